@@ -1,0 +1,9 @@
+//! # probekit-runtime — load and query baked probes
+//!
+//! What an engine links: load a `.probes` file and answer "irradiance at this
+//! point, for this normal" without allocating per query. Conventions are those
+//! of [`probekit_sh`].
+
+#![warn(missing_docs)]
+
+pub use probekit_sh as sh;

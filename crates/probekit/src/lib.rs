@@ -1,0 +1,9 @@
+//! # probekit — the baking library
+//!
+//! Scenes, ray tracing, probe capture, probe clouds, irradiance volumes and
+//! rigs. Conventions (axes, SH basis, radiance vs irradiance, units) are
+//! defined once in [`probekit_sh`]'s crate documentation and `docs/conventions.md`.
+
+#![warn(missing_docs)]
+
+pub use probekit_sh as sh;
