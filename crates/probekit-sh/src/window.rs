@@ -472,14 +472,6 @@ mod tests {
     }
 
     #[test]
-    #[ignore]
-    fn print_table() {
-        for o in 1..=MAX_ORDER {
-            println!("{o}: {:?}", solve_min_ringing_strength(o));
-        }
-    }
-
-    #[test]
     fn hanning_factors_match_closed_form() {
         // w = 4: (1 + cos(πl/4))/2 = 1, (2+√2)/4, 1/2, (2−√2)/4, 0, 0.
         let s2 = 2f32.sqrt();
