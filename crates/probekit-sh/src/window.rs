@@ -18,10 +18,12 @@
 //! | [`WindowKind::MinRinging`] | `1 / (1 + λ l²(l+1)²)` | `λ` |
 //!
 //! Hanning and Lanczos (σ-factors) are Sloan's, *Stupid SH Tricks*, with the
-//! window width `w` in bands. The `MinRinging` family is the one Sloan derives
-//! in the same talk as the minimiser of `‖f − g‖² + λ‖Δg‖²` (squared error
-//! plus a penalty on the spherical Laplacian, whose eigenvalue on band `l` is
-//! `−l(l+1)`), which gives `g_l = f_l / (1 + λ l²(l+1)²)`.
+//! window width `w` in bands. The `MinRinging` family is the Laplacian-penalty
+//! (Tikhonov) window that Sloan's SH windowing work builds on: the `g` that
+//! minimises `‖f − g‖² + λ‖Δg‖²` (squared error plus a penalty on the
+//! spherical Laplacian, whose eigenvalue on band `l` is `−l(l+1)`) has, by
+//! orthonormality, `g_lm = f_lm / (1 + λ l²(l+1)²)`. (We derived this
+//! ourselves; we could not check the talk's exact wording.)
 //!
 //! **Minimum-ringing strength.** Sloan, *Deringing Spherical Harmonics*
 //! (SIGGRAPH Asia 2017 technical brief), defines the minimum-ringing window
