@@ -21,6 +21,7 @@
 //!   recurrence, no tables.
 
 use crate::basis::{num_coeffs, order_from_len, MAX_ORDER, Y2_A, Y2_B, Y2_C};
+use crate::coeffs::ShRgb;
 use glam::{DMat3, Mat3, Vec3};
 
 /// Offset of band `l`'s block in the packed storage: `Σ_{k<l} (2k+1)² = l(2l−1)(2l+1)/3`.
@@ -217,6 +218,17 @@ impl ShRotation {
         }
     }
 
+    /// Returns `sh` rotated (allocates the result; use [`ShRotation::apply`]
+    /// on a hot path).
+    ///
+    /// # Panics
+    /// If `sh` has more bands than this rotation.
+    pub fn rotate_sh(&self, sh: &ShRgb) -> ShRgb {
+        let mut out = ShRgb::zeros(sh.order());
+        self.apply(sh.coeffs(), out.coeffs_mut());
+        out
+    }
+
     fn bands_of(&self, len: usize) -> usize {
         match order_from_len(len) {
             Some(b) if b <= self.order => b,
@@ -310,7 +322,6 @@ mod tests {
     use super::*;
     use crate::convolve::eval_sh;
     use crate::project::fibonacci_sphere;
-    use crate::ShRgb;
     use glam::{EulerRot, Quat};
     use proptest::prelude::*;
 
@@ -407,6 +418,31 @@ mod tests {
                 assert!((out[i0 - mm] - eb).length() < 1e-5, "l {l} m -{mm}");
             }
         }
+    }
+
+    /// Rotating zonal coefficients about +Z agrees with the independent
+    /// zonal-rotation formula `c_lm = sqrt(4π/(2l+1)) z_l Y_lm(R·Z)`.
+    #[test]
+    fn agrees_with_zonal_rotation() {
+        let zh = [0.9f32, -0.5, 0.3, 0.2, -0.1, 0.05, 0.02, -0.01];
+        let m = rot(-0.4, 1.3, 0.25);
+        let mut on_z = [0.0f32; 64];
+        crate::zonal::zh_to_sh(&zh, Vec3::Z, &mut on_z);
+        let mut want = [0.0f32; 64];
+        crate::zonal::zh_to_sh(&zh, m * Vec3::Z, &mut want);
+        let mut got = [0.0f32; 64];
+        ShRotation::new(8, m).apply_scalar(&on_z, &mut got);
+        for i in 0..64 {
+            assert!(
+                (got[i] - want[i]).abs() < 1e-5,
+                "{i}: {} vs {}",
+                got[i],
+                want[i]
+            );
+        }
+        let sh = ShRgb::from_coeffs(on_z.iter().map(|v| Vec3::splat(*v)).collect()).unwrap();
+        let r = ShRotation::new(8, m).rotate_sh(&sh);
+        assert!((r.coeffs()[5].x - want[5]).abs() < 1e-5);
     }
 
     #[test]

@@ -530,7 +530,7 @@ mod tests {
             .all(|v| (*v - Vec3::splat(0.25)).length() < 1e-6));
     }
 
-    /// The search agrees with a 400k-point brute-force minimum: never above
+    /// The search agrees with a 300k-point brute-force minimum: never above
     /// it (it refines past the grid) and only slightly below (the grid's own
     /// discretisation error).
     #[test]
@@ -543,10 +543,10 @@ mod tests {
             ((seed >> 33) as f32 / (1u64 << 31) as f32) * 2.0 - 1.0
         };
         for order in [1usize, 2, 3, 5, 8] {
-            for _ in 0..3 {
+            for _ in 0..2 {
                 let c: Vec<f32> = (0..order * order).map(|_| rnd()).collect();
                 let (m, d) = min_over_sphere(&c);
-                let brute = brute_min(&c, 400_000);
+                let brute = brute_min(&c, 300_000);
                 assert!(
                     m <= brute + 1e-5,
                     "order {order}: search {m} > brute {brute}"
