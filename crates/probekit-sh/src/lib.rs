@@ -31,8 +31,17 @@
 pub mod basis;
 pub mod coeffs;
 pub mod convolve;
+pub mod project;
+pub mod rotate;
+pub mod window;
 pub mod zonal;
 
 pub use basis::{eval_basis, eval_l1, eval_l2, index, num_coeffs, MAX_COEFFS, MAX_ORDER};
 pub use coeffs::{ShRgb, LUMINANCE};
 pub use convolve::{clamped_cosine_band, irradiance, irradiance_l1, irradiance_l2};
+pub use project::{fibonacci_point, fibonacci_sphere, project_fn};
+pub use rotate::{rotate_l1, rotate_l2, ShRotation};
+pub use window::{
+    choose_window_for, min_over_sphere, solve_min_ringing_strength, Window, WindowKind,
+    MIN_RINGING_STRENGTH,
+};
