@@ -182,7 +182,8 @@ pub fn sphere_light_sh(
 /// derivative of the A1 zonal coefficients with respect to distance
 /// (*Irradiance Rigs* A2, for every band), the lateral terms differentiate the
 /// rotation of the zonal lobe through the surface gradient of the basis.
-/// Inside the sphere and for degenerate input the gradient is zero. The
+/// Inside the sphere and for degenerate input the gradient is zero; a radius of
+/// 0 gives the gradient of the point light [`super::point_sh`]. The
 /// first-order model `c(p + δ) ≈ c(p) + Σ_j δ_j·grad[·][j]` is what the
 /// gradient rig of *Irradiance Rigs* §2.1 stores.
 ///
@@ -372,6 +373,27 @@ mod tests {
         for (a, b) in s.iter().zip(&q) {
             assert!((*a - *b).length() < 1e-6 * q[0].length());
         }
+        // Radius 0 also gives the point light's gradient: central differences of point_sh.
+        let mut g = vec![[Vec3::ZERO; 3]; 16];
+        sphere_light_sh_gradient(order, p, c, 0.0, i, &mut g);
+        let h = 1e-2;
+        let (mut a, mut b) = (vec![Vec3::ZERO; 16], vec![Vec3::ZERO; 16]);
+        let gmax = g
+            .iter()
+            .flat_map(|x| x.iter().map(|v| v.abs().max_element()))
+            .fold(0.0f32, f32::max);
+        for (j, e) in [Vec3::X, Vec3::Y, Vec3::Z].into_iter().enumerate() {
+            point_sh(order, p + e * h, c, i, &mut a);
+            point_sh(order, p - e * h, c, i, &mut b);
+            for k in 0..16 {
+                let fd = (a[k] - b[k]) / (2.0 * h);
+                assert!(
+                    (fd - g[k][j]).abs().max_element() < 1e-3 * gmax,
+                    "{k} {j}: {fd} vs {}",
+                    g[k][j]
+                );
+            }
+        }
     }
 
     /// Irradiance from the sphere light against brute-force cosine integration:
@@ -535,5 +557,79 @@ mod tests {
         sphere_light_sh_and_gradient(3, center, center, r, i, &mut v, &mut g);
         assert!(g.iter().all(|c| *c == [Vec3::ZERO; 3]));
         assert!(v[0].x > 0.0);
+    }
+
+    fn dir(theta: f32, phi: f32) -> Vec3 {
+        Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.cos(),
+            theta.sin() * phi.sin(),
+        )
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// A uniform sphere's vector irradiance equals a point source's (Newton's
+        /// shell theorem for 1/r² fields), so band 1 of the sphere light equals
+        /// band 1 of the point light of the same intensity, for any radius < d.
+        #[test]
+        fn band1_is_the_point_lights(
+            th in 0.0f32..std::f32::consts::PI, ph in 0.0f32..std::f32::consts::TAU, r in 0.01f32..2.0, k in 1.02f32..30.0,
+        ) {
+            let p = Vec3::new(0.3, -0.2, 1.0);
+            let center = p + dir(th, ph) * (r * k);
+            let i = Vec3::new(1.0, 2.0, 3.0);
+            let mut s = [Vec3::ZERO; 9];
+            let mut q = [Vec3::ZERO; 9];
+            sphere_light_sh(3, p, center, r, i, &mut s);
+            point_sh(3, p, center, i, &mut q);
+            for idx in 1..4 {
+                proptest::prop_assert!((s[idx] - q[idx]).length() <= 2e-5 * q[0].length());
+            }
+        }
+
+        /// The whole gradient against central differences at random receivers.
+        #[test]
+        fn gradient_matches_central_differences_random(
+            th in 0.0f32..std::f32::consts::PI, ph in 0.0f32..std::f32::consts::TAU, r in 0.05f32..1.0, k in 1.2f32..20.0,
+        ) {
+            let p = Vec3::new(-0.5, 0.7, 0.2);
+            let center = p + dir(th, ph) * (r * k);
+            let i = Vec3::new(3.0, 1.0, 2.0);
+            let mut v = [Vec3::ZERO; 16];
+            let mut g = [[Vec3::ZERO; 3]; 16];
+            sphere_light_sh_and_gradient(4, p, center, r, i, &mut v, &mut g);
+            let gmax = g.iter().flat_map(|c| c.iter().map(|x| x.abs().max_element())).fold(0.0f32, f32::max);
+            let h = 2e-3 * r * (k - 1.0);
+            let mut a = [Vec3::ZERO; 16];
+            let mut b = [Vec3::ZERO; 16];
+            for (j, e) in [Vec3::X, Vec3::Y, Vec3::Z].into_iter().enumerate() {
+                sphere_light_sh(4, p + e * h, center, r, i, &mut a);
+                sphere_light_sh(4, p - e * h, center, r, i, &mut b);
+                for idx in 0..16 {
+                    let fd = (a[idx] - b[idx]) / (2.0 * h);
+                    proptest::prop_assert!((fd - g[idx][j]).abs().max_element() <= 3e-3 * gmax,
+                        "coeff {} axis {}: fd {} analytic {}", idx, j, fd, g[idx][j]);
+                }
+            }
+        }
+
+        /// Horizon-clipped irradiance: non-decreasing in cos θ, between 0 and the
+        /// bounded by `π sin²α`, at least `π sin²α cos θ`, and equal to `π sin²α` head-on.
+        #[test]
+        fn horizon_clipped_monotone_and_bounded(s in 0.001f32..1.0, c0 in -1.0f32..1.0, dc in 0.0f32..0.5) {
+            let c1 = (c0 + dc).min(1.0);
+            let e0 = sphere_light_irradiance_horizon_clipped(c0, s);
+            let e1 = sphere_light_irradiance_horizon_clipped(c1, s);
+            let top = std::f32::consts::PI * s * s;
+            proptest::prop_assert!(e0 >= 0.0 && e1 <= top * (1.0 + 1e-5));
+            proptest::prop_assert!(e1 >= e0 - 1e-6 * top);
+            // Clipping only ever adds light compared with the linear cosine (the
+            // hidden part would have counted negatively).
+            proptest::prop_assert!(e0 >= top * c0 - 1e-6 * top);
+            let head_on = sphere_light_irradiance_horizon_clipped(1.0, s);
+            proptest::prop_assert!((head_on - top).abs() <= 1e-5 * top);
+        }
     }
 }
