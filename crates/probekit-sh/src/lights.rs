@@ -227,25 +227,24 @@ pub fn spot_sh(
 /// `∫_{cos α}^1 P_l = (P_{l−1}(cos α) − P_{l+1}(cos α))/(2l+1)`).
 ///
 /// `half_angle` is clamped to `[0, π]` (π is the whole sphere). A zero `axis`
-/// gives all-zero output.
+/// or a NaN angle gives all-zero output.
 ///
 /// # Panics
 /// If `order` is not in `1..=MAX_ORDER` or `out` is shorter than `order²`.
 pub fn cone_sh(order: usize, axis: Vec3, half_angle: f32, radiance: Vec3, out: &mut [Vec3]) {
     check_order(order, out.len());
-    let Some(axis) = axis.try_normalize() else {
+    let Some(axis) = axis.try_normalize().filter(|_| !half_angle.is_nan()) else {
         zero(order, out);
         return;
     };
     let alpha = (half_angle as f64).clamp(0.0, PI);
-    let a = cap_band_factors(order, alpha.cos(), alpha.sin().powi(2));
     let a = if alpha >= PI {
-        // sin²α rounds to ~1e-32, not 0: the whole sphere has only band 0.
+        // sin²π rounds to ~1e-32, not 0: the whole sphere has only band 0.
         let mut full = [0.0; MAX_ORDER];
         full[0] = 4.0 * PI;
         full
     } else {
-        a
+        cap_band_factors(order, alpha.cos(), alpha.sin().powi(2))
     };
     let mut b = [0.0f32; MAX_COEFFS];
     basis_fast(order, axis, &mut b);
