@@ -101,11 +101,32 @@ fn view(order: usize, p: Vec3, center: Vec3, radius: f32, intensity: Vec3, grad:
     }
     let axis: DVec3 = w / d;
     let c = ((d - r) * (d + r)).sqrt() / d;
+    let mut f = [Vec3::ZERO; MAX_ORDER];
+    let mut df = [Vec3::ZERO; MAX_ORDER];
+    if order <= 3 {
+        // L1/L2 fast path, the same factors in closed form (P_1' = 1, P_2' = 3c):
+        // F = I/d²·[2/(1+c), 1, c],  F' = −2I/d³·[1/c, 1, (3c² − 1)/(2c)].
+        let inv_d2 = (1.0 / (d * d)) as f32;
+        let cf = c as f32;
+        f[0] = intensity * (2.0 * inv_d2 / (1.0 + cf));
+        f[1] = intensity * inv_d2;
+        f[2] = intensity * (inv_d2 * cf);
+        if grad {
+            let g = (-2.0 / (d * d * d)) as f32;
+            df[0] = intensity * (g / cf);
+            df[1] = intensity * g;
+            df[2] = intensity * (g * (3.0 * cf * cf - 1.0) / (2.0 * cf));
+        }
+        return View::Outside {
+            axis: axis.as_vec3(),
+            d: d as f32,
+            f,
+            df,
+        };
+    }
     // B_l = A_l / sin²α: the cap factors with sin²α = 1 (c > 0 here).
     let b = cap_band_factors(order, c, 1.0);
     let k = 1.0 / (PI * d * d);
-    let mut f = [Vec3::ZERO; MAX_ORDER];
-    let mut df = [Vec3::ZERO; MAX_ORDER];
     for l in 0..order {
         f[l] = intensity * (k * b[l]) as f32;
     }
