@@ -433,7 +433,7 @@ mod tests {
         }
     }
 
-    /// The bounds are tight: single deltas reach them.
+    /// The bounds are tight: single deltas reach both ends used by the codec.
     #[test]
     fn ratio_bounds_are_attained_by_deltas() {
         let cases = [
@@ -443,10 +443,15 @@ mod tests {
             (Vec3::X, 6, -(5f32.sqrt()) / 2.0),
             (Vec3::new(1.0, 1.0, 0.0).normalize(), 4, 15f32.sqrt() / 2.0),
             (Vec3::X, 8, 15f32.sqrt() / 2.0),
+            (Vec3::Y, 1, -(3f32.sqrt())),
+            (Vec3::Y, 8, -(15f32.sqrt()) / 2.0),
         ];
         for (d, i, expect) in cases {
             let y = eval_l2(d);
             assert!((y[i] / y[0] - expect).abs() < 1e-5, "{i}: {}", y[i] / y[0]);
+            let (lo, hi) = ratio_range(i);
+            let end = if expect > 0.0 { hi } else { lo };
+            assert!((end - expect).abs() < 1e-5, "range of {i} is not tight");
         }
     }
 
