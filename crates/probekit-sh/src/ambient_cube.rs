@@ -192,6 +192,16 @@ impl AmbientCube {
     }
 }
 
+/// Free-function form of [`AmbientCube::fit_from_sh`].
+pub fn fit_from_sh(radiance_sh: &[Vec3]) -> AmbientCube {
+    AmbientCube::fit_from_sh(radiance_sh)
+}
+
+/// Free-function form of [`AmbientCube::fit_from_samples`].
+pub fn fit_from_samples(normals: &[Vec3], irradiance: &[Vec3]) -> AmbientCube {
+    AmbientCube::fit_from_samples(normals, irradiance)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

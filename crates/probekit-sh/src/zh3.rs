@@ -541,6 +541,28 @@ mod tests {
         }
     }
 
+    /// Without a band-1 vector the L1-derived axes are undefined (they fall
+    /// back to +Y), but the solve still finds the zonal axis exactly.
+    #[test]
+    fn solve_recovers_zonal_signal_without_band1() {
+        let axis = unit(0.6, -0.2, 0.77);
+        let mut l2 = [Vec3::ZERO; 9];
+        for (ch, z2) in [0.4f32, -0.3, 0.2].into_iter().enumerate() {
+            let mut c = [0.0f32; 9];
+            zh_to_sh(&[1.0, 0.0, z2], axis, &mut c);
+            for i in 0..9 {
+                l2[i][ch] = c[i];
+            }
+        }
+        for w in [AxisWeights::Equal, AxisWeights::Luminance] {
+            let back = solve_zh3_axis(&l2, w).to_l2();
+            for i in 0..9 {
+                assert!((back[i] - l2[i]).length() < 1e-5, "coefficient {i}");
+            }
+        }
+        assert_eq!(fit_zh3_shared(&l2).axes[0], Vec3::Y);
+    }
+
     /// ZH3 irradiance (fast path) against brute-force cosine integration of the
     /// ZH3 radiance reconstructed from its expansion.
     #[test]
