@@ -1,7 +1,7 @@
 //! Geomerics' non-negative irradiance reconstruction from L1 radiance SH
 //! (Graham Hazel / Geomerics, "Reconstructing diffuse lighting from spherical
 //! harmonic data", reference implementation in Probulator; described in
-//! Pettineo, *SG Series Part 1*, and cited as [Joseph15] in Roughton et al.,
+//! Pettineo, *SG Series Part 1*, and cited as \[Joseph15\] in Roughton et al.,
 //! *ZH3: Quadratic Zonal Harmonics*, I3D 2024 — seeds 002 and 004).
 //!
 //! ## Normalisation (issue 3)
@@ -24,7 +24,7 @@
 //!
 //! Because the mean of `(p + 1)·q^p` over the sphere is 1, `E` keeps the mean
 //! irradiance `R0` exactly, is non-negative whenever `c0 ≥ 0`, and does not keep
-//! the linear moment for strong directionality (it over-brightens, [SS20]).
+//! the linear moment for strong directionality (it over-brightens; Sloan & Silvennoinen 2020, cited in seed 004).
 
 // Index loops over colour channels and SH coefficients read like the formulas.
 #![allow(clippy::needless_range_loop)]

@@ -85,11 +85,13 @@ impl Zh3 {
     /// `SHHallucinateZH3Irradiance`, with our unnormalised cosine kernel
     /// `π/4` in place of the talk's normalised `1/4`).
     pub fn irradiance(&self, n: Vec3) -> Vec3 {
-        let mut e = irradiance_l1(&self.l1, n);
-        for ch in 0..3 {
-            e[ch] += std::f32::consts::FRAC_PI_4 * self.zonal[ch] * y20(self.axes[ch].dot(n));
-        }
-        e
+        let t = Vec3::new(
+            self.axes[0].dot(n),
+            self.axes[1].dot(n),
+            self.axes[2].dot(n),
+        );
+        irradiance_l1(&self.l1, n)
+            + self.zonal * (3.0 * t * t - Vec3::ONE) * (std::f32::consts::FRAC_PI_4 * Y2_B)
     }
 }
 
@@ -429,13 +431,12 @@ pub fn zh3_hallucinated_irradiance(l1: &[Vec3; 4], n: Vec3) -> Vec3 {
         return e;
     };
     let zh = y20(a.dot(n)) * std::f32::consts::FRAC_PI_4;
-    for ch in 0..3 {
-        let c0 = l1[0][ch];
-        if c0 > 0.0 && c0.is_finite() {
-            let r = Vec3::new(-l1[3][ch], -l1[1][ch], l1[2][ch]).dot(a).abs() / c0;
-            e[ch] += c0 * (0.08 * r + 0.6 * r * r) * zh;
-        }
-    }
+    // Per-channel v·a for all three channels at once: v = (−c3, −c1, c2).
+    let c0 = l1[0];
+    let r = (l1[2] * a.z - l1[3] * a.x - l1[1] * a.y).abs() / c0;
+    let zonal = c0 * (0.08 * r + 0.6 * r * r);
+    let valid = c0.cmpgt(Vec3::ZERO) & c0.is_finite_mask();
+    e += Vec3::select(valid, zonal * zh, Vec3::ZERO);
     e
 }
 
