@@ -559,6 +559,35 @@ mod tests {
         assert_eq!(decode_ambient_cube(&encode_ambient_cube(&cube)), cube);
     }
 
+    /// A ZH3 with another axis (solved) is stored as the projection of its
+    /// L2 expansion onto the luminance axis of the decoded L1 — exactly what
+    /// the decoder assumes — up to half a quantisation step.
+    #[test]
+    fn zh3_with_other_axis_is_stored_as_shared_projection() {
+        let mut rng = Lcg(99);
+        for _ in 0..50 {
+            let c = random_non_negative(&mut rng);
+            let solved = crate::zh3::solve_zh3_axis(&c, crate::zh3::AxisWeights::Equal);
+            let d = decode_zh3(&encode_zh3(&solved));
+            let axis = shared_axis(&d.l1);
+            assert!((d.axes[0] - axis).length() < 1e-6);
+            let l2 = solved.to_l2();
+            let (lo, hi) = zonal_range();
+            for ch in 0..3 {
+                let band2 = [l2[4][ch], l2[5][ch], l2[6][ch], l2[7][ch], l2[8][ch]];
+                let c0 = d.l1[0][ch];
+                let z = (zonal_projection(&band2, axis) / c0).clamp(lo, hi) * c0;
+                let half_step = 0.5 * (hi - lo) / 254.0 * c0;
+                assert!(
+                    (d.zonal[ch] - z).abs() <= half_step * 1.001 + 1e-6,
+                    "{} vs {}",
+                    d.zonal[ch],
+                    z
+                );
+            }
+        }
+    }
+
     fn rel_rmse(a: impl Fn(Vec3) -> Vec3, b: impl Fn(Vec3) -> Vec3, dirs: &[Vec3]) -> f64 {
         let (mut num, mut den) = (0.0f64, 0.0f64);
         for d in dirs {
