@@ -28,13 +28,19 @@
 
 #![warn(missing_docs)]
 
+pub mod ambient_cube;
 pub mod basis;
+pub mod codec;
 pub mod coeffs;
 pub mod convolve;
 pub mod lights;
 pub mod project;
 pub mod rotate;
 pub mod window;
+pub mod geomerics;
+pub mod hl2;
+mod numeric;
+pub mod zh3;
 pub mod zonal;
 
 pub use basis::{eval_basis, eval_l1, eval_l2, index, num_coeffs, MAX_COEFFS, MAX_ORDER};
