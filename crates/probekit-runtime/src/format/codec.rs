@@ -218,12 +218,15 @@ impl Coefficients {
     /// `l*(l+1)+m`). Allocates nothing.
     pub fn decode_probe(&self, i: usize, out: &mut [Vec3]) -> Result<(), FormatError> {
         let n = self.coeffs_per_probe();
-        let bytes = self.probe_bytes(i).ok_or(FormatError::IndexOutOfRange {
-            id: super::SectionId::COEFFICIENTS,
-            element: i as u64,
-            value: i as u64,
-            limit: self.len() as u64,
-        })?;
+        let bytes = (i < self.len())
+            .then(|| self.probe_bytes(i))
+            .flatten()
+            .ok_or(FormatError::IndexOutOfRange {
+                id: super::SectionId::COEFFICIENTS,
+                element: i as u64,
+                value: i as u64,
+                limit: self.len() as u64,
+            })?;
         let out = out.get_mut(..n).ok_or(FormatError::Unrepresentable(
             "output slice shorter than order²",
         ))?;
@@ -376,6 +379,27 @@ mod tests {
                 assert_eq!(f16_is_non_finite(h), theirs.is_infinite());
             }
         }
+    }
+
+    #[test]
+    fn decode_probe_checks_index_and_output_length() {
+        let c = Coefficients::from_f32(2, &[Vec3::ONE; 8]).unwrap();
+        let mut out = [Vec3::ZERO; 4];
+        c.decode_probe(1, &mut out).unwrap();
+        assert_eq!(out, [Vec3::ONE; 4]);
+        assert!(matches!(
+            c.decode_probe(2, &mut out),
+            Err(FormatError::IndexOutOfRange { .. })
+        ));
+        assert!(c.decode_probe(0, &mut out[..3]).is_err());
+        // A codec/order pair that does not exist holds no probes.
+        let bad = Coefficients {
+            codec: Codec::L1Q13,
+            order: 3,
+            data: vec![0; 26],
+        };
+        assert_eq!(bad.len(), 0);
+        assert!(bad.decode_probe(0, &mut [Vec3::ZERO; 9]).is_err());
     }
 
     #[test]
