@@ -3,18 +3,21 @@
 //!
 //! The same CRC as zlib, PNG and gzip (`crc32("123456789") = 0xCBF43926`),
 //! so an engine can check sections with any library it already has.
-//! Table-driven, one byte per step: fast enough for load-time checking
-//! (hundreds of MB/s) without a dependency.
+//! Table-driven with "slicing-by-8" (eight 256-entry tables, eight bytes
+//! per step; Kounavis and Berry, "A Systematic Approach to Building High
+//! Performance Software-based CRC Generators", ISCC 2005), without a
+//! dependency.
 
 /// The reflected IEEE polynomial.
 const POLY: u32 = 0xEDB8_8320;
 
-/// 256-entry table: `TABLE[b]` is the CRC register after shifting byte `b`
-/// through eight polynomial-division steps. Built at compile time.
-const TABLE: [u32; 256] = build_table();
+/// `TABLES[0][b]` is the CRC register after shifting byte `b` through eight
+/// polynomial-division steps; `TABLES[k][b]` is the same followed by `k`
+/// zero bytes (for slicing-by-8). Built at compile time.
+const TABLES: [[u32; 256]; 8] = build_tables();
 
-const fn build_table() -> [u32; 256] {
-    let mut table = [0u32; 256];
+const fn build_tables() -> [[u32; 256]; 8] {
+    let mut t = [[0u32; 256]; 8];
     let mut i = 0;
     while i < 256 {
         let mut c = i as u32;
@@ -23,10 +26,20 @@ const fn build_table() -> [u32; 256] {
             c = if c & 1 != 0 { (c >> 1) ^ POLY } else { c >> 1 };
             k += 1;
         }
-        table[i] = c;
+        t[0][i] = c;
         i += 1;
     }
-    table
+    let mut k = 1;
+    while k < 8 {
+        let mut i = 0;
+        while i < 256 {
+            let prev = t[k - 1][i];
+            t[k][i] = (prev >> 8) ^ t[0][(prev & 0xFF) as usize];
+            i += 1;
+        }
+        k += 1;
+    }
+    t
 }
 
 /// An incremental CRC-32 (IEEE): feed bytes with [`Crc32::update`], read the
@@ -50,9 +63,23 @@ impl Crc32 {
 
     /// Feeds `bytes`.
     pub fn update(&mut self, bytes: &[u8]) {
+        let t = &TABLES;
         let mut c = self.state;
-        for &b in bytes {
-            c = TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
+        let mut chunks = bytes.chunks_exact(8);
+        for ch in &mut chunks {
+            let lo = u32::from_le_bytes([ch[0], ch[1], ch[2], ch[3]]) ^ c;
+            let hi = u32::from_le_bytes([ch[4], ch[5], ch[6], ch[7]]);
+            c = t[7][(lo & 0xFF) as usize]
+                ^ t[6][((lo >> 8) & 0xFF) as usize]
+                ^ t[5][((lo >> 16) & 0xFF) as usize]
+                ^ t[4][(lo >> 24) as usize]
+                ^ t[3][(hi & 0xFF) as usize]
+                ^ t[2][((hi >> 8) & 0xFF) as usize]
+                ^ t[1][((hi >> 16) & 0xFF) as usize]
+                ^ t[0][(hi >> 24) as usize];
+        }
+        for &b in chunks.remainder() {
+            c = t[0][((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
         }
         self.state = c;
     }
@@ -110,12 +137,13 @@ mod tests {
                 (state >> 24) as u8
             })
             .collect();
-        for len in [0, 1, 7, 64, 1000, 4099] {
+        for len in [0, 1, 7, 8, 9, 15, 16, 17, 64, 1000, 4099] {
             assert_eq!(crc32(&bytes[..len]), crc32_bitwise(&bytes[..len]));
         }
         let mut inc = Crc32::new();
         inc.update(&bytes[..1234]);
-        inc.update(&bytes[1234..]);
+        inc.update(&bytes[1234..1237]);
+        inc.update(&bytes[1237..]);
         assert_eq!(inc.finish(), crc32(&bytes));
     }
 }
