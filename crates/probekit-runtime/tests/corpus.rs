@@ -97,20 +97,3 @@ fn load_reports_missing_file_and_writer_refuses_invalid_contents() {
         Err(FormatError::Unrepresentable(_))
     ));
 }
-
-#[cfg(not(feature = "pending-codecs"))]
-#[test]
-fn quantized_codecs_load_as_bytes_but_do_not_decode_without_the_feature() {
-    let mut f = full_file();
-    f.coefficients = Coefficients {
-        codec: Codec::L1Q13,
-        order: 2,
-        data: (0..5 * 13).map(|i| i as u8).collect(),
-    };
-    let back = ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap();
-    assert_eq!(back.coefficients.data, f.coefficients.data);
-    assert!(matches!(
-        back.coefficients.to_f32(),
-        Err(FormatError::CodecUnavailable("l1"))
-    ));
-}

@@ -303,7 +303,6 @@ pub(crate) fn check_finite(coeffs: &Coefficients) -> Result<(), FormatError> {
     Ok(())
 }
 
-#[cfg(feature = "pending-codecs")]
 mod quantized {
     //! The quantized codecs, through `probekit_sh::codec` (seed 004).
     use super::{Codec, Coefficients, FormatError};
@@ -340,24 +339,6 @@ mod quantized {
                 });
             }
         }
-        Ok(())
-    }
-}
-
-#[cfg(not(feature = "pending-codecs"))]
-mod quantized {
-    //! Placeholder until `probekit_sh::codec` is merged: quantized payloads
-    //! load as bytes, decoding reports [`FormatError::CodecUnavailable`].
-    use super::{Codec, Coefficients, FormatError};
-    use glam::Vec3;
-
-    pub(super) fn decode(codec: Codec, _: &[u8], _: &mut [Vec3]) -> Result<(), FormatError> {
-        Err(FormatError::CodecUnavailable(codec.name()))
-    }
-
-    /// Quantized payloads are bounded ratios and cannot encode NaN except
-    /// through their DC term, which needs the decoder; accepted as bytes.
-    pub(super) fn check_finite(_: &Coefficients) -> Result<(), FormatError> {
         Ok(())
     }
 }

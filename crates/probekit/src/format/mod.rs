@@ -109,12 +109,12 @@ pub fn encode_coefficients(
     })
 }
 
-#[cfg(feature = "pending-codecs")]
 mod quantized {
     //! The quantized encoders of `probekit_sh::codec` (seed 004).
     use super::{Codec, FormatError};
     use glam::Vec3;
-    use probekit_sh::codec::{encode_l1, encode_l2, encode_zh3, Zh3};
+    use probekit_sh::codec::{encode_l1, encode_l2, encode_zh3};
+    use probekit_sh::zh3::fit_zh3_shared;
 
     pub(super) fn encode<'a>(
         codec: Codec,
@@ -138,7 +138,7 @@ mod quantized {
                         .ok_or_else(short)?
                         .try_into()
                         .map_err(|_| short())?;
-                    out.extend_from_slice(&encode_zh3(&Zh3::from_l2(&l2)));
+                    out.extend_from_slice(&encode_zh3(&fit_zh3_shared(&l2)));
                 }
                 Codec::L2Q28 => {
                     let l2: [Vec3; 9] = probe
@@ -152,21 +152,6 @@ mod quantized {
             }
         }
         Ok(())
-    }
-}
-
-#[cfg(not(feature = "pending-codecs"))]
-mod quantized {
-    //! Placeholder until `probekit_sh::codec` is merged.
-    use super::{Codec, FormatError};
-    use glam::Vec3;
-
-    pub(super) fn encode<'a>(
-        codec: Codec,
-        _: impl Iterator<Item = &'a [Vec3]>,
-        _: &mut Vec<u8>,
-    ) -> Result<(), FormatError> {
-        Err(FormatError::CodecUnavailable(codec.name()))
     }
 }
 
@@ -230,26 +215,15 @@ mod tests {
         assert_eq!(e.to_f32().unwrap(), c);
     }
 
-    #[cfg(not(feature = "pending-codecs"))]
-    #[test]
-    fn quantized_encoders_report_unavailable_until_merged() {
-        for codec in [Codec::L1Q13, Codec::Zh3Q16, Codec::L2Q28] {
-            assert!(matches!(
-                encode_coefficients(codec, 3, &[Vec3::ONE; 9]),
-                Err(FormatError::CodecUnavailable(_))
-            ));
-        }
-    }
-
     /// The file adds nothing to the codecs: what comes out of a file is
     /// exactly `decode(encode(x))` of the SH core, and sizes match the
     /// strides of seed 004 (13, 16, 28 bytes).
-    #[cfg(feature = "pending-codecs")]
     #[test]
     fn quantized_codecs_round_trip_through_a_file_bit_for_bit() {
         use probekit_sh::codec::{
-            decode_l1, decode_l2, decode_zh3, encode_l1, encode_l2, encode_zh3, Zh3,
+            decode_l1, decode_l2, decode_zh3, encode_l1, encode_l2, encode_zh3,
         };
+        use probekit_sh::zh3::fit_zh3_shared;
         let probes = 5;
         let coeffs: Vec<Vec3> = lcg_coeffs(probes * 9, 3)
             .into_iter()
@@ -271,7 +245,9 @@ mod tests {
                 let l2: [Vec3; 9] = probe.try_into().unwrap();
                 let expect: Vec<Vec3> = match codec {
                     Codec::L1Q13 => decode_l1(&encode_l1(&l1)).to_vec(),
-                    Codec::Zh3Q16 => decode_zh3(&encode_zh3(&Zh3::from_l2(&l2))).to_l2().to_vec(),
+                    Codec::Zh3Q16 => decode_zh3(&encode_zh3(&fit_zh3_shared(&l2)))
+                        .to_l2()
+                        .to_vec(),
                     _ => decode_l2(&encode_l2(&l2)).to_vec(),
                 };
                 let n = expect.len();
