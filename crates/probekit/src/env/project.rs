@@ -130,7 +130,15 @@ pub fn project_equirect(map: &EnvMap, order: usize) -> ShRgb {
             let row = &map.texels()[y * w..(y + 1) * w];
             for (t, (cp, sp)) in row.iter().zip(&cols) {
                 let d = DVec3::new(cl * cp, sl, cl * sp);
-                eval_basis_f64(order, d, &mut b);
+                if order <= 3 {
+                    // hand-written L2 fast path (f32 basis, f64 sums)
+                    let f = probekit_sh::basis::eval_l2(d.as_vec3());
+                    for (bi, fi) in b.iter_mut().zip(f) {
+                        *bi = fi as f64;
+                    }
+                } else {
+                    eval_basis_f64(order, d, &mut b);
+                }
                 let l = t.as_dvec3();
                 for i in 0..nc {
                     acc[i] += l * b[i];
@@ -204,29 +212,41 @@ pub fn reference_irradiance(map: &EnvMap, normals: &[Vec3]) -> Vec<Vec3> {
 /// [`Cubemap`]'s, via [`Environment::weighted_texels`]).
 pub fn reference_irradiance_texels(texels: &[WeightedTexel], normals: &[Vec3]) -> Vec<Vec3> {
     // Structure of arrays for a tight inner loop.
-    let dx: Vec<f32> = texels.iter().map(|t| t.dir.x).collect();
-    let dy: Vec<f32> = texels.iter().map(|t| t.dir.y).collect();
-    let dz: Vec<f32> = texels.iter().map(|t| t.dir.z).collect();
-    let fr: Vec<f32> = texels.iter().map(|t| t.flux.x).collect();
-    let fg: Vec<f32> = texels.iter().map(|t| t.flux.y).collect();
-    let fb: Vec<f32> = texels.iter().map(|t| t.flux.z).collect();
+    // Padded to a multiple of LANES with zero flux, which adds nothing.
+    const LANES: usize = 8;
+    let padded = texels.len().div_ceil(LANES) * LANES;
+    let soa = |f: &dyn Fn(&WeightedTexel) -> f32| -> Vec<f32> {
+        let mut v: Vec<f32> = texels.iter().map(f).collect();
+        v.resize(padded, 0.0);
+        v
+    };
+    let (dx, dy, dz) = (soa(&|t| t.dir.x), soa(&|t| t.dir.y), soa(&|t| t.dir.z));
+    let (fr, fg, fb) = (soa(&|t| t.flux.x), soa(&|t| t.flux.y), soa(&|t| t.flux.z));
     const CHUNK: usize = 512;
     normals
         .par_iter()
         .map(|n| {
             let mut total = DVec3::ZERO;
             let mut start = 0;
-            while start < dx.len() {
-                let end = (start + CHUNK).min(dx.len());
-                // f32 within a short chunk (auto-vectorised), f64 across chunks.
-                let (mut r, mut g, mut b) = (0.0f32, 0.0f32, 0.0f32);
-                for i in start..end {
-                    let c = (n.x * dx[i] + n.y * dy[i] + n.z * dz[i]).max(0.0);
-                    r += c * fr[i];
-                    g += c * fg[i];
-                    b += c * fb[i];
+            while start < padded {
+                let end = (start + CHUNK).min(padded);
+                // f32 in LANES independent partial sums within a short chunk
+                // (so the loop vectorises: a single f32 sum cannot be
+                // reordered), f64 across chunks; the order is fixed.
+                let (mut r, mut g, mut b) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+                for base in (start..end).step_by(LANES) {
+                    let s = base..base + LANES;
+                    let (x, y, z) = (&dx[s.clone()], &dy[s.clone()], &dz[s.clone()]);
+                    let (fr, fg, fb) = (&fr[s.clone()], &fg[s.clone()], &fb[s]);
+                    for k in 0..LANES {
+                        let c = (n.x * x[k] + n.y * y[k] + n.z * z[k]).max(0.0);
+                        r[k] += c * fr[k];
+                        g[k] += c * fg[k];
+                        b[k] += c * fb[k];
+                    }
                 }
-                total += DVec3::new(r as f64, g as f64, b as f64);
+                let sum = |a: [f32; LANES]| a.iter().map(|v| *v as f64).sum::<f64>();
+                total += DVec3::new(sum(r), sum(g), sum(b));
                 start = end;
             }
             total.as_vec3()

@@ -313,15 +313,15 @@ fn eval_ambient_cube(i: &ComparisonInputs) -> Option<Vec<Vec3>> {
 fn basis_bytes() -> BasisBytes {
     use probekit_sh::codec::{AMBIENT_CUBE_BYTES, L1_BYTES, L2_BYTES, ZH3_BYTES};
     BasisBytes {
-        l1: Some(L1_BYTES),
-        l1_geomerics: Some(L1_BYTES),
-        zh3_hallucinated: Some(L1_BYTES),
-        zh3_shared: Some(ZH3_BYTES),
-        zh3_per_channel: Some(ZH3_BYTES),
-        zh3_solved: Some(ZH3_BYTES),
-        l2: Some(L2_BYTES),
-        l2_windowed: Some(L2_BYTES),
-        ambient_cube: Some(AMBIENT_CUBE_BYTES),
+        l1: Some(L1_BYTES as usize),
+        l1_geomerics: Some(L1_BYTES as usize),
+        zh3_hallucinated: Some(L1_BYTES as usize),
+        zh3_shared: Some(ZH3_BYTES as usize),
+        zh3_per_channel: Some(ZH3_BYTES as usize),
+        zh3_solved: Some(ZH3_BYTES as usize),
+        l2: Some(L2_BYTES as usize),
+        l2_windowed: Some(L2_BYTES as usize),
+        ambient_cube: Some(AMBIENT_CUBE_BYTES as usize),
     }
 }
 
