@@ -120,3 +120,33 @@ fn sh_bad_inputs_fail_with_one_line() {
         "face +X missing",
     );
 }
+
+/// A cubemap folder (six `.exr` faces) of a constant radiance: the DC
+/// coefficient is `L·√(4π)` and the rest vanish (exact cube solid angles).
+#[test]
+fn sh_on_cubemap_folder() {
+    use probekit::env::EnvMap;
+    let dir = tempfile::tempdir().unwrap();
+    for stem in ["px", "nx", "py", "ny", "pz", "nz"] {
+        let face = EnvMap::from_texels(
+            Path::new(stem),
+            8,
+            8,
+            vec![glam::Vec3::new(1.0, 0.5, 0.25); 64],
+        )
+        .unwrap();
+        face.save_exr(dir.path().join(format!("{stem}.exr")))
+            .unwrap();
+    }
+    let o = probekit(&["sh", dir.path().to_str().unwrap(), "--order", "2", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    let c = v["coefficients"].as_array().unwrap();
+    let s = (4.0 * std::f64::consts::PI).sqrt();
+    for (ch, l) in [1.0, 0.5, 0.25].iter().enumerate() {
+        assert!((c[0][ch].as_f64().unwrap() - l * s).abs() < 1e-4);
+        for ck in &c[1..4] {
+            assert!(ck[ch].as_f64().unwrap().abs() < 1e-5);
+        }
+    }
+}

@@ -438,7 +438,16 @@ fn bad_inputs_give_typed_errors() {
             e => panic!("{name}: {e}"),
         }
     }
-    // zero size
+    // zero size, in a file and in memory
+    std::fs::write(
+        d.join("zero.hdr"),
+        "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 0\n",
+    )
+    .unwrap();
+    assert!(matches!(
+        expect_err(&d.join("zero.hdr")),
+        EnvError::ZeroSize { .. }
+    ));
     assert!(matches!(
         EnvMap::from_texels(Path::new("z"), 0, 0, vec![]),
         Err(EnvError::ZeroSize { .. })
