@@ -177,9 +177,7 @@ pub fn project_cubemap(cube: &Cubemap, order: usize) -> ShRgb {
             for x in 0..n {
                 let a = 2.0 * (x as f64 + 0.5) / n as f64 - 1.0;
                 let bb = 2.0 * (y as f64 + 0.5) / n as f64 - 1.0;
-                let d = face.direction(a as f32, bb as f32).as_dvec3();
-                // recompute in f64 for accuracy (direction() is exact for these small integers/n)
-                let d = d.normalize();
+                let d = face.direction(a as f32, bb as f32).as_dvec3().normalize();
                 eval_basis_f64(order, d, &mut b);
                 let l = cube.face(face)[y * n + x].as_dvec3() * cube.texel_solid_angle(x, y);
                 for i in 0..nc {

@@ -538,3 +538,29 @@ fn shrgb_round_trip_of_projection() {
         assert!((sh.eval(d) - truth.eval(d)).length() < 5e-3);
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
+
+    /// Property: projecting any (non-negative) band-limited L2 radiance
+    /// sampled on a 128×64 map returns its coefficients, up to the texel
+    /// quadrature error.
+    #[test]
+    fn projection_of_random_band_limited_radiance(
+        raw in proptest::collection::vec(-1.0f32..1.0, 24)
+    ) {
+        let mut c = vec![Vec3::ZERO; 9];
+        for i in 1..9 {
+            c[i] = Vec3::new(raw[3 * (i - 1)], raw[3 * (i - 1) + 1], raw[3 * (i - 1) + 2]);
+        }
+        // |Y_lm| <= 0.631 for l <= 2, so this DC keeps the radiance positive
+        let bound: Vec3 = c[1..].iter().map(|v| v.abs()).sum::<Vec3>() * 0.7 + Vec3::splat(0.1);
+        c[0] = bound / probekit_sh::basis::Y00;
+        let map = synthetic(128, 64, |d| eval_sh(&c, d));
+        let sh = project_equirect(&map, 3);
+        let scale = c.iter().map(|v| v.abs().max_element()).sum::<f32>();
+        for (a, b) in sh.coeffs().iter().zip(&c) {
+            proptest::prop_assert!((*a - *b).abs().max_element() < 1e-3 * scale, "{} vs {}", a, b);
+        }
+    }
+}
