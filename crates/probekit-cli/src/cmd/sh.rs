@@ -18,7 +18,7 @@ pub struct ShArgs {
     /// Environment: an equirect .hdr/.exr (three.js layout), a cubemap folder
     /// (px/nx/py/ny/pz/nz .hdr|.exr|.png), or `builtin:sky`.
     pub env: PathBuf,
-    /// Number of SH bands (1..=8; 3 = L2).
+    /// Number of SH bands (1..=8; 3 = L2). The comparison always uses L1/L2.
     #[arg(long, default_value_t = 3)]
     pub order: usize,
     /// Print JSON instead of a table.
