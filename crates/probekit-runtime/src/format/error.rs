@@ -174,7 +174,7 @@ pub enum FormatError {
     },
     /// The codec is known but its decoder is not compiled in (feature
     /// `pending-codecs`).
-    #[error("codec {0} is not available in this build (feature `pending-codecs`)")]
+    #[error("codec {0} is not available in this build")]
     CodecUnavailable(&'static str),
     /// A file kind id this reader does not know.
     #[error("unknown file kind {0}")]
