@@ -7,3 +7,6 @@
 #![warn(missing_docs)]
 
 pub use probekit_sh as sh;
+
+pub mod scene;
+pub mod trace;
