@@ -9,4 +9,6 @@
 pub mod env;
 pub mod format;
 pub mod plot;
+pub mod scene;
 pub mod sh;
+pub mod trace;

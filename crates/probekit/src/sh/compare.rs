@@ -289,7 +289,7 @@ fn eval_l2_windowed(i: &ComparisonInputs) -> Option<(Vec<Vec3>, WindowInfo)> {
     w.apply(&mut c);
     let info = WindowInfo {
         kind: w.name().to_string(),
-        strength: w.strength as f64,
+        strength: f64::from(w.strength),
     };
     Some((i.map(|n| probekit_sh::irradiance_l2(&c, n)), info))
 }
@@ -306,22 +306,19 @@ const SOLVED_AXIS_BYTES: usize = 2;
 fn basis_bytes() -> BasisBytes {
     use probekit_sh::codec::{AMBIENT_CUBE_BYTES, L1_BYTES, L2_BYTES, ZH3_BYTES};
     BasisBytes {
-        l1: Some(L1_BYTES as usize),
-        l1_geomerics: Some(L1_BYTES as usize),
-        zh3_hallucinated: Some(L1_BYTES as usize),
-        zh3_shared: Some(ZH3_BYTES as usize),
-        zh3_per_channel: Some(ZH3_BYTES as usize),
+        l1: Some(L1_BYTES),
+        l1_geomerics: Some(L1_BYTES),
+        zh3_hallucinated: Some(L1_BYTES),
+        zh3_shared: Some(ZH3_BYTES),
+        zh3_per_channel: Some(ZH3_BYTES),
         // The solved axis is not derivable from L1, so it must be stored:
         // +2 bytes (8:8 octahedral) beyond the 16-byte ZH3 layout.
-        zh3_solved: Some(ZH3_BYTES as usize + SOLVED_AXIS_BYTES),
-        l2: Some(L2_BYTES as usize),
-        l2_windowed: Some(L2_BYTES as usize),
-        ambient_cube: Some(AMBIENT_CUBE_BYTES as usize),
+        zh3_solved: Some(ZH3_BYTES + SOLVED_AXIS_BYTES),
+        l2: Some(L2_BYTES),
+        l2_windowed: Some(L2_BYTES),
+        ambient_cube: Some(AMBIENT_CUBE_BYTES),
     }
 }
-
-/// Without the codec module only the sizes issue 3 states for L1 (4-byte
-/// RGB9E5 DC + 9 signed bytes = 13) and L2 (4 + 24 = 28) are known.
 
 #[cfg(test)]
 mod tests {
