@@ -43,7 +43,7 @@
 //! are summed in f64 in chunks of [`CHUNK`] in a fixed order, so results are
 //! bit-identical for any thread count and any sharding.
 
-use super::emitters::{Emitters, Environment};
+use super::emitters::Emitters;
 use super::sampling::{
     power_heuristic, r2_point, sample_cosine_hemisphere, sample_uniform_sphere, Frame, SampleRng,
     INV_FOUR_PI,
@@ -509,7 +509,7 @@ impl<'s> Baker<'s> {
             let mut shape_hit: Option<(usize, f32)> = None;
             for (k, s) in e.shapes.iter().enumerate() {
                 if let Some(t) = s.intersect(ray.origin, ray.direction, 0.0) {
-                    if t < t_tri && shape_hit.is_none_or(|(_, tb)| t < tb) {
+                    if t < t_tri && shape_hit.map_or(true, |(_, tb)| t < tb) {
                         shape_hit = Some((k, t));
                     }
                 }
@@ -547,8 +547,12 @@ impl<'s> Baker<'s> {
             }
             let le = scene.emission(h.material, h.uv);
             if le != Vec3::ZERO {
-                let light_pdf =
-                    e.triangle_pdf(scene, h.triangle, ray.direction, (h.point - prev_point).length());
+                let light_pdf = e.triangle_pdf(
+                    scene,
+                    h.triangle,
+                    ray.direction,
+                    (h.point - prev_point).length(),
+                );
                 let w = mis(prev_pdf, light_pdf);
                 sink(beta * le * w, e.emissive_group, depth == 0);
             }
@@ -566,7 +570,7 @@ impl<'s> Baker<'s> {
             depth += 1;
             if depth > params.rr_depth {
                 let q = beta.max_element().min(0.95);
-                if !(q > 0.0) || rng.next_f32() >= q {
+                if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
                     return;
                 }
                 beta /= q;
@@ -849,7 +853,7 @@ impl<'s> Baker<'s> {
                 position: point,
             });
         }
-        if s.max_samples == 0 || !(s.relative_precision >= 0.0) {
+        if s.max_samples == 0 || s.relative_precision.is_nan() || s.relative_precision < 0.0 {
             return Err(BakeError::BadSettings(
                 "reference needs max_samples ≥ 1 and a relative precision ≥ 0".into(),
             ));
@@ -928,20 +932,6 @@ fn batch_mean_se(sums: &[DVec3]) -> (DVec3, DVec3) {
     if sums.len() < 2 {
         return (m, DVec3::splat(f64::INFINITY));
     }
-    let var = means
-        .iter()
-        .map(|x| (*x - m) * (*x - m))
-        .sum::<DVec3>()
-        / (k - 1.0);
+    let var = means.iter().map(|x| (*x - m) * (*x - m)).sum::<DVec3>() / (k - 1.0);
     (m, (var / k).map(f64::sqrt))
-}
-
-#[allow(dead_code)]
-fn _assert_sync(b: &Baker<'_>) -> &(dyn Sync) {
-    b
-}
-
-#[allow(dead_code)]
-fn _env_is_send(e: Environment) -> impl Send {
-    e
 }

@@ -395,7 +395,7 @@ impl Emitters {
                     group,
                 }),
                 LightKind::Sphere | LightKind::Disk => {
-                    if !(l.radius > 0.0) {
+                    if l.radius.is_nan() || l.radius <= 0.0 {
                         return Err(bad("sphere and disk lights need a radius > 0"));
                     }
                     shapes.push(ShapeLight {
@@ -413,7 +413,11 @@ impl Emitters {
         let mut tri_index = Vec::new();
         let mut weights = Vec::new();
         for e in &scene.emissive_triangles {
-            let w = e.radiance.dot(LUMINANCE).max(e.radiance.max_element() * 1e-3) * e.area;
+            let w = e
+                .radiance
+                .dot(LUMINANCE)
+                .max(e.radiance.max_element() * 1e-3)
+                * e.area;
             if w > 0.0 && w.is_finite() {
                 tri_index.push(e.triangle);
                 weights.push(w as f64);
@@ -477,7 +481,11 @@ impl Emitters {
 
     /// A map environment rotated counter-clockwise seen from above (+Y) by
     /// `rotation_y_degrees`: world radiance `L(d) = map(R⁻¹ d)`.
-    pub(crate) fn map_environment(map: &EnvMap, scale: f32, rotation_y_degrees: f32) -> Environment {
+    pub(crate) fn map_environment(
+        map: &EnvMap,
+        scale: f32,
+        rotation_y_degrees: f32,
+    ) -> Environment {
         let world_from_map = Quat::from_rotation_y(rotation_y_degrees.to_radians());
         Environment::Map {
             sampler: Box::new(EnvSampler::new(map)),

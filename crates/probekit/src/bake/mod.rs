@@ -145,7 +145,11 @@ impl BakeOutput {
             )));
         }
         if next.settings != self.settings
-            || next.groups.iter().map(|g| &g.0).ne(self.groups.iter().map(|g| &g.0))
+            || next
+                .groups
+                .iter()
+                .map(|g| &g.0)
+                .ne(self.groups.iter().map(|g| &g.0))
         {
             return Err(BakeError::BadSettings(
                 "parts were baked with different settings or light groups".into(),

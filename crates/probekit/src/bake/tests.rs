@@ -204,7 +204,12 @@ fn sphere_light_in_empty_space_matches_zonal_closed_form() {
     let baker = Baker::new(&scene).unwrap();
     let order = 4;
     let runs: Vec<Vec<f64>> = (0..8)
-        .map(|seed| red(&baker.capture(Vec3::ZERO, 0, &quick(512, 3, order, seed)).unwrap().sh))
+        .map(|seed| {
+            red(&baker
+                .capture(Vec3::ZERO, 0, &quick(512, 3, order, seed))
+                .unwrap()
+                .sh)
+        })
         .collect();
     let (m, se) = mean_se(&runs);
     let d = c.length() as f64;
@@ -216,7 +221,11 @@ fn sphere_light_in_empty_space_matches_zonal_closed_form() {
     let want: Vec<f64> = want.iter().map(|v| *v as f64).collect();
     assert_close(&m, &se, &want, 1e-3 * want[0].abs(), "sphere light SH");
     // the estimator really is light-sampled: relative spread of c00 per run is small
-    assert!(se[0] < 0.01 * want[0], "c00 standard error {} too large", se[0]);
+    assert!(
+        se[0] < 0.01 * want[0],
+        "c00 standard error {} too large",
+        se[0]
+    );
 }
 
 #[test]
@@ -232,9 +241,15 @@ fn point_light_reference_irradiance_is_inverse_square_cosine() {
     let s = ReferenceSettings::default();
     for (i, theta) in [0.0f32, 0.5, 1.2, 2.0].into_iter().enumerate() {
         let n = Vec3::new(theta.sin(), theta.cos(), 0.0);
-        let r = baker.reference_irradiance(Vec3::ZERO, n, i as u64, &s).unwrap();
+        let r = baker
+            .reference_irradiance(Vec3::ZERO, n, i as u64, &s)
+            .unwrap();
         let want = 8.0 / 4.0 * theta.cos().max(0.0);
-        assert!((r.irradiance.x - want).abs() < 1e-5, "θ={theta}: {} vs {want}", r.irradiance.x);
+        assert!(
+            (r.irradiance.x - want).abs() < 1e-5,
+            "θ={theta}: {} vs {want}",
+            r.irradiance.x
+        );
     }
 }
 
@@ -263,12 +278,20 @@ fn sphere_and_disk_reference_irradiance_match_closed_forms() {
     let r = baker.reference_irradiance(Vec3::ZERO, n, 0, &s).unwrap();
     let want = 10.0 / 4.0 * theta.cos() as f64;
     let got = r.irradiance.x as f64;
-    assert!((got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4, "sphere: {got} vs {want}");
-    let r = baker.reference_irradiance(Vec3::ZERO, Vec3::NEG_Y, 1, &s).unwrap();
+    assert!(
+        (got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4,
+        "sphere: {got} vs {want}"
+    );
+    let r = baker
+        .reference_irradiance(Vec3::ZERO, Vec3::NEG_Y, 1, &s)
+        .unwrap();
     let l = 5.0 / (PI * 0.25);
     let want = PI * l * 0.25 / (0.25 + 1.5 * 1.5);
     let got = r.irradiance.x as f64;
-    assert!((got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4, "disk: {got} vs {want}");
+    assert!(
+        (got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4,
+        "disk: {got} vs {want}"
+    );
 }
 
 #[test]
@@ -277,13 +300,21 @@ fn directional_and_spot_lights_follow_their_definitions() {
     let mut spot = light(LightKind::Spot, spot_pos, Vec3::NEG_Y, 30.0, 0.0);
     spot.inner_angle = 0.2;
     spot.outer_angle = 0.6;
-    let mut sun = light(LightKind::Directional, Vec3::ZERO, Vec3::new(1.0, -1.0, 0.0).normalize(), 7.0, 0.0);
+    let mut sun = light(
+        LightKind::Directional,
+        Vec3::ZERO,
+        Vec3::new(1.0, -1.0, 0.0).normalize(),
+        7.0,
+        0.0,
+    );
     sun.group = Some("sun".into());
     let scene = scene_of(vec![], vec![], vec![spot, sun], Vec3::ZERO);
     let baker = Baker::new(&scene).unwrap();
     // a point 1 m off the axis at the spot's foot: angle atan(1/3) = 0.3217 rad, in the ramp
     let p = Vec3::new(1.0, 0.0, 0.0);
-    let r = baker.reference_irradiance(p, Vec3::Y, 0, &ReferenceSettings::default()).unwrap();
+    let r = baker
+        .reference_irradiance(p, Vec3::Y, 0, &ReferenceSettings::default())
+        .unwrap();
     let to_spot = spot_pos - p;
     let d2 = to_spot.length_squared() as f64;
     let cos_axis = (3.0 / d2.sqrt()) as f32;
@@ -291,7 +322,11 @@ fn directional_and_spot_lights_follow_their_definitions() {
     let ramp = ((cos_axis - co) / (ci - co)).powi(2) as f64; // KHR_lights_punctual
     let sun_e = 7.0 * std::f64::consts::FRAC_1_SQRT_2; // lux · cos 45°
     let want = 30.0 / d2 * ramp * (3.0 / d2.sqrt()) + sun_e;
-    assert!((r.irradiance.x as f64 - want).abs() < 1e-4 * want, "{} vs {want}", r.irradiance.x);
+    assert!(
+        (r.irradiance.x as f64 - want).abs() < 1e-4 * want,
+        "{} vs {want}",
+        r.irradiance.x
+    );
     // delta lights in SH: E·Y_lm(ω_l); the group split holds the sun alone
     let s = CaptureSettings {
         groups: true,
@@ -323,12 +358,21 @@ fn glass_passes_one_minus_opacity_for_shadow_and_path_rays() {
         Vec3::new(-5.0, 1.0, 5.0),
     );
     let pane = vec![tri(a, b, c, 0), tri(a, c, d, 0)];
+    // off the pane's diagonal: a shadow ray exactly through the shared edge
+    // would cross both triangles (the tracer documents this)
+    let pl = Vec3::new(0.3, 2.0, -0.8);
     let scene = scene_of(
         vec![pane],
         vec![glass],
         vec![
-            light(LightKind::Point, Vec3::new(0.0, 2.0, 0.0), Vec3::NEG_Y, 4.0, 0.0),
-            light(LightKind::Sphere, Vec3::new(1.0, 3.0, 0.0), Vec3::NEG_Y, 9.0, 0.5),
+            light(LightKind::Point, pl, Vec3::NEG_Y, 4.0, 0.0),
+            light(
+                LightKind::Sphere,
+                Vec3::new(1.0, 3.0, 0.0),
+                Vec3::NEG_Y,
+                9.0,
+                0.5,
+            ),
         ],
         Vec3::ZERO,
     );
@@ -337,17 +381,29 @@ fn glass_passes_one_minus_opacity_for_shadow_and_path_rays() {
         relative_precision: 0.003,
         ..ReferenceSettings::default()
     };
-    let r = baker.reference_irradiance(Vec3::ZERO, Vec3::Y, 0, &s).unwrap();
+    let r = baker
+        .reference_irradiance(Vec3::ZERO, Vec3::Y, 0, &s)
+        .unwrap();
     let ds = Vec3::new(1.0, 3.0, 0.0);
-    let want = (1.0 - alpha as f64) * (4.0 / 4.0 + 9.0 / ds.length_squared() as f64 * (3.0 / ds.length() as f64));
+    let point = 4.0 / pl.length_squared() as f64 * (2.0 / pl.length() as f64);
+    let sphere = 9.0 / ds.length_squared() as f64 * (3.0 / ds.length() as f64);
+    let want = (1.0 - alpha as f64) * (point + sphere);
     let got = r.irradiance.x as f64;
-    assert!((got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4, "{got} vs {want}");
+    assert!(
+        (got - want).abs() < 5.0 * r.std_error.x as f64 + 1e-4,
+        "{got} vs {want}"
+    );
 }
 
 /// A closed box, faces inward, albedo a and emission Le everywhere.
 fn furnace(a: f32, le: f32) -> Scene {
     scene_of(
-        vec![box_tris(Vec3::splat(-1.0), Vec3::new(1.0, 1.5, 0.8), true, 0)],
+        vec![box_tris(
+            Vec3::splat(-1.0),
+            Vec3::new(1.0, 1.5, 0.8),
+            true,
+            0,
+        )],
         vec![material(a, le)],
         vec![],
         Vec3::ZERO,
@@ -371,15 +427,26 @@ fn furnace_gives_geometric_series_per_bounce_count() {
                 assert!(c.validity.valid && !c.validity.offset_applied);
                 // direct is the emission seen straight: Le
                 let d00 = c.direct.as_ref().unwrap().coeffs()[0].x as f64;
-                assert!((d00 / y00 / (4.0 * PI) - le as f64).abs() < 0.03 * le as f64, "direct {d00}");
+                assert!(
+                    (d00 / y00 / (4.0 * PI) - le as f64).abs() < 0.03 * le as f64,
+                    "direct {d00}"
+                );
                 red(&c.sh)
             })
             .collect();
         let (m, se) = mean_se(&runs);
-        let l: f64 = (0..=bounces).map(|k| le as f64 * (a as f64).powi(k as i32)).sum();
+        let l: f64 = (0..=bounces)
+            .map(|k| le as f64 * (a as f64).powi(k as i32))
+            .sum();
         // isotropic radiance L: c00 = L·4π·Y00 = L·sqrt(4π); the rest vanish
         let want = [l * 4.0 * PI * y00, 0.0, 0.0, 0.0];
-        assert_close(&m, &se, &want, 2e-3 * want[0], &format!("furnace B={bounces}"));
+        assert_close(
+            &m,
+            &se,
+            &want,
+            2e-3 * want[0],
+            &format!("furnace B={bounces}"),
+        );
     }
 }
 
@@ -389,7 +456,12 @@ fn furnace_converges_to_le_over_one_minus_a_with_russian_roulette() {
     let scene = furnace(a, le);
     let baker = Baker::new(&scene).unwrap();
     let runs: Vec<Vec<f64>> = (0..6)
-        .map(|seed| red(&baker.capture(Vec3::ZERO, 1, &quick(512, 1000, 1, seed)).unwrap().sh))
+        .map(|seed| {
+            red(&baker
+                .capture(Vec3::ZERO, 1, &quick(512, 1000, 1, seed))
+                .unwrap()
+                .sh)
+        })
         .collect();
     let (m, se) = mean_se(&runs);
     let want = le as f64 / (1.0 - a as f64) * (4.0 * PI).sqrt();
@@ -405,8 +477,14 @@ fn uniform_sky_in_empty_space_is_constant_radiance() {
     let want = (4.0 * PI).sqrt() as f32;
     assert!((c.sh.coeffs()[0] - sky * want).abs().max_element() < 1e-4);
     for k in 1..9 {
-        // R2 directions integrate low-order harmonics almost exactly
-        assert!(c.sh.coeffs()[k].abs().max_element() < 5e-3, "{k}: {}", c.sh.coeffs()[k]);
+        // Only quadrature error is left: R2 points reach below 1 % of c00
+        // at 1024 directions, where independent random ones spread ~3 %.
+        let tol = 1e-2 * c.sh.coeffs()[0];
+        assert!(
+            c.sh.coeffs()[k].abs().cmplt(tol).all(),
+            "{k}: {}",
+            c.sh.coeffs()[k]
+        );
     }
 }
 
@@ -417,7 +495,11 @@ fn environment_map_capture_matches_projection() {
     let mut texels = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
-            let bright = if (3..6).contains(&y) && (20..24).contains(&x) { 40.0 } else { 0.3 };
+            let bright = if (3..6).contains(&y) && (20..24).contains(&x) {
+                40.0
+            } else {
+                0.3
+            };
             texels.push(Vec3::new(bright, bright * 0.5, 0.1 + x as f32 * 0.01));
         }
     }
@@ -427,7 +509,12 @@ fn environment_map_capture_matches_projection() {
     baker.set_environment_map(&map, 1.0, 0.0);
     let order = 3;
     let runs: Vec<Vec<f64>> = (0..6)
-        .map(|seed| red(&baker.capture(Vec3::ZERO, 0, &quick(512, 3, order, seed)).unwrap().sh))
+        .map(|seed| {
+            red(&baker
+                .capture(Vec3::ZERO, 0, &quick(512, 3, order, seed))
+                .unwrap()
+                .sh)
+        })
         .collect();
     let (m, se) = mean_se(&runs);
     let want = red(&project_equirect(&map, order));
@@ -438,11 +525,22 @@ fn environment_map_capture_matches_projection() {
 fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
     // a room (inward) containing a solid block (outward)
     let room = box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0);
-    let block = box_tris(Vec3::new(-0.5, -0.5, -0.5), Vec3::new(0.5, 0.5, 0.5), false, 0);
+    let block = box_tris(
+        Vec3::new(-0.5, -0.5, -0.5),
+        Vec3::new(0.5, 0.5, 0.5),
+        false,
+        0,
+    );
     let scene = scene_of(
         vec![room, block],
         vec![material(0.5, 0.0)],
-        vec![light(LightKind::Point, Vec3::new(0.0, 2.5, 0.0), Vec3::NEG_Y, 5.0, 0.0)],
+        vec![light(
+            LightKind::Point,
+            Vec3::new(0.0, 2.5, 0.0),
+            Vec3::NEG_Y,
+            5.0,
+            0.0,
+        )],
         Vec3::ZERO,
     );
     let baker = Baker::new(&scene).unwrap();
@@ -450,12 +548,24 @@ fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
     let mut s = quick(256, 1, 3, 1);
     s.validity.virtual_offset = false;
     let c = baker.capture(p, 0, &s).unwrap();
-    assert!(!c.validity.valid && c.validity.backface_fraction > 0.99, "{:?}", c.validity);
+    assert!(
+        !c.validity.valid && c.validity.backface_fraction > 0.99,
+        "{:?}",
+        c.validity
+    );
     assert!((c.validity.nearest_distance - 0.2).abs() < 0.01);
     s.validity.virtual_offset = true;
     let c = baker.capture(p, 0, &s).unwrap();
-    assert!(c.validity.offset_applied && c.validity.valid, "{:?}", c.validity);
-    assert!(c.position.x > 0.5 && c.position.x < 0.6, "pushed to {}", c.position);
+    assert!(
+        c.validity.offset_applied && c.validity.valid,
+        "{:?}",
+        c.validity
+    );
+    assert!(
+        c.position.x > 0.5 && c.position.x < 0.6,
+        "pushed to {}",
+        c.position
+    );
     assert!(c.sh.coeffs()[0].x > 0.0, "the pushed probe sees the light");
 }
 
@@ -464,11 +574,17 @@ fn parity_judges_inconsistently_wound_triangles() {
     // solid block with its +x face flipped: those triangles (and neighbours
     // sharing an edge with them) are flagged; parity still says "inside"
     let mut block = box_tris(Vec3::splat(-0.5), Vec3::splat(0.5), false, 0);
-    for t in block.iter_mut().filter(|t| t.positions.iter().all(|p| p.x > 0.49)) {
+    for t in block
+        .iter_mut()
+        .filter(|t| t.positions.iter().all(|p| p.x > 0.49))
+    {
         t.positions.swap(1, 2);
     }
     let scene = scene_of(vec![block], vec![material(0.5, 0.0)], vec![], Vec3::ZERO);
-    assert!((0..12).any(|t| !scene.winding_consistent(t)), "scene flags the flipped face");
+    assert!(
+        (0..12).any(|t| !scene.winding_consistent(t)),
+        "scene flags the flipped face"
+    );
     let baker = Baker::new(&scene).unwrap();
     let mut s = quick(512, 0, 1, 1);
     s.validity.virtual_offset = false;
@@ -488,7 +604,10 @@ fn harmonic_mean_distance_in_a_cube_matches_quadrature() {
         Vec3::ZERO,
     );
     let baker = Baker::new(&scene).unwrap();
-    let v = baker.capture(Vec3::ZERO, 0, &quick(4096, 0, 1, 3)).unwrap().validity;
+    let v = baker
+        .capture(Vec3::ZERO, 0, &quick(4096, 0, 1, 3))
+        .unwrap()
+        .validity;
     let n = 200_000;
     let ga = PI * (3.0 - 5f64.sqrt());
     let mut e = 0.0;
@@ -499,7 +618,11 @@ fn harmonic_mean_distance_in_a_cube_matches_quadrature() {
         e += x.abs().max(y.abs()).max(z.abs());
     }
     let want = h as f64 / (e / n as f64);
-    assert!((v.harmonic_mean_distance as f64 - want).abs() < 0.005 * want, "{} vs {want}", v.harmonic_mean_distance);
+    assert!(
+        (v.harmonic_mean_distance as f64 - want).abs() < 0.005 * want,
+        "{} vs {want}",
+        v.harmonic_mean_distance
+    );
     assert!(v.valid && v.backface_fraction == 0.0);
     assert!((v.nearest_distance - h).abs() < 0.01 * h);
 }
@@ -507,18 +630,35 @@ fn harmonic_mean_distance_in_a_cube_matches_quadrature() {
 fn small_room() -> Scene {
     scene_of(
         vec![
-            box_tris(Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 2.5, 2.0), true, 0),
+            box_tris(
+                Vec3::new(-2.0, 0.0, -2.0),
+                Vec3::new(2.0, 2.5, 2.0),
+                true,
+                0,
+            ),
             box_tris(Vec3::new(0.5, 0.0, 0.5), Vec3::new(1.0, 1.0, 1.0), false, 1),
         ],
         vec![material(0.7, 0.0), material(0.4, 0.0)],
-        vec![light(LightKind::Sphere, Vec3::new(-0.5, 2.0, 0.0), Vec3::NEG_Y, 15.0, 0.15)],
+        vec![light(
+            LightKind::Sphere,
+            Vec3::new(-0.5, 2.0, 0.0),
+            Vec3::NEG_Y,
+            15.0,
+            0.15,
+        )],
         Vec3::ZERO,
     )
 }
 
 fn probe_points() -> Vec<Vec3> {
     (0..7)
-        .map(|i| Vec3::new(-1.5 + 0.5 * i as f32, 0.3 + 0.25 * i as f32, 0.2 * i as f32 - 0.7))
+        .map(|i| {
+            Vec3::new(
+                -1.5 + 0.5 * i as f32,
+                0.3 + 0.25 * i as f32,
+                0.2 * i as f32 - 0.7,
+            )
+        })
         .collect()
 }
 
@@ -550,7 +690,10 @@ fn same_bits_for_one_and_two_threads() {
     assert_eq!(a, b);
     // direct + indirect = total
     for i in 0..pts.len() {
-        let (d, ind) = (&a.direct.as_ref().unwrap()[i], &a.indirect.as_ref().unwrap()[i]);
+        let (d, ind) = (
+            &a.direct.as_ref().unwrap()[i],
+            &a.indirect.as_ref().unwrap()[i],
+        );
         for k in 0..9 {
             let sum = d.coeffs()[k] + ind.coeffs()[k];
             assert!((sum - a.sh[i].coeffs()[k]).abs().max_element() < 1e-4);
@@ -566,7 +709,9 @@ fn three_shards_reproduce_the_unsharded_bake() {
     let whole = bake_points(&scene, &pts, &s, &|_, _| {}).unwrap();
     let mut merged = bake_shard(&scene, &pts, 0, 3, &s, &|_, _| {}).unwrap();
     for k in 1..3 {
-        merged.append(bake_shard(&scene, &pts, k, 3, &s, &|_, _| {}).unwrap()).unwrap();
+        merged
+            .append(bake_shard(&scene, &pts, k, 3, &s, &|_, _| {}).unwrap())
+            .unwrap();
     }
     assert_eq!(bits(&whole), bits(&merged));
     assert_eq!(whole, merged);
@@ -603,9 +748,15 @@ fn bad_settings_and_points_are_typed_errors() {
         order: 9,
         ..CaptureSettings::default()
     };
-    assert!(matches!(baker.capture(Vec3::ZERO, 0, &s), Err(BakeError::BadSettings(_))));
+    assert!(matches!(
+        baker.capture(Vec3::ZERO, 0, &s),
+        Err(BakeError::BadSettings(_))
+    ));
     let s = quick(0, 1, 3, 1);
-    assert!(matches!(baker.capture(Vec3::ZERO, 0, &s), Err(BakeError::BadSettings(_))));
+    assert!(matches!(
+        baker.capture(Vec3::ZERO, 0, &s),
+        Err(BakeError::BadSettings(_))
+    ));
     let s = quick(16, 1, 3, 1);
     assert!(matches!(
         baker.capture(Vec3::new(f32::NAN, 0.0, 0.0), 0, &s),

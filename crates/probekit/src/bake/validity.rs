@@ -130,7 +130,7 @@ impl HitStats {
         self.min_dist = self.min_dist.min(t);
         if back {
             self.back += 1;
-            if self.nearest_back.is_none_or(|(tb, _)| t < tb) {
+            if self.nearest_back.map_or(true, |(tb, _)| t < tb) {
                 self.nearest_back = Some((t, dir));
             }
         }
@@ -144,7 +144,7 @@ impl HitStats {
         self.inv_dist_sum += o.inv_dist_sum;
         self.min_dist = self.min_dist.min(o.min_dist);
         if let Some((t, d)) = o.nearest_back {
-            if self.nearest_back.is_none_or(|(tb, _)| t < tb) {
+            if self.nearest_back.map_or(true, |(tb, _)| t < tb) {
                 self.nearest_back = Some((t, d));
             }
         }
@@ -168,7 +168,12 @@ impl HitStats {
 }
 
 impl Validity {
-    pub(crate) fn from_stats(st: &HitStats, s: &ValiditySettings, offset: Vec3, pushed: bool) -> Self {
+    pub(crate) fn from_stats(
+        st: &HitStats,
+        s: &ValiditySettings,
+        offset: Vec3,
+        pushed: bool,
+    ) -> Self {
         let f = st.backface_fraction();
         Self {
             backface_fraction: f,
