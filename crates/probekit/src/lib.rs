@@ -9,4 +9,6 @@
 pub mod bake;
 pub mod env;
 pub mod plot;
+pub mod scene;
 pub mod sh;
+pub mod trace;
