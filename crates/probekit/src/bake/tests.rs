@@ -763,3 +763,35 @@ fn bad_settings_and_points_are_typed_errors() {
         Err(BakeError::NonFinitePosition { .. })
     ));
 }
+
+#[test]
+fn demo_closet_gets_only_indirect_light() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let s = CaptureSettings {
+        split_direct: true,
+        ..quick(512, 3, 3, 5)
+    };
+    let c = baker.capture(Vec3::new(0.6, 1.5, 0.5), 0, &s).unwrap();
+    assert!(
+        c.validity.valid && !c.validity.offset_applied,
+        "{:?}",
+        c.validity
+    );
+    let direct = c.direct.as_ref().unwrap();
+    let indirect = c.indirect.as_ref().unwrap();
+    // no straight line reaches the closet from the lamp, the sun or the sky
+    assert!(
+        direct.coeffs().iter().all(|v| *v == Vec3::ZERO),
+        "direct {:?}",
+        direct.coeffs()[0]
+    );
+    assert!(
+        indirect.coeffs()[0].min_element() > 0.0,
+        "indirect {:?}",
+        indirect.coeffs()[0]
+    );
+    // while room A's middle does see the lamp directly
+    let a = baker.capture(Vec3::new(2.6, 1.2, 2.0), 1, &s).unwrap();
+    assert!(a.direct.unwrap().coeffs()[0].x > 0.0);
+}
