@@ -31,6 +31,7 @@
 pub mod basis;
 pub mod coeffs;
 pub mod convolve;
+pub mod lights;
 pub mod zonal;
 
 pub use basis::{eval_basis, eval_l1, eval_l2, index, num_coeffs, MAX_COEFFS, MAX_ORDER};
