@@ -220,6 +220,24 @@ fn sphere_light_in_empty_space_matches_zonal_closed_form() {
     zh_to_sh(&zh, c.normalize(), &mut want);
     let want: Vec<f64> = want.iter().map(|v| *v as f64).collect();
     assert_close(&m, &se, &want, 1e-3 * want[0].abs(), "sphere light SH");
+    // and the analytic sphere light of probekit_sh::lights agrees too
+    let mut lib = vec![Vec3::ZERO; order * order];
+    probekit_sh::lights::sphere::sphere_light_sh(
+        order,
+        Vec3::ZERO,
+        c,
+        r,
+        Vec3::splat(intensity),
+        &mut lib,
+    );
+    let lib: Vec<f64> = lib.iter().map(|v| v.x as f64).collect();
+    assert_close(
+        &m,
+        &se,
+        &lib,
+        1e-3 * want[0].abs(),
+        "sphere light vs probekit_sh::lights",
+    );
     // the estimator really is light-sampled: relative spread of c00 per run is small
     assert!(
         se[0] < 0.01 * want[0],
