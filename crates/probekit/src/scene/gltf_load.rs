@@ -120,7 +120,18 @@ pub(crate) fn load(path: &Path) -> Result<Parts, SceneError> {
         .or_else(|| document.scenes().next());
     let roots: Vec<gltf::Node> = match &scene {
         Some(s) => s.nodes().collect(),
-        None => document.nodes().collect(),
+        None => {
+            // No scene: every node that is nobody's child is a root.
+            let mut is_child = vec![false; document.nodes().len()];
+            for n in document.nodes() {
+                for c in n.children() {
+                    if let Some(f) = is_child.get_mut(c.index()) {
+                        *f = true;
+                    }
+                }
+            }
+            document.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
     };
     let mut stack: Vec<(gltf::Node, Mat4)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY)).collect();

@@ -634,6 +634,27 @@ impl Scene {
         }
     }
 
+    /// Builds a scene from triangles made in code (test scenes, furnaces, benchmarks), with the
+    /// same validation as loading: non-finite vertices are an error, degenerate triangles are
+    /// dropped with a warning, winding is checked per object, emissive triangles and bounds are
+    /// collected. `objects` are `(name, triangles)`; triangle material indices index `materials`
+    /// (out-of-range ones get a default grey material). Environment, bake settings and regions
+    /// start empty; set the public fields afterwards.
+    pub fn from_triangles(
+        name: &str,
+        objects: Vec<(String, Vec<Triangle>)>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+    ) -> Result<Scene, SceneError> {
+        let parts = Parts {
+            objects,
+            materials,
+            lights,
+            ..Parts::default()
+        };
+        Scene::from_parts(Path::new(name), parts, SceneExtras::default())
+    }
+
     /// The built-in demo scene (two rooms, a closet; see [`demo`] for the plan).
     pub fn builtin_demo() -> Scene {
         demo::build()

@@ -558,3 +558,52 @@ fn tracer_is_usable_from_many_threads() {
         .collect();
     assert_eq!(serial, parallel);
 }
+
+mod prop {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn v3(r: std::ops::Range<f32>) -> impl Strategy<Value = Vec3> {
+        (r.clone(), r.clone(), r).prop_map(|(x, y, z)| Vec3::new(x, y, z))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// A ray aimed at a point inside a triangle hits it there, with the barycentrics the
+        /// point was made from (independent: the point is constructed, not intersected).
+        #[test]
+        fn aimed_rays_hit_with_the_right_barycentrics(
+            a in v3(-10.0..10.0), b in v3(-10.0..10.0), c in v3(-10.0..10.0),
+            u in 0.05f32..0.9, v in 0.05f32..0.9, from in v3(-20.0..20.0),
+        ) {
+            let (b1, b2) = if u + v < 0.95 { (u, v) } else { (1.0 - u, 1.0 - v) };
+            prop_assume!(b1 + b2 < 0.95);
+            let tri = STriangle { positions: [a, b, c], normals: [Vec3::Y; 3], uvs: [Vec2::ZERO; 3], material: 0 };
+            let ng = tri.geometric_normal_unnormalized();
+            // Well-shaped triangles seen at a reasonable angle only.
+            prop_assume!(ng.length() > 0.5);
+            let target = tri.point(b1, b2);
+            let d = target - from;
+            prop_assume!(d.length() > 0.5 && d.normalize().dot(ng.normalize()).abs() > 0.1);
+            let s = scene_of(vec![("t".into(), vec![tri])], vec![white()], vec![]);
+            let tr = Tracer::new(&s);
+            let h = tr.closest_hit(&Ray::new(from, d), 2.0);
+            prop_assert!(h.is_some());
+            let h = h.unwrap();
+            prop_assert!((h.t - 1.0).abs() < 1e-4, "t = {}", h.t);
+            prop_assert!((h.barycentrics - Vec2::new(b1, b2)).abs().max_element() < 1e-3);
+            prop_assert_eq!(h.front_face, d.dot(ng) < 0.0);
+            prop_assert!((h.point - target).length() < 1e-3 * (1.0 + target.length()));
+        }
+
+        /// The self-intersection offset stays tiny relative to the coordinates.
+        #[test]
+        fn offset_is_small_and_on_the_normal_side(p in v3(-1e5..1e5), n in v3(-1.0..1.0)) {
+            prop_assume!(n.length() > 0.1);
+            let o = offset_ray_origin(p, n);
+            let d = o - p;
+            prop_assert!(d.length() <= 1e-4 * (1.0 + p.abs().max_element()));
+            prop_assert!(d.dot(n) >= 0.0);
+        }
+    }
+}
