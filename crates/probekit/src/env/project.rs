@@ -30,7 +30,22 @@ pub trait Environment: Sync {
     fn weighted_texels(&self) -> Vec<WeightedTexel>;
     /// Radiance SH of `order` bands with exact texel solid angles.
     fn project(&self, order: usize) -> ShRgb;
+    /// The texels the brute-force reference integrates over; by default all
+    /// of [`Environment::weighted_texels`]. [`EnvMap`] reduces maps wider
+    /// than [`REFERENCE_MAX_WIDTH`] with [`EnvMap::downsample_2x2`] first.
+    fn reference_texels(&self) -> Vec<WeightedTexel> {
+        self.weighted_texels()
+    }
 }
+
+/// Widest equirect map the comparison's reference integrates at full
+/// resolution (256×128 = 32768 texels). Wider maps are halved by exact
+/// solid-angle-weighted 2×2 averaging, which preserves total flux exactly:
+/// the cosine kernel is smooth, so the irradiance changes by far less than
+/// 0.1 % RMS (measured: builtin sky 512×256, a 2° sun at 2000× sky radiance,
+/// in `env::tests::downsample_for_reference_is_accurate`; the real maps in the
+/// data tier test of `sh::compare`), and the reference costs 4× less per halving.
+pub const REFERENCE_MAX_WIDTH: usize = 256;
 
 impl Environment for EnvMap {
     fn weighted_texels(&self) -> Vec<WeightedTexel> {
@@ -48,6 +63,13 @@ impl Environment for EnvMap {
     }
     fn project(&self, order: usize) -> ShRgb {
         project_equirect(self, order)
+    }
+    fn reference_texels(&self) -> Vec<WeightedTexel> {
+        let mut m = std::borrow::Cow::Borrowed(self);
+        while m.width() > REFERENCE_MAX_WIDTH && m.width() % 2 == 0 && m.height() % 2 == 0 {
+            m = std::borrow::Cow::Owned(m.downsample_2x2());
+        }
+        m.weighted_texels()
     }
 }
 
@@ -108,7 +130,15 @@ pub fn project_equirect(map: &EnvMap, order: usize) -> ShRgb {
             let row = &map.texels()[y * w..(y + 1) * w];
             for (t, (cp, sp)) in row.iter().zip(&cols) {
                 let d = DVec3::new(cl * cp, sl, cl * sp);
-                eval_basis_f64(order, d, &mut b);
+                if order <= 3 {
+                    // hand-written L2 fast path (f32 basis, f64 sums)
+                    let f = probekit_sh::basis::eval_l2(d.as_vec3());
+                    for (bi, fi) in b.iter_mut().zip(f) {
+                        *bi = fi as f64;
+                    }
+                } else {
+                    eval_basis_f64(order, d, &mut b);
+                }
                 let l = t.as_dvec3();
                 for i in 0..nc {
                     acc[i] += l * b[i];
@@ -147,9 +177,7 @@ pub fn project_cubemap(cube: &Cubemap, order: usize) -> ShRgb {
             for x in 0..n {
                 let a = 2.0 * (x as f64 + 0.5) / n as f64 - 1.0;
                 let bb = 2.0 * (y as f64 + 0.5) / n as f64 - 1.0;
-                let d = face.direction(a as f32, bb as f32).as_dvec3();
-                // recompute in f64 for accuracy (direction() is exact for these small integers/n)
-                let d = d.normalize();
+                let d = face.direction(a as f32, bb as f32).as_dvec3().normalize();
                 eval_basis_f64(order, d, &mut b);
                 let l = cube.face(face)[y * n + x].as_dvec3() * cube.texel_solid_angle(x, y);
                 for i in 0..nc {
@@ -182,29 +210,41 @@ pub fn reference_irradiance(map: &EnvMap, normals: &[Vec3]) -> Vec<Vec3> {
 /// [`Cubemap`]'s, via [`Environment::weighted_texels`]).
 pub fn reference_irradiance_texels(texels: &[WeightedTexel], normals: &[Vec3]) -> Vec<Vec3> {
     // Structure of arrays for a tight inner loop.
-    let dx: Vec<f32> = texels.iter().map(|t| t.dir.x).collect();
-    let dy: Vec<f32> = texels.iter().map(|t| t.dir.y).collect();
-    let dz: Vec<f32> = texels.iter().map(|t| t.dir.z).collect();
-    let fr: Vec<f32> = texels.iter().map(|t| t.flux.x).collect();
-    let fg: Vec<f32> = texels.iter().map(|t| t.flux.y).collect();
-    let fb: Vec<f32> = texels.iter().map(|t| t.flux.z).collect();
+    // Padded to a multiple of LANES with zero flux, which adds nothing.
+    const LANES: usize = 8;
+    let padded = texels.len().div_ceil(LANES) * LANES;
+    let soa = |f: &dyn Fn(&WeightedTexel) -> f32| -> Vec<f32> {
+        let mut v: Vec<f32> = texels.iter().map(f).collect();
+        v.resize(padded, 0.0);
+        v
+    };
+    let (dx, dy, dz) = (soa(&|t| t.dir.x), soa(&|t| t.dir.y), soa(&|t| t.dir.z));
+    let (fr, fg, fb) = (soa(&|t| t.flux.x), soa(&|t| t.flux.y), soa(&|t| t.flux.z));
     const CHUNK: usize = 512;
     normals
         .par_iter()
         .map(|n| {
             let mut total = DVec3::ZERO;
             let mut start = 0;
-            while start < dx.len() {
-                let end = (start + CHUNK).min(dx.len());
-                // f32 within a short chunk (auto-vectorised), f64 across chunks.
-                let (mut r, mut g, mut b) = (0.0f32, 0.0f32, 0.0f32);
-                for i in start..end {
-                    let c = (n.x * dx[i] + n.y * dy[i] + n.z * dz[i]).max(0.0);
-                    r += c * fr[i];
-                    g += c * fg[i];
-                    b += c * fb[i];
+            while start < padded {
+                let end = (start + CHUNK).min(padded);
+                // f32 in LANES independent partial sums within a short chunk
+                // (so the loop vectorises: a single f32 sum cannot be
+                // reordered), f64 across chunks; the order is fixed.
+                let (mut r, mut g, mut b) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+                for base in (start..end).step_by(LANES) {
+                    let s = base..base + LANES;
+                    let (x, y, z) = (&dx[s.clone()], &dy[s.clone()], &dz[s.clone()]);
+                    let (fr, fg, fb) = (&fr[s.clone()], &fg[s.clone()], &fb[s]);
+                    for k in 0..LANES {
+                        let c = (n.x * x[k] + n.y * y[k] + n.z * z[k]).max(0.0);
+                        r[k] += c * fr[k];
+                        g[k] += c * fg[k];
+                        b[k] += c * fb[k];
+                    }
                 }
-                total += DVec3::new(r as f64, g as f64, b as f64);
+                let sum = |a: [f32; LANES]| a.iter().map(|v| *v as f64).sum::<f64>();
+                total += DVec3::new(sum(r), sum(g), sum(b));
                 start = end;
             }
             total.as_vec3()

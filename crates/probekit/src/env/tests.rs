@@ -438,7 +438,16 @@ fn bad_inputs_give_typed_errors() {
             e => panic!("{name}: {e}"),
         }
     }
-    // zero size
+    // zero size, in a file and in memory
+    std::fs::write(
+        d.join("zero.hdr"),
+        "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 0\n",
+    )
+    .unwrap();
+    assert!(matches!(
+        expect_err(&d.join("zero.hdr")),
+        EnvError::ZeroSize { .. }
+    ));
     assert!(matches!(
         EnvMap::from_texels(Path::new("z"), 0, 0, vec![]),
         Err(EnvError::ZeroSize { .. })
@@ -528,4 +537,82 @@ fn shrgb_round_trip_of_projection() {
     for d in spherical_fibonacci(20) {
         assert!((sh.eval(d) - truth.eval(d)).length() < 5e-3);
     }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(12))]
+
+    /// Property: projecting any (non-negative) band-limited L2 radiance
+    /// sampled on a 128×64 map returns its coefficients, up to the texel
+    /// quadrature error.
+    #[test]
+    fn projection_of_random_band_limited_radiance(
+        raw in proptest::collection::vec(-1.0f32..1.0, 24)
+    ) {
+        let mut c = vec![Vec3::ZERO; 9];
+        for i in 1..9 {
+            c[i] = Vec3::new(raw[3 * (i - 1)], raw[3 * (i - 1) + 1], raw[3 * (i - 1) + 2]);
+        }
+        // |Y_lm| <= 0.631 for l <= 2, so this DC keeps the radiance positive
+        let bound: Vec3 = c[1..].iter().map(|v| v.abs()).sum::<Vec3>() * 0.7 + Vec3::splat(0.1);
+        c[0] = bound / probekit_sh::basis::Y00;
+        let map = synthetic(128, 64, |d| eval_sh(&c, d));
+        let sh = project_equirect(&map, 3);
+        let scale = c.iter().map(|v| v.abs().max_element()).sum::<f32>();
+        for (a, b) in sh.coeffs().iter().zip(&c) {
+            proptest::prop_assert!((*a - *b).abs().max_element() < 1e-3 * scale, "{} vs {}", a, b);
+        }
+    }
+}
+
+/// Chi-square test of the sampler: samples binned by texel row and by 8
+/// column groups against the expected probability `∫ pdf dω` of each bin
+/// (computed from `pdf()` at texel centres times the exact solid angles).
+#[test]
+fn sampler_chi_square() {
+    let map = EnvMap::builtin_sky(32, 16);
+    let s = EnvSampler::new(&map);
+    let (bins_x, bins_y) = (8, 16);
+    let mut expected = vec![0.0f64; bins_x * bins_y];
+    for y in 0..16 {
+        for x in 0..32 {
+            let p = s.pdf(map.texel_direction(x, y)) as f64 * map.row_solid_angle(y);
+            expected[y * bins_x + x / 4] += p;
+        }
+    }
+    let n = 40_000;
+    let mut counts = vec![0.0f64; bins_x * bins_y];
+    let mut state = 0x2545F4914F6CDD1Du64;
+    let mut rnd = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for _ in 0..n {
+        let (d, _, _) = s.sample(Vec2::new(rnd(), rnd()));
+        let (x, y) = map.texel_of(d);
+        counts[y * bins_x + x / 4] += 1.0;
+    }
+    // pool bins with small expectation (standard chi-square practice)
+    let (mut chi2, mut dof, mut pool_e, mut pool_c) = (0.0, 0usize, 0.0, 0.0);
+    for (e, c) in expected.iter().zip(&counts) {
+        let e = e * n as f64;
+        if e < 5.0 {
+            pool_e += e;
+            pool_c += c;
+        } else {
+            chi2 += (c - e) * (c - e) / e;
+            dof += 1;
+        }
+    }
+    if pool_e > 0.0 {
+        chi2 += (pool_c - pool_e) * (pool_c - pool_e) / pool_e.max(1.0);
+        dof += 1;
+    }
+    // 99.99th percentile of χ² for `dof − 1` degrees of freedom is below
+    // dof + 5.4·sqrt(2·dof) for dof in this range (Wilson–Hilferty).
+    let limit = dof as f64 + 5.4 * (2.0 * dof as f64).sqrt();
+    println!("chi2 {chi2:.1} over {dof} bins (limit {limit:.1})");
+    assert!(chi2 < limit, "chi2 {chi2} over {dof} bins (limit {limit})");
 }

@@ -243,7 +243,8 @@ pub fn bar_chart(
     let bottom = H as i64 - 20 - label_px.min(260);
     let mut c = Canvas::new();
     title_and_axes(&mut c, title, y_label, bottom);
-    let ymax = finite.iter().copied().fold(0.0f64, f64::max);
+    // 8 % headroom so the value printed above the tallest bar stays inside
+    let ymax = finite.iter().copied().fold(0.0f64, f64::max) * 1.08;
     let ymin = finite.iter().copied().fold(0.0f64, f64::min);
     let (lo, hi) = y_axis(
         &mut c,

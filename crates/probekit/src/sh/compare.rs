@@ -182,7 +182,9 @@ pub fn relative_rmse(approx: &[Vec3], reference: &[Vec3]) -> Option<f64> {
 }
 
 /// Everything a basis needs: the projected radiance SH, the normals and the
-/// reference irradiance at them.
+/// reference irradiance at them (over [`Environment::reference_texels`]: maps
+/// wider than 256 texels are 2×2-averaged first, < 0.1 % change, see
+/// [`crate::env::project::REFERENCE_MAX_WIDTH`]).
 #[derive(Clone, Debug)]
 pub struct ComparisonInputs {
     /// L1 radiance SH (first four coefficients of `l2`).
@@ -203,7 +205,7 @@ impl ComparisonInputs {
         let l2: [Vec3; 9] = sh.coeffs().try_into().expect("order 3 has 9 coefficients");
         let l1 = [l2[0], l2[1], l2[2], l2[3]];
         let normals = spherical_fibonacci(normals);
-        let reference = reference_irradiance_texels(&env.weighted_texels(), &normals);
+        let reference = reference_irradiance_texels(&env.reference_texels(), &normals);
         Self {
             l1,
             l2,
@@ -311,15 +313,15 @@ fn eval_ambient_cube(i: &ComparisonInputs) -> Option<Vec<Vec3>> {
 fn basis_bytes() -> BasisBytes {
     use probekit_sh::codec::{AMBIENT_CUBE_BYTES, L1_BYTES, L2_BYTES, ZH3_BYTES};
     BasisBytes {
-        l1: Some(L1_BYTES),
-        l1_geomerics: Some(L1_BYTES),
-        zh3_hallucinated: Some(L1_BYTES),
-        zh3_shared: Some(ZH3_BYTES),
-        zh3_per_channel: Some(ZH3_BYTES),
-        zh3_solved: Some(ZH3_BYTES),
-        l2: Some(L2_BYTES),
-        l2_windowed: Some(L2_BYTES),
-        ambient_cube: Some(AMBIENT_CUBE_BYTES),
+        l1: Some(L1_BYTES as usize),
+        l1_geomerics: Some(L1_BYTES as usize),
+        zh3_hallucinated: Some(L1_BYTES as usize),
+        zh3_shared: Some(ZH3_BYTES as usize),
+        zh3_per_channel: Some(ZH3_BYTES as usize),
+        zh3_solved: Some(ZH3_BYTES as usize),
+        l2: Some(L2_BYTES as usize),
+        l2_windowed: Some(L2_BYTES as usize),
+        ambient_cube: Some(AMBIENT_CUBE_BYTES as usize),
     }
 }
 
