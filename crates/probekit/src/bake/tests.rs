@@ -813,3 +813,30 @@ fn demo_closet_gets_only_indirect_light() {
     let a = baker.capture(Vec3::new(2.6, 1.2, 2.0), 1, &s).unwrap();
     assert!(a.direct.unwrap().coeffs()[0].x > 0.0);
 }
+
+#[test]
+fn environment_rotation_turns_the_sky_counter_clockwise_seen_from_above() {
+    use crate::env::EnvMap;
+    let (w, h) = (64usize, 32usize);
+    let (bx, by) = (40usize, 12usize);
+    let mut texels = vec![Vec3::splat(0.01); w * h];
+    texels[by * w + bx] = Vec3::splat(5000.0);
+    let map = EnvMap::from_texels(Path::new("spot"), w, h, texels).unwrap();
+    let d0 = map.texel_direction(bx, by);
+    let scene = scene_of(vec![], vec![], vec![], Vec3::ZERO);
+    let mut baker = Baker::new(&scene).unwrap();
+    for deg in [0.0f32, 90.0, 200.0] {
+        baker.set_environment_map(&map, 1.0, deg);
+        let c = baker
+            .capture(Vec3::ZERO, 0, &quick(512, 0, 2, 1))
+            .unwrap()
+            .sh;
+        let k = c.coeffs();
+        // Sloan's basis: Y1,-1 ∝ −y, Y1,0 ∝ z, Y1,1 ∝ −x
+        let lobe = Vec3::new(-k[3].x, -k[1].x, k[2].x).normalize();
+        // positive angle = right-handed about +Y = counter-clockwise from above
+        let (s, co) = deg.to_radians().sin_cos();
+        let want = Vec3::new(co * d0.x + s * d0.z, d0.y, -s * d0.x + co * d0.z);
+        assert!(lobe.dot(want) > 0.99, "{deg}°: lobe {lobe} vs {want}");
+    }
+}
