@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod env;
 pub mod format;
 pub mod plot;
