@@ -266,6 +266,34 @@ pub struct TetMesh {
     grid: StartGrid,
 }
 
+/// Neighbour table of a tetrahedralization given only its tetrahedra (as in
+/// the JSON export): `result[t][i]` is the tetrahedron sharing the face
+/// opposite vertex `i` of `tets[t]`, or [`HULL`]. Error if a face is shared by
+/// more than two tetrahedra.
+pub fn face_neighbors(tets: &[[u32; 4]]) -> Result<Vec<[u32; 4]>, CloudError> {
+    let mut faces = std::collections::HashMap::with_capacity(tets.len() * 2);
+    let mut n = vec![[HULL; 4]; tets.len()];
+    for (t, v) in tets.iter().enumerate() {
+        for i in 0..4 {
+            let mut f = [v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]];
+            f.sort_unstable();
+            match faces.entry(f) {
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert(Some((t, i)));
+                }
+                std::collections::hash_map::Entry::Occupied(mut e) => match e.get_mut().take() {
+                    Some((u, j)) => {
+                        n[t][i] = u as u32;
+                        n[u][j] = t as u32;
+                    }
+                    None => return Err(CloudError::NeighborMismatch { tet: t, face: i }),
+                },
+            }
+        }
+    }
+    Ok(n)
+}
+
 /// `FACE[k]`: local vertices of the face opposite `k`, wound so that vertex
 /// `k` of a positively oriented tetrahedron lies on its positive side.
 const FACE: [[usize; 3]; 4] = [[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]];
@@ -313,7 +341,7 @@ impl TetMesh {
             let (e0, e1, e2) = (q[0] - q[3], q[1] - q[3], q[2] - q[3]);
             let det = e0.dot(e1.cross(e2));
             let scale = e0.length() * e1.length() * e2.length();
-            if !(det.abs() > 1e-12 * scale) {
+            if det.is_nan() || det.abs() <= 1e-12 * scale {
                 return Err(CloudError::DegenerateTet { tet: t });
             }
             // Rows of the inverse of [e0 e1 e2] are the cross products / det.
@@ -326,14 +354,8 @@ impl TetMesh {
         }
         // Neighbour validation.
         let sorted_face = |t: usize, i: usize| {
-            let mut f = [0u32; 3];
-            let mut n = 0;
-            for k in 0..4 {
-                if k != i {
-                    f[n] = tets[t][k];
-                    n += 1;
-                }
-            }
+            let v = tets[t];
+            let mut f = [v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]];
             f.sort_unstable();
             f
         };
@@ -379,12 +401,12 @@ impl TetMesh {
                 }
             }
         }
-        for h in 0..hull.len() {
+        for face in &mut hull {
             for k in 0..3 {
-                let f = hull[h].probes;
+                let f = face.probes;
                 let (a, b) = (f[(k + 1) % 3], f[(k + 2) % 3]);
                 match edges.get(&(b, a)) {
-                    Some(&(g, _)) => hull[h].adjacent[k] = g,
+                    Some(&(g, _)) => face.adjacent[k] = g,
                     None => return Err(CloudError::HullNotClosed { a, b }),
                 }
             }

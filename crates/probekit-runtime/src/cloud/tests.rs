@@ -5,6 +5,15 @@
 use super::*;
 use std::collections::HashMap;
 
+#[test]
+fn face_neighbors_rejects_a_face_shared_three_times() {
+    let t = [[0, 1, 2, 3], [0, 1, 2, 4], [0, 1, 2, 5]];
+    assert!(matches!(
+        face_neighbors(&t),
+        Err(CloudError::NeighborMismatch { tet: 2, .. })
+    ));
+}
+
 /// Kuhn triangulation of a `k³` lattice (spacing `h`, origin `o`, optional
 /// per-point jitter function): 6 tetrahedra per cube, one per axis order.
 pub(crate) fn kuhn(
@@ -51,22 +60,7 @@ pub(crate) fn kuhn(
 }
 
 pub(crate) fn neighbours(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
-    let mut faces: HashMap<[u32; 3], (usize, usize)> = HashMap::new();
-    let mut n = vec![[HULL; 4]; tets.len()];
-    for (t, v) in tets.iter().enumerate() {
-        for i in 0..4 {
-            let mut f: Vec<u32> = (0..4).filter(|&k| k != i).map(|k| v[k]).collect();
-            f.sort_unstable();
-            let key = [f[0], f[1], f[2]];
-            if let Some((u, j)) = faces.remove(&key) {
-                n[t][i] = u as u32;
-                n[u][j] = t as u32;
-            } else {
-                faces.insert(key, (t, i));
-            }
-        }
-    }
-    n
+    face_neighbors(tets).unwrap()
 }
 
 fn grid_mesh(k: u32) -> TetMesh {

@@ -207,7 +207,7 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
         let q = |k: usize| ((p[k] - lo[k]) * scale[k]) as u64;
         spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2)
     };
-    let mut rng = SplitMix(0x5EED_0F_B810);
+    let mut rng = SplitMix(0x005E_ED0F_B810);
     for i in (1..order.len()).rev() {
         let j = (rng.next() % (i as u64 + 1)) as usize;
         order.swap(i, j);
@@ -307,8 +307,8 @@ impl<'a> Builder<'a> {
         };
         let fin = [a, b, c, d];
         self.cells.push(fin);
-        for k in 0..4 {
-            let f = FACE[k].map(|i| fin[i]);
+        for face in &FACE {
+            let f = face.map(|i| fin[i]);
             self.cells.push([f[1], f[0], f[2], INF]);
         }
         self.nbrs = vec![[HULL; 4]; 5];
@@ -544,6 +544,19 @@ impl<'a> Builder<'a> {
 }
 
 impl Tetrahedralization {
+    /// Builds the runtime query structure for these tetrahedra over `points`
+    /// (the same slice given to [`tetrahedralize`]).
+    pub fn to_tet_mesh(
+        &self,
+        points: &[Vec3],
+    ) -> Result<probekit_runtime::cloud::TetMesh, probekit_runtime::cloud::CloudError> {
+        probekit_runtime::cloud::TetMesh::new(
+            points.to_vec(),
+            self.tets.clone(),
+            self.neighbors.clone(),
+        )
+    }
+
     /// Checks every invariant of a Delaunay tetrahedralization of `points`
     /// with exact predicates, returning a description of the first violation:
     ///
