@@ -238,10 +238,20 @@ const FREE: u32 = u32::MAX - 1;
 /// is an even permutation of the cell, i.e. `v_k` lies on its positive side.
 const FACE: [[usize; 3]; 4] = [[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]];
 
+/// One cell of the triangulation under construction.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Cell {
+    /// Vertices (`INF` for the point at infinity, `FREE` on the free list).
+    v: [u32; 4],
+    /// Neighbour opposite each vertex.
+    n: [u32; 4],
+}
+
 struct Builder<'a> {
     pts: &'a [P3],
-    cells: Vec<[u32; 4]>,
-    nbrs: Vec<[u32; 4]>,
+    /// Vertices and neighbours together: one cache line half per cell.
+    cells: Vec<Cell>,
     /// Cavity marks: `2·gen` in conflict, `2·gen + 1` tested and not.
     stamp: Vec<u32>,
     gen: u32,
@@ -265,7 +275,6 @@ impl<'a> Builder<'a> {
         Builder {
             pts,
             cells: Vec::with_capacity(cap),
-            nbrs: Vec::with_capacity(cap),
             stamp: Vec::with_capacity(cap),
             gen: 0,
             free: Vec::new(),
@@ -306,21 +315,26 @@ impl<'a> Builder<'a> {
             _ => (b, a),
         };
         let fin = [a, b, c, d];
-        self.cells.push(fin);
+        self.cells.push(Cell {
+            v: fin,
+            n: [HULL; 4],
+        });
         for face in &FACE {
             let f = face.map(|i| fin[i]);
-            self.cells.push([f[1], f[0], f[2], INF]);
+            self.cells.push(Cell {
+                v: [f[1], f[0], f[2], INF],
+                n: [HULL; 4],
+            });
         }
-        self.nbrs = vec![[HULL; 4]; 5];
         for s in 0..5 {
             for t in 0..5 {
                 if s == t {
                     continue;
                 }
-                let (cs, ct) = (self.cells[s], self.cells[t]);
+                let (cs, ct) = (self.cells[s].v, self.cells[t].v);
                 let missing: Vec<usize> = (0..4).filter(|&i| !ct.contains(&cs[i])).collect();
                 if missing.len() == 1 {
-                    self.nbrs[s][missing[0]] = t as u32;
+                    self.cells[s].n[missing[0]] = t as u32;
                 }
             }
         }
@@ -337,7 +351,7 @@ impl<'a> Builder<'a> {
     /// Index of `c` in the neighbour list of `n`.
     #[inline(always)]
     fn back_index(&self, n: u32, c: u32) -> usize {
-        let nb = &self.nbrs[n as usize];
+        let nb = &self.cells[n as usize].n;
         (0..4)
             .find(|&j| nb[j] == c)
             .expect("neighbour relation is symmetric")
@@ -347,25 +361,25 @@ impl<'a> Builder<'a> {
     /// infinite cell beyond the hull face it lies outside of.
     fn locate(&mut self, p: u32) -> u32 {
         let mut c = self.hint;
-        if self.cells[c as usize][0] == FREE {
+        if self.cells[c as usize].v[0] == FREE {
             c = (0..self.cells.len() as u32)
-                .find(|&i| self.cells[i as usize][0] != FREE)
+                .find(|&i| self.cells[i as usize].v[0] != FREE)
                 .unwrap();
         }
-        if let Some(k) = self.cells[c as usize].iter().position(|&v| v == INF) {
-            c = self.nbrs[c as usize][k];
+        if let Some(k) = self.cells[c as usize].v.iter().position(|&v| v == INF) {
+            c = self.cells[c as usize].n[k];
         }
         let pp = *self.p(p);
         let mut prev = HULL;
         'walk: loop {
-            let v = self.cells[c as usize];
+            let v = self.cells[c as usize].v;
             if v.contains(&INF) {
                 return c;
             }
             let start = (self.rng.next() & 3) as usize;
             for j in 0..4 {
                 let i = (start + j) & 3;
-                let n = self.nbrs[c as usize][i];
+                let n = self.cells[c as usize].n[i];
                 if n == prev {
                     // p is on the positive side of the face we came through.
                     continue;
@@ -384,12 +398,12 @@ impl<'a> Builder<'a> {
 
     /// Does `p` lie in the (perturbed) circumsphere of cell `c`?
     fn conflict(&self, c: u32, p: u32) -> bool {
-        let v = self.cells[c as usize];
+        let v = self.cells[c as usize].v;
         let pp = self.p(p);
         if let Some(k) = v.iter().position(|&x| x == INF) {
             let f = FACE[k].map(|i| v[i]);
-            let n = self.nbrs[c as usize][k];
-            let inner = self.cells[n as usize][self.back_index(n, c)];
+            let n = self.cells[c as usize].n[k];
+            let inner = self.cells[n as usize].v[self.back_index(n, c)];
             predicates::in_infinite_cell(
                 [self.p(f[0]), self.p(f[1]), self.p(f[2])],
                 f,
@@ -430,7 +444,7 @@ impl<'a> Builder<'a> {
         while let Some(c) = stack.pop() {
             cavity.push(c);
             for i in 0..4 {
-                let n = self.nbrs[c as usize][i];
+                let n = self.cells[c as usize].n[i];
                 let s = self.stamp[n as usize];
                 if s == gin {
                     continue;
@@ -451,8 +465,8 @@ impl<'a> Builder<'a> {
         let mut faces = std::mem::take(&mut self.faces);
         faces.clear();
         for &(c, i) in &boundary {
-            let cv = self.cells[c as usize];
-            let outside = self.nbrs[c as usize][i as usize];
+            let cv = self.cells[c as usize].v;
+            let outside = self.cells[c as usize].n[i as usize];
             let back = self.back_index(outside, c) as u8;
             faces.push((FACE[i as usize].map(|k| cv[k]), outside, back));
         }
@@ -472,14 +486,16 @@ impl<'a> Builder<'a> {
             } else if let Some(s) = self.free.pop() {
                 s
             } else {
-                self.cells.push([FREE; 4]);
-                self.nbrs.push([HULL; 4]);
+                self.cells.push(Cell {
+                    v: [FREE; 4],
+                    n: [HULL; 4],
+                });
                 self.stamp.push(0);
                 (self.cells.len() - 1) as u32
             };
-            self.cells[nc as usize] = [f[0], f[1], f[2], p];
-            self.nbrs[nc as usize][3] = outside;
-            self.nbrs[outside as usize][back as usize] = nc;
+            self.cells[nc as usize].v = [f[0], f[1], f[2], p];
+            self.cells[nc as usize].n[3] = outside;
+            self.cells[outside as usize].n[back as usize] = nc;
             // Faces containing p: the one opposite f[j] holds edge (f[j+1], f[j+2]).
             for j in 0..3 {
                 let (a, b) = (f[(j + 1) % 3], f[(j + 2) % 3]);
@@ -492,8 +508,8 @@ impl<'a> Builder<'a> {
                 loop {
                     let e = self.edge_table[h];
                     if e.0 == key {
-                        self.nbrs[nc as usize][j] = e.1;
-                        self.nbrs[e.1 as usize][e.2 as usize] = nc;
+                        self.cells[nc as usize].n[j] = e.1;
+                        self.cells[e.1 as usize].n[e.2 as usize] = nc;
                         break;
                     }
                     if e.0 == EMPTY_EDGE {
@@ -512,7 +528,7 @@ impl<'a> Builder<'a> {
         self.edge_used.clear();
         // Cavity cells not reused go to the free list.
         for &c in &cavity[..reuse] {
-            self.cells[c as usize] = [FREE; 4];
+            self.cells[c as usize].v = [FREE; 4];
             self.free.push(c);
         }
         self.hint = last;
@@ -526,17 +542,16 @@ impl<'a> Builder<'a> {
     fn finish(self) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
         let mut remap = vec![HULL; self.cells.len()];
         let mut tets = Vec::new();
-        for (c, v) in self.cells.iter().enumerate() {
+        for (c, Cell { v, .. }) in self.cells.iter().enumerate() {
             if v[0] != FREE && !v.contains(&INF) {
                 remap[c] = tets.len() as u32;
                 tets.push(*v);
             }
         }
         let mut neighbors = Vec::with_capacity(tets.len());
-        for (c, v) in self.cells.iter().enumerate() {
+        for (c, cell) in self.cells.iter().enumerate() {
             if remap[c] != HULL {
-                debug_assert!(v[0] != FREE);
-                neighbors.push(self.nbrs[c].map(|n| remap[n as usize]));
+                neighbors.push(cell.n.map(|n| remap[n as usize]));
             }
         }
         (tets, neighbors)
