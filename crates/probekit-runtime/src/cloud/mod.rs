@@ -254,14 +254,25 @@ pub enum Location {
     },
 }
 
+/// Per-tetrahedron data the walk reads at each step, packed into one 64-byte
+/// cache line (a cold walk step is one memory access, not three).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+struct WalkRecord {
+    bary: BaryMatrix,
+    /// Neighbour opposite each vertex; hull faces encoded `HULL_BIT | face`.
+    links: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<WalkRecord>() == 64);
+
 /// Probe positions with their tetrahedralization, ready for queries.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TetMesh {
     positions: Vec<Vec3>,
     tets: Vec<[u32; 4]>,
-    /// Neighbour opposite each vertex; hull faces encoded `HULL_BIT | face`.
-    links: Vec<[u32; 4]>,
-    bary: Vec<BaryMatrix>,
+    /// What the walk reads per step, one cache line per tetrahedron.
+    walk: Vec<WalkRecord>,
     hull: Vec<HullFace>,
     grid: StartGrid,
 }
@@ -414,8 +425,11 @@ impl TetMesh {
         let mut mesh = TetMesh {
             positions,
             tets,
-            links,
-            bary,
+            walk: bary
+                .into_iter()
+                .zip(links)
+                .map(|(bary, links)| WalkRecord { bary, links })
+                .collect(),
             hull,
             grid: StartGrid {
                 origin: Vec3::ZERO,
@@ -481,13 +495,13 @@ impl TetMesh {
     /// Neighbour of tetrahedron `tet` across the face opposite local vertex
     /// `face`, `None` on the convex hull.
     pub fn neighbor(&self, tet: u32, face: usize) -> Option<u32> {
-        let n = self.links[tet as usize][face];
+        let n = self.walk[tet as usize].links[face];
         (n & HULL_BIT == 0).then_some(n)
     }
 
-    /// Barycentric matrices, one per tetrahedron.
-    pub fn bary(&self) -> &[BaryMatrix] {
-        &self.bary
+    /// Barycentric matrix of tetrahedron `tet`.
+    pub fn bary(&self, tet: u32) -> &BaryMatrix {
+        &self.walk[tet as usize].bary
     }
 
     /// Number of triangles on the convex hull.
@@ -512,7 +526,7 @@ impl TetMesh {
         };
         let mut jumped = !warm;
         loop {
-            let l = self.bary[t as usize].coords(p);
+            let l = self.walk[t as usize].bary.coords(p);
             let mut i = 0;
             for k in 1..4 {
                 if l[k] < l[i] {
@@ -522,7 +536,7 @@ impl TetMesh {
             if l[i] >= -INSIDE_TOLERANCE {
                 return (t, l, None);
             }
-            let n = self.links[t as usize][i];
+            let n = self.walk[t as usize].links[i];
             if n & HULL_BIT != 0 {
                 return (t, l, Some(i));
             }
@@ -551,10 +565,10 @@ impl TetMesh {
     ) -> (u32, [f32; 4], Option<usize>) {
         let mut t = start;
         let mut prev = u32::MAX;
-        let mut best = (t, self.bary[t as usize].coords(p));
+        let mut best = (t, self.walk[t as usize].bary.coords(p));
         let budget = 4 * self.tets.len() as u64 + 64;
         for _ in 0..budget {
-            let l = self.bary[t as usize].coords(p);
+            let l = self.walk[t as usize].bary.coords(p);
             let min = l.iter().copied().fold(f32::INFINITY, f32::min);
             if min > best.1.iter().copied().fold(f32::INFINITY, f32::min) {
                 best = (t, l);
@@ -566,7 +580,7 @@ impl TetMesh {
             let mut moved = false;
             for j in 0..4 {
                 let i = (r + j) & 3;
-                let n = self.links[t as usize][i];
+                let n = self.walk[t as usize].links[i];
                 if l[i] >= -INSIDE_TOLERANCE || n == prev {
                     continue;
                 }
@@ -596,7 +610,7 @@ impl TetMesh {
         match exit {
             None => Location::Inside { tet, weights },
             Some(face) => {
-                let h = self.links[tet as usize][face] & !HULL_BIT;
+                let h = self.walk[tet as usize].links[face] & !HULL_BIT;
                 let (hull_face, weights, closest) = self.closest_on_hull(p, h);
                 state.hull_face = hull_face;
                 Location::Outside {

@@ -127,6 +127,7 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
         builder.insert(v);
     }
     let (tets, neighbors) = builder.finish();
+    let (tets, neighbors) = spatial_tet_order(&pts, tets, neighbors);
     Ok(Tetrahedralization {
         tets,
         neighbors,
@@ -227,6 +228,61 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
         keyed[w[0]..w[1]].sort_unstable();
     }
     keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Renumbers tetrahedra along a Morton curve of their centroids, so that
+/// neighbouring tetrahedra are close in memory (the runtime walk touches a few
+/// neighbours per query; scattered builder slots cost a cache miss per step).
+fn spatial_tet_order(
+    pts: &[P3],
+    tets: Vec<[u32; 4]>,
+    neighbors: Vec<[u32; 4]>,
+) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in &tets {
+        for &i in v {
+            for k in 0..3 {
+                lo[k] = lo[k].min(pts[i as usize][k]);
+                hi[k] = hi[k].max(pts[i as usize][k]);
+            }
+        }
+    }
+    let scale: [f64; 3] =
+        std::array::from_fn(|k| ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE));
+    let mut keyed: Vec<(u64, u32)> = tets
+        .iter()
+        .enumerate()
+        .map(|(t, v)| {
+            let q = |k: usize| {
+                let c = v.iter().map(|&i| pts[i as usize][k]).sum::<f64>() * 0.25;
+                (((c - lo[k]) * scale[k]) as u64).min((1 << 21) - 1)
+            };
+            (
+                spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2),
+                t as u32,
+            )
+        })
+        .collect();
+    keyed.sort_unstable();
+    let mut new_of_old = vec![0u32; tets.len()];
+    for (new, &(_, old)) in keyed.iter().enumerate() {
+        new_of_old[old as usize] = new as u32;
+    }
+    let out_tets = keyed.iter().map(|&(_, old)| tets[old as usize]).collect();
+    let out_nbrs = keyed
+        .iter()
+        .map(|&(_, old)| {
+            neighbors[old as usize].map(|n| {
+                if n == HULL {
+                    HULL
+                } else {
+                    new_of_old[n as usize]
+                }
+            })
+        })
+        .collect();
+    (out_tets, out_nbrs)
 }
 
 /// The point at infinity.
