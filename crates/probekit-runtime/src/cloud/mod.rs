@@ -315,6 +315,11 @@ impl TetMesh {
     /// opposite vertex `i`, [`HULL`] on the convex hull), validating all of
     /// them: indices in range, neighbour symmetry, non-degenerate
     /// tetrahedra, a closed hull.
+    ///
+    /// The tetrahedra must fill a **convex** region (as a Delaunay
+    /// tetrahedralization does): the walk treats leaving through a hull face
+    /// as being outside, and the outer-cell descent relies on convexity.
+    /// Convexity itself is not checked.
     pub fn new(
         positions: Vec<Vec3>,
         tets: Vec<[u32; 4]>,
