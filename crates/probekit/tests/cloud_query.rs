@@ -143,3 +143,81 @@ proptest! {
         }
     }
 }
+
+/// Interpolated payload (a fixed non-linear function of the probe index) at `p`.
+fn payload(m: &TetMesh, p: Vec3, s: &mut WalkState) -> f32 {
+    let (idx, w) = m.weights_at(p, s);
+    (0..4).map(|i| w[i] * (idx[i] as f32 * 0.731).sin()).sum()
+}
+
+/// Continuity on `[t0, t1]` along `o + t·dir`: bisect towards the half with
+/// the larger difference until the interval is ~1e-6 m wide. A continuous
+/// (possibly steep, e.g. in a thin tetrahedron) payload's difference shrinks
+/// with the interval; a jump's does not.
+fn assert_no_jump(m: &TetMesh, o: Vec3, dir: Vec3, t0: f32, t1: f32, s: &mut WalkState) {
+    let (mut lo, mut hi) = (t0, t1);
+    let (mut vlo, mut vhi) = (payload(m, o + dir * lo, s), payload(m, o + dir * hi, s));
+    while hi - lo > 2e-6 {
+        let mid = 0.5 * (lo + hi);
+        let vm = payload(m, o + dir * mid, s);
+        if (vm - vlo).abs() > (vhi - vm).abs() {
+            (hi, vhi) = (mid, vm);
+        } else {
+            (lo, vlo) = (mid, vm);
+        }
+    }
+    assert!(
+        (vhi - vlo).abs() < 0.01,
+        "jump {vlo} -> {vhi} near {}",
+        o + dir * lo
+    );
+}
+
+#[test]
+fn lighting_is_continuous_across_and_outside_the_hull_of_a_random_cloud() {
+    let pts = bench_points::uniform(300, 21);
+    let m = mesh(&pts);
+    let dirs = bench_points::uniform(200, 22);
+    let origins = bench_points::uniform(200, 23);
+    let eps = 1e-4f32;
+    let mut crossings = 0;
+    for (o, d) in origins.iter().zip(&dirs) {
+        let dir = (*d - Vec3::splat(0.5)).normalize_or(Vec3::X);
+        let mut s = WalkState::new();
+        let inside = |x: Vec3, s: &mut WalkState| matches!(m.locate(x, s), Location::Inside { .. });
+        // March the line from far outside to far outside in small steps: the
+        // payload must never jump (outer cells included: edge and vertex
+        // regions of the hull), and at each hull crossing, found by
+        // bisection, the values on both sides agree.
+        let mut t = -2.0f32;
+        let mut prev = payload(&m, *o + dir * t, &mut s);
+        let mut prev_in = inside(*o + dir * t, &mut s);
+        while t < 2.0 {
+            let t1 = t + 1e-3;
+            let x1 = *o + dir * t1;
+            let v = payload(&m, x1, &mut s);
+            if (v - prev).abs() >= 0.05 {
+                assert_no_jump(&m, *o, dir, t, t1, &mut s);
+            }
+            let now_in = inside(x1, &mut s);
+            if now_in != prev_in {
+                crossings += 1;
+                let (mut lo, mut hi) = (t, t1);
+                for _ in 0..30 {
+                    let mid = 0.5 * (lo + hi);
+                    if inside(*o + dir * mid, &mut s) == prev_in {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let mid = 0.5 * (lo + hi);
+                assert_no_jump(&m, *o, dir, mid - eps, mid + eps, &mut s);
+            }
+            prev = v;
+            prev_in = now_in;
+            t = t1;
+        }
+    }
+    assert!(crossings >= 200, "{crossings}");
+}
