@@ -504,6 +504,14 @@ impl TetMesh {
         (n & HULL_BIT == 0).then_some(n)
     }
 
+    /// The neighbour table as given to [`TetMesh::new`] (`HULL` on the hull),
+    /// e.g. for writing the mesh back to a file.
+    pub fn neighbors(&self) -> impl ExactSizeIterator<Item = [u32; 4]> + '_ {
+        self.walk
+            .iter()
+            .map(|r| r.links.map(|n| if n & HULL_BIT != 0 { HULL } else { n }))
+    }
+
     /// Barycentric matrix of tetrahedron `tet`.
     pub fn bary(&self, tet: u32) -> &BaryMatrix {
         &self.walk[tet as usize].bary

@@ -65,7 +65,11 @@ pub(crate) fn neighbours(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
 
 fn grid_mesh(k: u32) -> TetMesh {
     let (p, t, n) = kuhn(k, 1.0, Vec3::ZERO, &|_| Vec3::ZERO);
-    TetMesh::new(p, t, n).unwrap()
+    let m = TetMesh::new(p, t.clone(), n.clone()).unwrap();
+    // Round trip of the stored topology.
+    assert_eq!(m.tets(), &t[..]);
+    assert_eq!(m.neighbors().collect::<Vec<_>>(), n);
+    m
 }
 
 /// Tiny deterministic generator for test points.
