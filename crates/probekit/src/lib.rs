@@ -13,3 +13,4 @@ pub mod plot;
 pub mod scene;
 pub mod sh;
 pub mod trace;
+pub mod cloud;

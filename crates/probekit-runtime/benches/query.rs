@@ -1,0 +1,104 @@
+//! Point-location speed on ~100 k probes: the Freudenthal (Kuhn) triangulation
+//! of a 47³ probe grid (103 823 probes, 584 K tetrahedra, maximally
+//! co-spherical). Cold random queries (fresh `WalkState` each: start grid +
+//! walk), coherent queries (one object moving in small steps, warm state),
+//! and batched queries outside the hull (closest-hull-point outer cells).
+//! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec3;
+use probekit_runtime::cloud::{face_neighbors, TetMesh, WalkState};
+use std::hint::black_box;
+
+fn kuhn_grid(k: u32) -> TetMesh {
+    let id = |x: u32, y: u32, z: u32| (z * k + y) * k + x;
+    let mut pos = Vec::new();
+    for z in 0..k {
+        for y in 0..k {
+            for x in 0..k {
+                pos.push(Vec3::new(x as f32, y as f32, z as f32));
+            }
+        }
+    }
+    let mut tets = Vec::new();
+    for z in 0..k - 1 {
+        for y in 0..k - 1 {
+            for x in 0..k - 1 {
+                for s in [
+                    [0, 1, 2],
+                    [0, 2, 1],
+                    [1, 0, 2],
+                    [1, 2, 0],
+                    [2, 0, 1],
+                    [2, 1, 0],
+                ] {
+                    let mut c = [x, y, z];
+                    let mut t = [id(x, y, z); 4];
+                    for (j, &axis) in s.iter().enumerate() {
+                        c[axis] += 1;
+                        t[j + 1] = id(c[0], c[1], c[2]);
+                    }
+                    tets.push(t);
+                }
+            }
+        }
+    }
+    let n = face_neighbors(&tets).unwrap();
+    TetMesh::new(pos, tets, n).unwrap()
+}
+
+fn points(n: usize, seed: u64, lo: f32, hi: f32) -> Vec<Vec3> {
+    let mut s = seed;
+    let mut f = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((s >> 40) as f32 / (1u64 << 24) as f32)
+    };
+    (0..n).map(|_| Vec3::new(f(), f(), f())).collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let m = kuhn_grid(47);
+    const N: usize = 10_000;
+    let cold = points(N, 1, 0.0, 46.0);
+    let mut p = Vec3::splat(23.0);
+    let dirs = points(N, 2, -1.0, 1.0);
+    // A moving object: 5 cm steps (1/20 of the probe spacing), bouncing in the box.
+    let coherent: Vec<Vec3> = dirs
+        .iter()
+        .map(|d| {
+            p = (p + Vec3::new(0.05, 0.02, 0.01) + *d * 0.01).rem_euclid(Vec3::splat(46.0));
+            p
+        })
+        .collect();
+    let outside = points(N, 3, -20.0, 66.0);
+    let mut g = c.benchmark_group("query_kuhn47");
+    g.throughput(Throughput::Elements(N as u64));
+    g.bench_function("cold_random", |b| {
+        b.iter(|| {
+            for &q in &cold {
+                black_box(m.weights_at(q, &mut WalkState::new()));
+            }
+        })
+    });
+    g.bench_function("coherent_moving", |b| {
+        let mut s = WalkState::new();
+        b.iter(|| {
+            for &q in &coherent {
+                black_box(m.weights_at(q, &mut s));
+            }
+        })
+    });
+    g.bench_function("cold_random_box_with_outside", |b| {
+        b.iter(|| {
+            for &q in &outside {
+                black_box(m.weights_at(q, &mut WalkState::new()));
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,358 @@
+//! Tests of the query on Freudenthal (Kuhn) triangulations of grids — valid,
+//! maximally degenerate (co-spherical) tetrahedralizations built here without
+//! the baker. Random Delaunay clouds are tested in `probekit/tests/cloud_query.rs`.
+
+use super::*;
+use std::collections::HashMap;
+
+#[test]
+fn face_neighbors_rejects_a_face_shared_three_times() {
+    let t = [[0, 1, 2, 3], [0, 1, 2, 4], [0, 1, 2, 5]];
+    assert!(matches!(
+        face_neighbors(&t),
+        Err(CloudError::NeighborMismatch { tet: 2, .. })
+    ));
+}
+
+/// Kuhn triangulation of a `k³` lattice (spacing `h`, origin `o`, optional
+/// per-point jitter function): 6 tetrahedra per cube, one per axis order.
+pub(crate) fn kuhn(
+    k: u32,
+    h: f32,
+    o: Vec3,
+    jitter: &dyn Fn(u32) -> Vec3,
+) -> (Vec<Vec3>, Vec<[u32; 4]>, Vec<[u32; 4]>) {
+    let id = |x: u32, y: u32, z: u32| (z * k + y) * k + x;
+    let mut pos = Vec::new();
+    for z in 0..k {
+        for y in 0..k {
+            for x in 0..k {
+                pos.push(o + h * Vec3::new(x as f32, y as f32, z as f32) + jitter(id(x, y, z)));
+            }
+        }
+    }
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let mut tets = Vec::new();
+    for z in 0..k - 1 {
+        for y in 0..k - 1 {
+            for x in 0..k - 1 {
+                for s in perms {
+                    let mut c = [x, y, z];
+                    let mut t = [id(x, y, z); 4];
+                    for (j, &axis) in s.iter().enumerate() {
+                        c[axis] += 1;
+                        t[j + 1] = id(c[0], c[1], c[2]);
+                    }
+                    tets.push(t);
+                }
+            }
+        }
+    }
+    let nbrs = neighbours(&tets);
+    (pos, tets, nbrs)
+}
+
+pub(crate) fn neighbours(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
+    face_neighbors(tets).unwrap()
+}
+
+fn grid_mesh(k: u32) -> TetMesh {
+    let (p, t, n) = kuhn(k, 1.0, Vec3::ZERO, &|_| Vec3::ZERO);
+    let m = TetMesh::new(p, t.clone(), n.clone()).unwrap();
+    // Round trip of the stored topology.
+    assert_eq!(m.tets(), &t[..]);
+    assert_eq!(m.neighbors().collect::<Vec<_>>(), n);
+    m
+}
+
+/// Tiny deterministic generator for test points.
+struct Lcg(u64);
+impl Lcg {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.f(), self.f(), self.f()) * (hi - lo) + Vec3::splat(lo)
+    }
+}
+
+/// Independent containment test: exact-ish f64 signed volumes.
+fn contains(m: &TetMesh, t: usize, p: Vec3) -> bool {
+    let q = m.tets[t].map(|i| m.positions[i as usize].as_dvec3());
+    let p = p.as_dvec3();
+    let vol = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| (b - a).cross(c - a).dot(d - a);
+    let total = vol(q[0], q[1], q[2], q[3]);
+    (0..4).all(|i| {
+        let mut r = q;
+        r[i] = p;
+        vol(r[0], r[1], r[2], r[3]) / total >= -1e-5
+    })
+}
+
+#[test]
+fn weights_reproduce_position_and_sum_to_one() {
+    let m = grid_mesh(6);
+    let mut rng = Lcg(1);
+    let mut s = WalkState::new();
+    for _ in 0..2000 {
+        let p = rng.v(0.0, 5.0);
+        let (idx, w) = m.weights_at(p, &mut s);
+        let sum: f32 = w.iter().sum();
+        let rec: Vec3 = (0..4).map(|i| m.positions[idx[i] as usize] * w[i]).sum();
+        assert!((sum - 1.0).abs() < 1e-5, "{sum}");
+        assert!((rec - p).length() < 1e-5, "{rec} vs {p}");
+        assert!(w.iter().all(|&x| x >= -INSIDE_TOLERANCE));
+    }
+}
+
+#[test]
+fn walk_finds_the_containing_tet_cold_and_warm() {
+    let m = grid_mesh(7);
+    let mut rng = Lcg(2);
+    let mut warm = WalkState::new();
+    for _ in 0..1000 {
+        let p = rng.v(0.0, 6.0);
+        for s in [&mut WalkState::new(), &mut warm] {
+            match m.locate(p, s) {
+                Location::Inside { tet, .. } => assert!(contains(&m, tet as usize, p)),
+                o => panic!("{p} inside the grid located as {o:?}"),
+            }
+        }
+        // Brute force agrees that some tet contains p.
+        assert!((0..m.tets.len()).any(|t| contains(&m, t, p)));
+    }
+}
+
+#[test]
+fn walk_terminates_from_every_start_on_degenerate_grid() {
+    // Points on lattice vertices, edges and faces: the worst case for cycles.
+    let m = grid_mesh(4);
+    let mut rng = Lcg(3);
+    let pts: Vec<Vec3> = (0..40)
+        .map(|i| {
+            let v = (rng.v(0.0, 3.0) * 2.0).round() * 0.5;
+            if i % 3 == 0 {
+                v.round()
+            } else {
+                v
+            }
+        })
+        .collect();
+    for start in 0..m.tets.len() as u32 {
+        for &p in &pts {
+            let mut s = WalkState {
+                tet: start,
+                ..WalkState::new()
+            };
+            match m.locate(p, &mut s) {
+                Location::Inside { tet, .. } => assert!(contains(&m, tet as usize, p)),
+                o => panic!("{o:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn linear_functions_are_reproduced_exactly() {
+    let (p, t, n) = kuhn(5, 0.7, Vec3::new(-1.0, 2.0, 0.5), &|i| {
+        // Small deterministic jitter keeps the Kuhn triangulation valid.
+        let h = (i.wrapping_mul(2654435761) >> 8) as f32 / (1u32 << 24) as f32;
+        Vec3::new(h - 0.5, (h * 7.0).fract() - 0.5, (h * 13.0).fract() - 0.5) * 0.1
+    });
+    let m = TetMesh::new(p, t, n).unwrap();
+    let f = |x: Vec3| 3.0 * x.x - 2.0 * x.y + 0.5 * x.z + 1.25;
+    let mut rng = Lcg(4);
+    let mut s = WalkState::new();
+    for _ in 0..2000 {
+        let x = rng.v(-0.9, 1.6) + Vec3::new(0.0, 3.0, 1.5);
+        let (idx, w) = m.weights_at(x, &mut s);
+        if let Location::Inside { .. } = m.locate(x, &mut s.clone()) {
+            let v: f32 = (0..4).map(|i| w[i] * f(m.positions[idx[i] as usize])).sum();
+            assert!((v - f(x)).abs() < 1e-4, "{v} vs {}", f(x));
+        }
+    }
+}
+
+/// Brute-force closest point over all hull triangles.
+fn brute_closest(m: &TetMesh, p: Vec3) -> f32 {
+    (0..m.hull.len() as u32)
+        .map(|h| (p.as_dvec3() - m.closest_in_face(p, h).1).length() as f32)
+        .fold(f32::INFINITY, f32::min)
+}
+
+#[test]
+fn outside_points_use_the_closest_hull_point() {
+    // A box (convex hull required: the mesh must tetrahedralize a convex set).
+    let (p, t, n) = kuhn(5, 1.0, Vec3::ZERO, &|_| Vec3::ZERO);
+    let p = p
+        .into_iter()
+        .map(|v| v * Vec3::new(1.0, 0.5, 2.0))
+        .collect();
+    let m = TetMesh::new(p, t, n).unwrap();
+    let mut rng = Lcg(5);
+    let mut s = WalkState::new();
+    let mut outside = 0;
+    for _ in 0..3000 {
+        let p = rng.v(-6.0, 10.0);
+        if let Location::Outside {
+            probes,
+            weights,
+            closest,
+            ..
+        } = m.locate(p, &mut s)
+        {
+            outside += 1;
+            let d = (p - closest).length();
+            let b = brute_closest(&m, p);
+            assert!(
+                (d - b).abs() <= 1e-4 * (1.0 + b),
+                "descent {d} vs brute force {b} at {p}"
+            );
+            let rec: Vec3 = (0..3)
+                .map(|i| m.positions[probes[i] as usize] * weights[i])
+                .sum();
+            assert!((rec - closest).length() < 1e-4);
+            assert!(weights.iter().all(|&w| w >= 0.0));
+            assert!((weights.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        }
+    }
+    assert!(outside > 1000);
+}
+
+/// Interpolates a smooth-ish per-probe payload (a hash-free function of the
+/// probe index, deliberately non-linear in position) at `p`.
+fn payload_at(m: &TetMesh, p: Vec3, s: &mut WalkState) -> f32 {
+    let (idx, w) = m.weights_at(p, s);
+    (0..4).map(|i| w[i] * ((idx[i] as f32) * 0.37).sin()).sum()
+}
+
+#[test]
+fn lighting_is_continuous_across_the_hull() {
+    let m = grid_mesh(5);
+    let mut rng = Lcg(6);
+    let eps = 1e-4f32;
+    for _ in 0..300 {
+        // A random line through the box; march it in small steps and look for
+        // jumps bigger than the Lipschitz bound (payload range 2 over ~eps).
+        let a = rng.v(-3.0, 7.0);
+        let dir = (rng.v(-1.0, 1.0)).normalize_or(Vec3::X);
+        let mut s = WalkState::new();
+        // Find hull crossings by bisection on inside/outside along the line.
+        let inside = |x: Vec3, s: &mut WalkState| matches!(m.locate(x, s), Location::Inside { .. });
+        let mut prev_t = -8.0f32;
+        let mut prev_in = inside(a + dir * prev_t, &mut s);
+        let mut t = prev_t;
+        while t < 8.0 {
+            t += 0.25;
+            let now_in = inside(a + dir * t, &mut s);
+            if now_in != prev_in {
+                let (mut lo, mut hi) = (prev_t, t);
+                for _ in 0..40 {
+                    let mid = 0.5 * (lo + hi);
+                    if inside(a + dir * mid, &mut s) == prev_in {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+                let x = a + dir * (0.5 * (lo + hi));
+                let v0 = payload_at(&m, x - dir * eps, &mut s);
+                let v1 = payload_at(&m, x + dir * eps, &mut s);
+                // Weights are 1-Lipschitz-ish in units of 1/edge length (1 m);
+                // a jump would be O(1).
+                assert!((v0 - v1).abs() < 50.0 * eps, "jump {v0} -> {v1} at {x}");
+                let w0 = m.weights_at(x - dir * eps, &mut s);
+                let w1 = m.weights_at(x + dir * eps, &mut s);
+                // Same blend: per-probe total weights agree to O(eps).
+                let mut acc: HashMap<u32, f32> = HashMap::new();
+                for i in 0..4 {
+                    *acc.entry(w0.0[i]).or_default() += w0.1[i];
+                    *acc.entry(w1.0[i]).or_default() -= w1.1[i];
+                }
+                assert!(acc.values().all(|d| d.abs() < 50.0 * eps), "{w0:?} {w1:?}");
+            }
+            prev_t = t;
+            prev_in = now_in;
+        }
+    }
+}
+
+#[test]
+fn coherent_batch_matches_cold_queries() {
+    let m = grid_mesh(6);
+    let pts: Vec<Vec3> = (0..500)
+        .map(|i| Vec3::new(0.3 + i as f32 * 0.011, 2.5, 2.5 + (i as f32 * 0.1).sin()))
+        .collect();
+    let mut out = Vec::new();
+    m.locate_many(&pts, &mut WalkState::new(), &mut out);
+    assert_eq!(out.len(), pts.len());
+    for (p, l) in pts.iter().zip(&out) {
+        let (a, b) = (m.locate(*p, &mut WalkState::new()), *l);
+        let w = |l: Location| match l {
+            Location::Inside { tet, weights } => (0..4)
+                .map(|i| m.positions[m.tets[tet as usize][i] as usize] * weights[i])
+                .sum::<Vec3>(),
+            Location::Outside { closest, .. } => closest,
+        };
+        assert!((w(a) - w(b)).length() < 1e-5, "{p}: {a:?} vs {b:?}");
+    }
+}
+
+#[test]
+fn invalid_meshes_are_typed_errors() {
+    let (p, t, n) = kuhn(3, 1.0, Vec3::ZERO, &|_| Vec3::ZERO);
+    assert_eq!(
+        TetMesh::new(p.clone(), vec![], vec![]),
+        Err(CloudError::Empty)
+    );
+    let mut bad = t.clone();
+    bad[3][2] = 999;
+    assert!(matches!(
+        TetMesh::new(p.clone(), bad, n.clone()),
+        Err(CloudError::VertexOutOfRange {
+            tet: 3,
+            probe: 999,
+            ..
+        })
+    ));
+    let mut bn = n.clone();
+    let (i, _) = bn[0].iter().enumerate().find(|(_, &x)| x != HULL).unwrap();
+    bn[0][i] = HULL;
+    assert!(matches!(
+        TetMesh::new(p.clone(), t.clone(), bn),
+        Err(CloudError::NeighborMismatch { .. })
+    ));
+    let mut bn = n.clone();
+    bn[1][0] = 12345;
+    assert!(matches!(
+        TetMesh::new(p.clone(), t.clone(), bn),
+        Err(CloudError::NeighborOutOfRange { .. } | CloudError::NeighborMismatch { .. })
+    ));
+    let mut bp = p.clone();
+    bp[4] = Vec3::new(f32::NAN, 0.0, 0.0);
+    assert_eq!(
+        TetMesh::new(bp, t.clone(), n.clone()),
+        Err(CloudError::NonFinitePosition { index: 4 })
+    );
+    // A flat tetrahedron.
+    let flat = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
+    assert_eq!(
+        TetMesh::new(flat, vec![[0, 1, 2, 3]], vec![[HULL; 4]]),
+        Err(CloudError::DegenerateTet { tet: 0 })
+    );
+    assert!(matches!(
+        TetMesh::new(p, t.clone(), n[..3].to_vec()),
+        Err(CloudError::LengthMismatch { .. })
+    ));
+}

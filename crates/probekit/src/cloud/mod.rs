@@ -1,0 +1,770 @@
+//! Probe clouds: exact 3D Delaunay tetrahedralization of probe positions.
+//!
+//! [`tetrahedralize`] is an incremental Bowyer–Watson construction
+//! (Bowyer 1981, Watson 1981 — seed 003 §"Delaunay tessellation") in the style
+//! of CGAL's `Delaunay_triangulation_3`:
+//!
+//! * **Point at infinity.** The convex hull is closed by *infinite cells*
+//!   `(a, b, c, ∞)`, one per hull face, so a point outside the current hull is
+//!   located and inserted exactly like one inside; no bounding box or extra
+//!   probes are added (unlike seed 003, which encloses the cloud in a box).
+//! * **Spatial sort.** Points are inserted in BRIO order (Amenta, Choi & Rote,
+//!   "Incremental constructions con BRIO", 2003): a seeded shuffle split into
+//!   rounds of doubling size, each round sorted along a Morton (Z-order) curve,
+//!   so consecutive points are close and the location walk is short.
+//! * **Location** is a stochastic visibility walk (Devillers, Pion & Teillaud,
+//!   "Walking in a triangulation", 2002) from the last created cell.
+//! * **Exactness.** Every decision is an exact predicate from
+//!   [`predicates`] (Shewchuk's adaptive orient3d/insphere via the `robust`
+//!   crate), and co-spherical ties — every cube of a regular grid — are broken
+//!   by the symbolic lifting perturbation of Devillers & Teillaud (2011), so the
+//!   result is the unique Delaunay triangulation of the perturbed points: no
+//!   zero-volume tetrahedron, whatever the degeneracy. Perturbation ranks are
+//!   the input indices, so the output does not depend on insertion order.
+//! * **Duplicates** (bit-identical positions, `-0.0 == 0.0`) are merged before
+//!   insertion: the lowest index is kept and the pair is reported in
+//!   [`Tetrahedralization::merged_duplicates`].
+//!
+//! The result converts to the runtime's [`probekit_runtime::cloud::TetMesh`]
+//! with [`Tetrahedralization::to_tet_mesh`].
+
+pub mod predicates;
+
+use glam::Vec3;
+use predicates::{InSphere, Orientation, P3};
+use thiserror::Error;
+
+/// Why a point set cannot be tetrahedralized.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum DelaunayError {
+    /// A coordinate is NaN or infinite.
+    #[error("probe {index} has a non-finite position {position:?}")]
+    NonFinite {
+        /// Index of the offending point in the input.
+        index: usize,
+        /// Its coordinates.
+        position: [f32; 3],
+    },
+    /// Fewer than four distinct points (after merging duplicates).
+    #[error("need at least 4 distinct probe positions, got {distinct}")]
+    TooFewPoints {
+        /// Number of distinct positions.
+        distinct: usize,
+    },
+    /// All points lie on one line.
+    #[error("all probe positions are co-linear: no volume to tetrahedralize")]
+    Collinear,
+    /// All points lie in one plane.
+    #[error("all probe positions are co-planar: no volume to tetrahedralize")]
+    Coplanar,
+    /// More points than 32-bit indices can address.
+    #[error("too many probes: {count} (at most {max})")]
+    TooManyPoints {
+        /// Number of points given.
+        count: usize,
+        /// Largest supported count.
+        max: usize,
+    },
+}
+
+/// Largest number of input points: indices are `u32`, with two values reserved
+/// as markers (point at infinity, free cell).
+pub const MAX_POINTS: usize = (u32::MAX - 2) as usize;
+
+/// Neighbour marker for a face on the convex hull.
+pub const HULL: u32 = u32::MAX;
+
+/// A Delaunay tetrahedralization of a set of points.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tetrahedralization {
+    /// Tetrahedra as indices into the input points, positively oriented
+    /// (`det[b − a, c − a, d − a] > 0`, see [`predicates::Orientation`]).
+    pub tets: Vec<[u32; 4]>,
+    /// `neighbors[t][i]` is the tetrahedron sharing the face opposite vertex
+    /// `i` of `tets[t]`, or [`HULL`] (`u32::MAX`) on the convex hull.
+    pub neighbors: Vec<[u32; 4]>,
+    /// Duplicate positions that were merged: `(dropped, kept)` input indices,
+    /// sorted by `dropped`. A dropped index appears in no tetrahedron.
+    pub merged_duplicates: Vec<(u32, u32)>,
+}
+
+/// Computes the Delaunay tetrahedralization of `points` (metres, any frame).
+///
+/// Exact on degenerate input (see the module docs). Errors: any NaN/infinite
+/// coordinate, fewer than 4 distinct points, all points co-linear or co-planar,
+/// more than [`MAX_POINTS`] points.
+pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayError> {
+    if points.len() > MAX_POINTS {
+        return Err(DelaunayError::TooManyPoints {
+            count: points.len(),
+            max: MAX_POINTS,
+        });
+    }
+    for (index, p) in points.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(DelaunayError::NonFinite {
+                index,
+                position: p.to_array(),
+            });
+        }
+    }
+    // `+ 0.0` turns -0.0 into +0.0 so that equal positions have equal bits.
+    let pts: Vec<P3> = points
+        .iter()
+        .map(|p| [p.x as f64 + 0.0, p.y as f64 + 0.0, p.z as f64 + 0.0])
+        .collect();
+    let (unique, merged_duplicates) = merge_duplicates(&pts);
+    if unique.len() < 4 {
+        return Err(DelaunayError::TooFewPoints {
+            distinct: unique.len(),
+        });
+    }
+    let order = brio_order(&pts, unique);
+    let mut builder = Builder::new(&pts);
+    let rest = builder.init(&order)?;
+    for &v in &rest {
+        builder.insert(v);
+    }
+    let (tets, neighbors) = builder.finish();
+    let (tets, neighbors) = spatial_tet_order(&pts, tets, neighbors);
+    Ok(Tetrahedralization {
+        tets,
+        neighbors,
+        merged_duplicates,
+    })
+}
+
+/// Sorts indices by exact position and keeps the lowest index of each group.
+fn merge_duplicates(pts: &[P3]) -> (Vec<u32>, Vec<(u32, u32)>) {
+    let mut idx: Vec<u32> = (0..pts.len() as u32).collect();
+    let key = |i: u32| {
+        let p = pts[i as usize];
+        (p[0].to_bits(), p[1].to_bits(), p[2].to_bits(), i)
+    };
+    idx.sort_unstable_by_key(|&i| key(i));
+    let mut unique = Vec::with_capacity(pts.len());
+    let mut merged = Vec::new();
+    let mut g = 0;
+    while g < idx.len() {
+        let kept = idx[g];
+        let mut h = g + 1;
+        while h < idx.len() && pts[idx[h] as usize] == pts[kept as usize] {
+            merged.push((idx[h], kept));
+            h += 1;
+        }
+        unique.push(kept);
+        g = h;
+    }
+    merged.sort_unstable();
+    (unique, merged)
+}
+
+/// SplitMix64: a tiny deterministic generator for the BRIO shuffle and walks.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// Spreads the low 21 bits of `v` so that two zero bits follow each bit.
+fn spread3(v: u64) -> u64 {
+    let mut x = v & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x1f00000000ffff;
+    x = (x | (x << 16)) & 0x1f0000ff0000ff;
+    x = (x | (x << 8)) & 0x100f00f00f00f00f;
+    x = (x | (x << 4)) & 0x10c30c30c30c30c3;
+    x = (x | (x << 2)) & 0x1249249249249249;
+    x
+}
+
+/// BRIO insertion order: seeded shuffle, rounds of doubling size, each sorted
+/// by Morton code (21 bits per axis over the bounding box).
+fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for &i in &order {
+        for k in 0..3 {
+            lo[k] = lo[k].min(pts[i as usize][k]);
+            hi[k] = hi[k].max(pts[i as usize][k]);
+        }
+    }
+    let scale: [f64; 3] = std::array::from_fn(|k| {
+        let ext = hi[k] - lo[k];
+        if ext > 0.0 {
+            ((1u64 << 21) - 1) as f64 / ext
+        } else {
+            0.0
+        }
+    });
+    let morton = |i: u32| {
+        let p = pts[i as usize];
+        let q = |k: usize| ((p[k] - lo[k]) * scale[k]) as u64;
+        spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2)
+    };
+    let mut rng = SplitMix(0x005E_ED0F_B810);
+    for i in (1..order.len()).rev() {
+        let j = (rng.next() % (i as u64 + 1)) as usize;
+        order.swap(i, j);
+    }
+    // Round boundaries from the end: the last round holds half the points.
+    const FIRST_ROUND: usize = 64;
+    let mut bounds = vec![order.len()];
+    let mut end = order.len();
+    while end > FIRST_ROUND {
+        end /= 2;
+        bounds.push(end);
+    }
+    bounds.push(0);
+    bounds.reverse();
+    let mut keyed: Vec<(u64, u32)> = order.iter().map(|&i| (morton(i), i)).collect();
+    for w in bounds.windows(2) {
+        keyed[w[0]..w[1]].sort_unstable();
+    }
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Renumbers tetrahedra along a Morton curve of their centroids, so that
+/// neighbouring tetrahedra are close in memory (the runtime walk touches a few
+/// neighbours per query; scattered builder slots cost a cache miss per step).
+fn spatial_tet_order(
+    pts: &[P3],
+    tets: Vec<[u32; 4]>,
+    neighbors: Vec<[u32; 4]>,
+) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in &tets {
+        for &i in v {
+            for k in 0..3 {
+                lo[k] = lo[k].min(pts[i as usize][k]);
+                hi[k] = hi[k].max(pts[i as usize][k]);
+            }
+        }
+    }
+    let scale: [f64; 3] =
+        std::array::from_fn(|k| ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE));
+    let mut keyed: Vec<(u64, u32)> = tets
+        .iter()
+        .enumerate()
+        .map(|(t, v)| {
+            let q = |k: usize| {
+                let c = v.iter().map(|&i| pts[i as usize][k]).sum::<f64>() * 0.25;
+                (((c - lo[k]) * scale[k]) as u64).min((1 << 21) - 1)
+            };
+            (
+                spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2),
+                t as u32,
+            )
+        })
+        .collect();
+    keyed.sort_unstable();
+    let mut new_of_old = vec![0u32; tets.len()];
+    for (new, &(_, old)) in keyed.iter().enumerate() {
+        new_of_old[old as usize] = new as u32;
+    }
+    let out_tets = keyed.iter().map(|&(_, old)| tets[old as usize]).collect();
+    let out_nbrs = keyed
+        .iter()
+        .map(|&(_, old)| {
+            neighbors[old as usize].map(|n| {
+                if n == HULL {
+                    HULL
+                } else {
+                    new_of_old[n as usize]
+                }
+            })
+        })
+        .collect();
+    (out_tets, out_nbrs)
+}
+
+/// The point at infinity.
+const INF: u32 = u32::MAX;
+/// Marks a cell slot on the free list.
+const FREE: u32 = u32::MAX - 1;
+
+/// `FACE[k]`: the face opposite vertex `k`, ordered so that `(f0, f1, f2, v_k)`
+/// is an even permutation of the cell, i.e. `v_k` lies on its positive side.
+const FACE: [[usize; 3]; 4] = [[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]];
+
+/// One cell of the triangulation under construction.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Cell {
+    /// Vertices (`INF` for the point at infinity, `FREE` on the free list).
+    v: [u32; 4],
+    /// Neighbour opposite each vertex.
+    n: [u32; 4],
+}
+
+struct Builder<'a> {
+    pts: &'a [P3],
+    /// Vertices and neighbours together: one cache line half per cell.
+    cells: Vec<Cell>,
+    /// Cavity marks: `2·gen` in conflict, `2·gen + 1` tested and not.
+    stamp: Vec<u32>,
+    gen: u32,
+    free: Vec<u32>,
+    hint: u32,
+    rng: SplitMix,
+    // Scratch reused across insertions (no allocation per point in steady state).
+    stack: Vec<u32>,
+    cavity: Vec<u32>,
+    boundary: Vec<(u32, u8)>,
+    faces: Vec<([u32; 3], u32, u8)>,
+    edge_table: Vec<(u64, u32, u8)>,
+    edge_used: Vec<usize>,
+}
+
+const EMPTY_EDGE: u64 = u64::MAX;
+
+impl<'a> Builder<'a> {
+    fn new(pts: &'a [P3]) -> Self {
+        let cap = pts.len() * 7 + 16;
+        Builder {
+            pts,
+            cells: Vec::with_capacity(cap),
+            stamp: Vec::with_capacity(cap),
+            gen: 0,
+            free: Vec::new(),
+            hint: 0,
+            rng: SplitMix(0xD1CE),
+            stack: Vec::new(),
+            cavity: Vec::new(),
+            boundary: Vec::new(),
+            faces: Vec::new(),
+            edge_table: vec![(EMPTY_EDGE, 0, 0); 256],
+            edge_used: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn p(&self, v: u32) -> &P3 {
+        &self.pts[v as usize]
+    }
+
+    /// Picks a non-degenerate first tetrahedron from the start of `order` and
+    /// returns the remaining points in order.
+    fn init(&mut self, order: &[u32]) -> Result<Vec<u32>, DelaunayError> {
+        let a = order[0];
+        let b = order[1];
+        let ic = (2..order.len())
+            .find(|&i| !predicates::collinear(self.p(a), self.p(b), self.p(order[i])))
+            .ok_or(DelaunayError::Collinear)?;
+        let c = order[ic];
+        let id = (2..order.len())
+            .find(|&i| {
+                predicates::orient3d(self.p(a), self.p(b), self.p(c), self.p(order[i]))
+                    != Orientation::Zero
+            })
+            .ok_or(DelaunayError::Coplanar)?;
+        let d = order[id];
+        let (a, b) = match predicates::orient3d(self.p(a), self.p(b), self.p(c), self.p(d)) {
+            Orientation::Positive => (a, b),
+            _ => (b, a),
+        };
+        let fin = [a, b, c, d];
+        self.cells.push(Cell {
+            v: fin,
+            n: [HULL; 4],
+        });
+        for face in &FACE {
+            let f = face.map(|i| fin[i]);
+            self.cells.push(Cell {
+                v: [f[1], f[0], f[2], INF],
+                n: [HULL; 4],
+            });
+        }
+        for s in 0..5 {
+            for t in 0..5 {
+                if s == t {
+                    continue;
+                }
+                let (cs, ct) = (self.cells[s].v, self.cells[t].v);
+                let missing: Vec<usize> = (0..4).filter(|&i| !ct.contains(&cs[i])).collect();
+                if missing.len() == 1 {
+                    self.cells[s].n[missing[0]] = t as u32;
+                }
+            }
+        }
+        self.stamp = vec![0; 5];
+        self.hint = 0;
+        Ok(order
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| i != 0 && i != 1 && i != ic && i != id)
+            .map(|(_, &v)| v)
+            .collect())
+    }
+
+    /// Index of `c` in the neighbour list of `n`.
+    #[inline(always)]
+    fn back_index(&self, n: u32, c: u32) -> usize {
+        let nb = &self.cells[n as usize].n;
+        (0..4)
+            .find(|&j| nb[j] == c)
+            .expect("neighbour relation is symmetric")
+    }
+
+    /// A cell in conflict with `p`: walk to the cell containing it, or to the
+    /// infinite cell beyond the hull face it lies outside of.
+    fn locate(&mut self, p: u32) -> u32 {
+        let mut c = self.hint;
+        if self.cells[c as usize].v[0] == FREE {
+            c = (0..self.cells.len() as u32)
+                .find(|&i| self.cells[i as usize].v[0] != FREE)
+                .unwrap();
+        }
+        if let Some(k) = self.cells[c as usize].v.iter().position(|&v| v == INF) {
+            c = self.cells[c as usize].n[k];
+        }
+        let pp = *self.p(p);
+        let mut prev = HULL;
+        'walk: loop {
+            let v = self.cells[c as usize].v;
+            if v.contains(&INF) {
+                return c;
+            }
+            let start = (self.rng.next() & 3) as usize;
+            for j in 0..4 {
+                let i = (start + j) & 3;
+                let n = self.cells[c as usize].n[i];
+                if n == prev {
+                    // p is on the positive side of the face we came through.
+                    continue;
+                }
+                let mut q = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
+                q[i] = &pp;
+                if predicates::orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
+                    prev = c;
+                    c = n;
+                    continue 'walk;
+                }
+            }
+            return c;
+        }
+    }
+
+    /// Does `p` lie in the (perturbed) circumsphere of cell `c`?
+    fn conflict(&self, c: u32, p: u32) -> bool {
+        let v = self.cells[c as usize].v;
+        let pp = self.p(p);
+        if let Some(k) = v.iter().position(|&x| x == INF) {
+            let f = FACE[k].map(|i| v[i]);
+            let n = self.cells[c as usize].n[k];
+            let inner = self.cells[n as usize].v[self.back_index(n, c)];
+            predicates::in_infinite_cell(
+                [self.p(f[0]), self.p(f[1]), self.p(f[2])],
+                f,
+                self.p(inner),
+                pp,
+                p,
+            ) == InSphere::Inside
+        } else {
+            predicates::insphere_perturbed(
+                [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])],
+                v,
+                pp,
+                p,
+            ) == InSphere::Inside
+        }
+    }
+
+    fn insert(&mut self, p: u32) {
+        let start = self.locate(p);
+        if self.gen >= (u32::MAX >> 1) - 1 {
+            self.stamp.iter_mut().for_each(|s| *s = 0);
+            self.gen = 0;
+        }
+        self.gen += 1;
+        let (gin, gout) = (2 * self.gen, 2 * self.gen + 1);
+        self.cavity_and_fill(p, start, gin, gout);
+    }
+
+    fn cavity_and_fill(&mut self, p: u32, start: u32, gin: u32, gout: u32) {
+        let mut stack = std::mem::take(&mut self.stack);
+        let mut cavity = std::mem::take(&mut self.cavity);
+        let mut boundary = std::mem::take(&mut self.boundary);
+        stack.clear();
+        cavity.clear();
+        boundary.clear();
+        self.stamp[start as usize] = gin;
+        stack.push(start);
+        while let Some(c) = stack.pop() {
+            cavity.push(c);
+            for i in 0..4 {
+                let n = self.cells[c as usize].n[i];
+                let s = self.stamp[n as usize];
+                if s == gin {
+                    continue;
+                }
+                if s != gout {
+                    if self.conflict(n, p) {
+                        self.stamp[n as usize] = gin;
+                        stack.push(n);
+                        continue;
+                    }
+                    self.stamp[n as usize] = gout;
+                }
+                boundary.push((c, i as u8));
+            }
+        }
+
+        // Copy the boundary faces out before cavity slots are reused.
+        let mut faces = std::mem::take(&mut self.faces);
+        faces.clear();
+        for &(c, i) in &boundary {
+            let cv = self.cells[c as usize].v;
+            let outside = self.cells[c as usize].n[i as usize];
+            let back = self.back_index(outside, c) as u8;
+            faces.push((FACE[i as usize].map(|k| cv[k]), outside, back));
+        }
+
+        // Size the edge table: 3 half-edges per face, 2 per edge, load <= 1/4.
+        let need = (faces.len() * 6).next_power_of_two().max(256);
+        if self.edge_table.len() < need {
+            self.edge_table = vec![(EMPTY_EDGE, 0, 0); need];
+        }
+        let mask = self.edge_table.len() - 1;
+        let mut reuse = cavity.len();
+        let mut last = start;
+        for &(f, outside, back) in &faces {
+            let nc = if reuse > 0 {
+                reuse -= 1;
+                cavity[reuse]
+            } else if let Some(s) = self.free.pop() {
+                s
+            } else {
+                self.cells.push(Cell {
+                    v: [FREE; 4],
+                    n: [HULL; 4],
+                });
+                self.stamp.push(0);
+                (self.cells.len() - 1) as u32
+            };
+            self.cells[nc as usize].v = [f[0], f[1], f[2], p];
+            self.cells[nc as usize].n[3] = outside;
+            self.cells[outside as usize].n[back as usize] = nc;
+            // Faces containing p: the one opposite f[j] holds edge (f[j+1], f[j+2]).
+            for j in 0..3 {
+                let (a, b) = (f[(j + 1) % 3], f[(j + 2) % 3]);
+                let key = if a < b {
+                    (a as u64) << 32 | b as u64
+                } else {
+                    (b as u64) << 32 | a as u64
+                };
+                let mut h = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask;
+                loop {
+                    let e = self.edge_table[h];
+                    if e.0 == key {
+                        self.cells[nc as usize].n[j] = e.1;
+                        self.cells[e.1 as usize].n[e.2 as usize] = nc;
+                        break;
+                    }
+                    if e.0 == EMPTY_EDGE {
+                        self.edge_table[h] = (key, nc, j as u8);
+                        self.edge_used.push(h);
+                        break;
+                    }
+                    h = (h + 1) & mask;
+                }
+            }
+            last = nc;
+        }
+        for &h in &self.edge_used {
+            self.edge_table[h].0 = EMPTY_EDGE;
+        }
+        self.edge_used.clear();
+        // Cavity cells not reused go to the free list.
+        for &c in &cavity[..reuse] {
+            self.cells[c as usize].v = [FREE; 4];
+            self.free.push(c);
+        }
+        self.hint = last;
+        self.stack = stack;
+        self.cavity = cavity;
+        self.boundary = boundary;
+        self.faces = faces;
+    }
+
+    /// Drops infinite and free cells and renumbers neighbours.
+    fn finish(self) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
+        let mut remap = vec![HULL; self.cells.len()];
+        let mut tets = Vec::new();
+        for (c, Cell { v, .. }) in self.cells.iter().enumerate() {
+            if v[0] != FREE && !v.contains(&INF) {
+                remap[c] = tets.len() as u32;
+                tets.push(*v);
+            }
+        }
+        let mut neighbors = Vec::with_capacity(tets.len());
+        for (c, cell) in self.cells.iter().enumerate() {
+            if remap[c] != HULL {
+                neighbors.push(cell.n.map(|n| remap[n as usize]));
+            }
+        }
+        (tets, neighbors)
+    }
+}
+
+impl Tetrahedralization {
+    /// Builds the runtime query structure for these tetrahedra over `points`
+    /// (the same slice given to [`tetrahedralize`]).
+    pub fn to_tet_mesh(
+        &self,
+        points: &[Vec3],
+    ) -> Result<probekit_runtime::cloud::TetMesh, probekit_runtime::cloud::CloudError> {
+        probekit_runtime::cloud::TetMesh::new(
+            points.to_vec(),
+            self.tets.clone(),
+            self.neighbors.clone(),
+        )
+    }
+
+    /// Checks every invariant of a Delaunay tetrahedralization of `points`
+    /// with exact predicates, returning a description of the first violation:
+    ///
+    /// * indices in range, no tetrahedron uses a merged duplicate, every other
+    ///   point is a vertex;
+    /// * every tetrahedron positively oriented (hence none of zero volume);
+    /// * neighbour symmetry: `neighbors[t][i] = u` implies `u` points back at
+    ///   `t` and the two share exactly the face opposite `i`;
+    /// * locally Delaunay: the vertex of each neighbour opposite the shared face
+    ///   is not strictly inside the circumsphere (exact insphere; co-spherical
+    ///   allowed) — with the above this implies the global empty-sphere property;
+    /// * the hull (faces without neighbour) is closed: each directed hull edge
+    ///   appears once and its reverse once;
+    /// * the tetrahedra's volumes sum to the volume enclosed by the hull
+    ///   (divergence theorem over hull faces; relative tolerance 1e-9 in `f64`).
+    ///
+    /// Used by the tests and fuzzing; O(n log n) and allocation-heavy — not for
+    /// hot paths.
+    pub fn sanity_check(&self, points: &[Vec3]) -> Result<(), String> {
+        let pts: Vec<P3> = points.iter().map(|p| p.as_dvec3().to_array()).collect();
+        let n = pts.len();
+        if self.tets.len() != self.neighbors.len() {
+            return Err("tets and neighbors differ in length".into());
+        }
+        let mut used = vec![false; n];
+        for (t, v) in self.tets.iter().enumerate() {
+            for &x in v {
+                if x as usize >= n {
+                    return Err(format!("tet {t} has vertex {x} out of range"));
+                }
+                used[x as usize] = true;
+            }
+            let q = v.map(|x| &pts[x as usize]);
+            if predicates::orient3d(q[0], q[1], q[2], q[3]) != Orientation::Positive {
+                return Err(format!("tet {t} {v:?} is not positively oriented"));
+            }
+        }
+        let dropped: std::collections::HashSet<u32> =
+            self.merged_duplicates.iter().map(|&(d, _)| d).collect();
+        for (i, &u) in used.iter().enumerate() {
+            if u == dropped.contains(&(i as u32)) {
+                return Err(format!("point {i}: used = {u}, merged duplicate = {}", !u));
+            }
+        }
+        for &(d, k) in &self.merged_duplicates {
+            if pts[d as usize] != pts[k as usize] || k >= d {
+                return Err(format!("bad duplicate pair ({d}, {k})"));
+            }
+        }
+        let mut hull_edges = std::collections::HashMap::new();
+        let mut hull_volume6 = 0.0f64;
+        let mut volume6 = 0.0f64;
+        let mut scale = 0.0f64;
+        for (t, v) in self.tets.iter().enumerate() {
+            let q = v.map(|x| glam::DVec3::from_array(pts[x as usize]));
+            let vol6 = (q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]);
+            volume6 += vol6;
+            scale += vol6.abs();
+            for i in 0..4 {
+                let f = FACE[i].map(|k| v[k]);
+                let u = self.neighbors[t][i];
+                if u == HULL {
+                    // Outward face orientation is (f1, f0, f2).
+                    let (a, b, c) = (f[1], f[0], f[2]);
+                    for e in [(a, b), (b, c), (c, a)] {
+                        if hull_edges.insert(e, t).is_some() {
+                            return Err(format!("hull edge {e:?} used twice in one direction"));
+                        }
+                    }
+                    let (pa, pb, pc) = (q[FACE[i][1]], q[FACE[i][0]], q[FACE[i][2]]);
+                    hull_volume6 += pa.dot(pb.cross(pc));
+                    continue;
+                }
+                let Some(w) = self.neighbors.get(u as usize) else {
+                    return Err(format!("tet {t} neighbour {u} out of range"));
+                };
+                let Some(j) = (0..4).find(|&j| w[j] == t as u32) else {
+                    return Err(format!("tet {t} -> {u} is not symmetric"));
+                };
+                let uv = self.tets[u as usize];
+                let mut shared_a: Vec<u32> = f.to_vec();
+                let mut shared_b: Vec<u32> = (0..4).filter(|&k| k != j).map(|k| uv[k]).collect();
+                shared_a.sort_unstable();
+                shared_b.sort_unstable();
+                if shared_a != shared_b {
+                    return Err(format!("tets {t} and {u} do not share the expected face"));
+                }
+                let opp = &pts[uv[j] as usize];
+                let tq = v.map(|x| &pts[x as usize]);
+                if predicates::insphere_exact(tq, opp) == Some(InSphere::Inside) {
+                    return Err(format!(
+                        "tet {t}: vertex {} of {u} is inside its circumsphere",
+                        uv[j]
+                    ));
+                }
+            }
+        }
+        for &(a, b) in hull_edges.keys() {
+            if !hull_edges.contains_key(&(b, a)) {
+                return Err(format!("hull is open at edge ({a}, {b})"));
+            }
+        }
+        if (volume6 - hull_volume6).abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {
+            return Err(format!(
+                "volume {volume6} != hull volume {hull_volume6} (×6)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Deterministic point sets shared by the benchmark, the Qhull peer script's
+/// point writer (`examples/delaunay_points.rs`) and the tests.
+pub mod bench_points {
+    use super::SplitMix;
+    use glam::Vec3;
+
+    /// `n` points uniform in the unit cube `[0, 1)³` from `seed`.
+    pub fn uniform(n: usize, seed: u64) -> Vec<Vec3> {
+        let mut rng = SplitMix(seed);
+        let mut u = || (rng.next() >> 40) as f32 / (1u64 << 24) as f32;
+        (0..n).map(|_| Vec3::new(u(), u(), u())).collect()
+    }
+
+    /// The `k × k × k` regular grid with unit spacing (every cube co-spherical).
+    pub fn grid(k: usize) -> Vec<Vec3> {
+        let mut v = Vec::with_capacity(k * k * k);
+        for z in 0..k {
+            for y in 0..k {
+                for x in 0..k {
+                    v.push(Vec3::new(x as f32, y as f32, z as f32));
+                }
+            }
+        }
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests;

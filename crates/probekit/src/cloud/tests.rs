@@ -1,0 +1,215 @@
+//! Tests of the tetrahedralization against exact invariants (sanity_check) and
+//! independent counts (Euler characteristic, known grid/volume facts).
+
+use super::*;
+use proptest::prelude::*;
+
+fn check(points: &[Vec3]) -> Tetrahedralization {
+    let t = tetrahedralize(points).expect("tetrahedralize");
+    t.sanity_check(points).expect("sanity");
+    t
+}
+
+/// Euler characteristic of a triangulated 3-ball: V − E + F − T = 1,
+/// computed from the tets alone (an independent topological check).
+fn euler(t: &Tetrahedralization) -> i64 {
+    use std::collections::HashSet;
+    let mut vs = HashSet::new();
+    let mut es = HashSet::new();
+    let mut fs = HashSet::new();
+    for v in &t.tets {
+        let mut s = *v;
+        s.sort_unstable();
+        for a in 0..4 {
+            vs.insert(s[a]);
+            for b in a + 1..4 {
+                es.insert((s[a], s[b]));
+                for c in b + 1..4 {
+                    fs.insert((s[a], s[b], s[c]));
+                }
+            }
+        }
+    }
+    vs.len() as i64 - es.len() as i64 + fs.len() as i64 - t.tets.len() as i64
+}
+
+#[test]
+fn single_tetrahedron() {
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+    let t = check(&p);
+    assert_eq!(t.tets.len(), 1);
+    assert_eq!(t.neighbors[0], [HULL; 4]);
+}
+
+#[test]
+fn cube_corners_give_five_or_six_tets_of_total_volume_one() {
+    let p = bench_points::grid(2);
+    let t = check(&p);
+    // Any triangulation of a cube without interior vertices has 5 or 6 tets.
+    assert!(t.tets.len() == 5 || t.tets.len() == 6, "{}", t.tets.len());
+    assert_eq!(euler(&t), 1);
+}
+
+#[test]
+fn regular_grids_are_exact() {
+    for k in [3, 4, 7] {
+        let p = bench_points::grid(k);
+        let t = check(&p);
+        assert_eq!(euler(&t), 1);
+        // Volume of the grid's hull is (k-1)^3: checked exactly by the sum of
+        // integer-coordinate tet volumes (each 6·vol is an integer).
+        let vol6: i64 = t
+            .tets
+            .iter()
+            .map(|v| {
+                let q = v.map(|i| p[i as usize].as_dvec3());
+                (q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]) as i64
+            })
+            .sum();
+        assert_eq!(vol6, 6 * ((k - 1) as i64).pow(3));
+    }
+}
+
+#[test]
+fn shuffled_scaled_grid_with_duplicates() {
+    let mut p: Vec<Vec3> = bench_points::grid(5)
+        .iter()
+        .map(|v| *v * 0.1 + Vec3::splat(-3.3))
+        .collect();
+    p.push(p[7]);
+    p.push(p[0]);
+    p.push(p[7]);
+    let t = check(&p);
+    let n = 125;
+    assert_eq!(t.merged_duplicates, vec![(n, 7), (n + 1, 0), (n + 2, 7)]);
+}
+
+#[test]
+fn cospherical_points_on_a_sphere() {
+    // Points with integer coordinates on the sphere x²+y²+z² = 25 (all co-spherical).
+    let mut p = Vec::new();
+    for x in -5i32..=5 {
+        for y in -5i32..=5 {
+            for z in -5i32..=5 {
+                if x * x + y * y + z * z == 25 {
+                    p.push(Vec3::new(x as f32, y as f32, z as f32));
+                }
+            }
+        }
+    }
+    assert!(p.len() > 20);
+    let t = check(&p);
+    assert_eq!(euler(&t), 1);
+}
+
+#[test]
+fn coplanar_and_collinear_subsets() {
+    // A plane of grid points, a line of points, plus two apexes.
+    let mut p = Vec::new();
+    for i in 0..6 {
+        for j in 0..6 {
+            p.push(Vec3::new(i as f32, j as f32, 0.0));
+        }
+    }
+    for i in 0..10 {
+        p.push(Vec3::new(0.5 * i as f32, 0.5 * i as f32, 2.0));
+    }
+    p.push(Vec3::new(2.5, 2.5, -3.0));
+    check(&p);
+}
+
+#[test]
+fn degenerate_inputs_are_typed_errors() {
+    assert_eq!(
+        tetrahedralize(&[Vec3::ZERO, Vec3::X, Vec3::Y]),
+        Err(DelaunayError::TooFewPoints { distinct: 3 })
+    );
+    assert_eq!(
+        tetrahedralize(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Y, Vec3::X]),
+        Err(DelaunayError::TooFewPoints { distinct: 3 })
+    );
+    let line: Vec<Vec3> = (0..10).map(|i| Vec3::splat(i as f32)).collect();
+    assert_eq!(tetrahedralize(&line), Err(DelaunayError::Collinear));
+    let plane: Vec<Vec3> = bench_points::grid(3)
+        .iter()
+        .map(|v| Vec3::new(v.x, v.y, 1.0))
+        .collect();
+    assert_eq!(tetrahedralize(&plane), Err(DelaunayError::Coplanar));
+    let mut nan = bench_points::grid(2);
+    nan[5].y = f32::NAN;
+    assert!(matches!(
+        tetrahedralize(&nan),
+        Err(DelaunayError::NonFinite { index: 5, .. })
+    ));
+    nan[5].y = f32::INFINITY;
+    assert!(matches!(
+        tetrahedralize(&nan),
+        Err(DelaunayError::NonFinite { index: 5, .. })
+    ));
+}
+
+#[test]
+fn random_points_and_output_independent_of_input_order() {
+    let p = bench_points::uniform(3000, 7);
+    let t = check(&p);
+    assert_eq!(euler(&t), 1);
+    // Reversing the input changes ranks; the set of tets must still be the
+    // unique Delaunay triangulation (random points are in general position).
+    let rev: Vec<Vec3> = p.iter().rev().copied().collect();
+    let t2 = check(&rev);
+    let canon = |t: &Tetrahedralization, map: &dyn Fn(u32) -> u32| {
+        let mut v: Vec<[u32; 4]> = t
+            .tets
+            .iter()
+            .map(|v| {
+                let mut s = v.map(map);
+                s.sort_unstable();
+                s
+            })
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let n = p.len() as u32;
+    assert_eq!(canon(&t, &|i| i), canon(&t2, &|i| n - 1 - i));
+}
+
+#[test]
+fn clustered_points_with_large_scale_range() {
+    let mut p = bench_points::uniform(500, 3);
+    p.extend(
+        bench_points::uniform(500, 4)
+            .iter()
+            .map(|v| *v * 1e-4 + Vec3::splat(0.5)),
+    );
+    p.extend(bench_points::grid(3).iter().map(|v| *v * 1e3));
+    check(&p);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    #[test]
+    fn random_small_integer_sets_are_valid(
+        pts in proptest::collection::vec((0i8..4, 0i8..4, 0i8..4), 4..60)
+    ) {
+        // Tiny integer lattice: massive co-planarity, co-sphericity and duplicates.
+        let p: Vec<Vec3> = pts.iter().map(|&(x, y, z)| Vec3::new(x as f32, y as f32, z as f32)).collect();
+        match tetrahedralize(&p) {
+            Ok(t) => {
+                prop_assert_eq!(t.sanity_check(&p), Ok(()));
+                prop_assert_eq!(euler(&t), 1);
+            }
+            Err(DelaunayError::TooFewPoints { .. } | DelaunayError::Collinear | DelaunayError::Coplanar) => {}
+            Err(e) => prop_assert!(false, "{e}"),
+        }
+    }
+
+    #[test]
+    fn random_float_sets_are_valid(
+        pts in proptest::collection::vec((-1e3f32..1e3, -1e3f32..1e3, -1e3f32..1e3), 4..200)
+    ) {
+        let p: Vec<Vec3> = pts.iter().map(|&(x, y, z)| Vec3::new(x, y, z)).collect();
+        let t = tetrahedralize(&p).unwrap();
+        prop_assert_eq!(t.sanity_check(&p), Ok(()));
+    }
+}
