@@ -57,7 +57,10 @@ fn generated_files_are_up_to_date() {
             assert!(f.contents.contains(name), "{} lacks {name}", f.name);
         }
         let path = dir.join(f.name);
-        let committed = std::fs::read_to_string(&path).unwrap_or_default();
+        // A checkout with CRLF line endings is still up to date.
+        let committed = std::fs::read_to_string(&path)
+            .unwrap_or_default()
+            .replace("\r\n", "\n");
         assert!(
             committed == f.contents,
             "{} is out of date with shaders/*.wgsl; regenerate it with `{REGENERATE_COMMAND}` \
