@@ -24,9 +24,28 @@ use probekit_shaders::{full_wgsl, CHECK_ENTRY_POINT, CHECK_IN_FLOATS, CHECK_OUT_
 use wgpu::util::DeviceExt;
 
 const CASES: usize = 256;
-const GRID_MIN: Vec3 = Vec3::new(-1.0, 0.0, 2.0);
-const GRID_MAX: Vec3 = Vec3::new(3.0, 2.5, 5.0);
-const GRID_RES: [u32; 3] = [3, 2, 4];
+
+/// A uniform volume (`PkVolumeGrid`): box corners and probes per axis.
+#[derive(Clone, Copy)]
+struct Grid {
+    min: Vec3,
+    max: Vec3,
+    resolution: [u32; 3],
+}
+
+/// An ordinary grid, and one with a single probe (and an empty extent) on x.
+const GRIDS: [Grid; 2] = [
+    Grid {
+        min: Vec3::new(-1.0, 0.0, 2.0),
+        max: Vec3::new(3.0, 2.5, 5.0),
+        resolution: [3, 2, 4],
+    },
+    Grid {
+        min: Vec3::new(0.5, -1.0, 0.0),
+        max: Vec3::new(0.5, 2.0, 1.0),
+        resolution: [1, 3, 2],
+    },
+];
 
 /// xorshift64*: deterministic test inputs without a dependency.
 struct Rng(u64);
@@ -59,14 +78,21 @@ impl Rng {
     }
 }
 
-/// Plausible radiance L2 SH: positive DC, other coefficients a fraction of it;
-/// some cases exercise the edge branches (no band 1, a negative DC channel).
+/// Magnitude of case `case`'s SH: 1e-3 … 1e3, so that the RGB9E5 DC of the
+/// codecs runs through many exponents.
+fn sh_scale(case: usize) -> f32 {
+    10f32.powi((case % 7) as i32 - 3)
+}
+
+/// Plausible radiance L2 SH of magnitude [`sh_scale`]: positive DC, other
+/// coefficients a fraction of it; some cases exercise the edge branches (no
+/// band 1, a negative DC channel).
 fn random_sh(rng: &mut Rng, case: usize) -> [Vec3; 9] {
     let c0 = Vec3::new(
         rng.range(0.2, 2.0),
         rng.range(0.2, 2.0),
         rng.range(0.2, 2.0),
-    );
+    ) * sh_scale(case);
     let mut c = [Vec3::ZERO; 9];
     c[0] = c0;
     for (i, ci) in c.iter_mut().enumerate().skip(1) {
@@ -83,7 +109,7 @@ fn random_sh(rng: &mut Rng, case: usize) -> [Vec3; 9] {
                 *ci = Vec3::ZERO;
             }
         }
-        5 => c[0].z = -0.3,
+        5 => c[0].z = -0.3 * sh_scale(case),
         _ => {}
     }
     c
@@ -105,12 +131,18 @@ struct Inputs {
     offsets: [u32; 4],
 }
 
-fn grid_probe_position(i: usize) -> Vec3 {
-    let [rx, ry, rz] = GRID_RES.map(|r| r as usize);
+fn grid_probe_position(g: &Grid, i: usize) -> Vec3 {
+    let [rx, ry, rz] = g.resolution.map(|r| r as usize);
     let (x, y, z) = (i % rx, (i / rx) % ry, i / (rx * ry));
     assert!(z < rz);
-    let step = (GRID_MAX - GRID_MIN) / Vec3::new((rx - 1) as f32, (ry - 1) as f32, (rz - 1) as f32);
-    GRID_MIN + step * Vec3::new(x as f32, y as f32, z as f32)
+    let t = |k: usize, r: usize| {
+        if r > 1 {
+            k as f32 / (r - 1) as f32
+        } else {
+            0.0
+        }
+    };
+    g.min + (g.max - g.min) * Vec3::new(t(x, rx), t(y, ry), t(z, rz))
 }
 
 fn affine_eval(a: &([Vec3; 9], [[Vec3; 3]; 9]), p: Vec3) -> [Vec3; 9] {
@@ -121,9 +153,9 @@ fn affine_eval(a: &([Vec3; 9], [[Vec3; 3]; 9]), p: Vec3) -> [Vec3; 9] {
     out
 }
 
-fn make_inputs() -> Inputs {
+fn make_inputs(g: &Grid) -> Inputs {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    let nprobes = GRID_RES.iter().product::<u32>() as usize;
+    let nprobes = g.resolution.iter().product::<u32>() as usize;
     let mut affine = ([Vec3::ZERO; 9], [[Vec3::ZERO; 3]; 9]);
     for i in 0..9 {
         affine.0[i] = Vec3::new(
@@ -141,7 +173,7 @@ fn make_inputs() -> Inputs {
     }
     let mut grid_sh = Vec::with_capacity(nprobes * 27);
     for p in 0..nprobes {
-        for c in affine_eval(&affine, grid_probe_position(p)) {
+        for c in affine_eval(&affine, grid_probe_position(g, p)) {
             grid_sh.extend_from_slice(&c.to_array());
         }
     }
@@ -175,7 +207,7 @@ fn make_inputs() -> Inputs {
             rng.range(-1.0, 1.0),
             rng.range(-1.0, 1.0),
             rng.range(-1.0, 1.0),
-        );
+        ) * sh_scale(case);
         let l1: [Vec3; 4] = sh[..4].try_into().unwrap();
         let zh = Zh3 {
             l1,
@@ -195,9 +227,9 @@ fn make_inputs() -> Inputs {
         let w = [0; 4].map(|_| rng.range(0.05, 1.0));
         let ws: f32 = w.iter().sum();
         let w = w.map(|x| x / ws);
-        let pad = (GRID_MAX - GRID_MIN) * 0.15;
-        let lo = GRID_MIN - pad;
-        let hi = GRID_MAX + pad;
+        let pad = (g.max - g.min) * 0.15 + Vec3::splat(0.1);
+        let lo = g.min - pad;
+        let hi = g.max + pad;
         let pos = Vec3::new(
             rng.range(lo.x, hi.x),
             rng.range(lo.y, hi.y),
@@ -241,7 +273,7 @@ fn make_inputs() -> Inputs {
     inp
 }
 
-fn params_bytes(offsets: [u32; 4]) -> Vec<u8> {
+fn params_bytes(g: &Grid, offsets: [u32; 4]) -> Vec<u8> {
     // PkCheckParams: PkVolumeGrid (min @0, max @16, resolution @32; 48 B),
     // count @48, l1/zh3/l2/cube offsets @52..68, size rounded to 80.
     let mut b = vec![0u8; 80];
@@ -250,9 +282,9 @@ fn params_bytes(offsets: [u32; 4]) -> Vec<u8> {
             b[at + 4 * k..at + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
         }
     };
-    put_f(&mut b, 0, GRID_MIN);
-    put_f(&mut b, 16, GRID_MAX);
-    for (k, r) in GRID_RES.iter().enumerate() {
+    put_f(&mut b, 0, g.min);
+    put_f(&mut b, 16, g.max);
+    for (k, r) in g.resolution.iter().enumerate() {
         b[32 + 4 * k..36 + 4 * k].copy_from_slice(&r.to_le_bytes());
     }
     b[48..52].copy_from_slice(&(CASES as u32).to_le_bytes());
@@ -287,7 +319,7 @@ fn adapter() -> Option<wgpu::Adapter> {
     })
 }
 
-fn run_gpu(adapter: &wgpu::Adapter, inp: &Inputs) -> Vec<f32> {
+fn run_gpu(adapter: &wgpu::Adapter, g: &Grid, inp: &Inputs) -> Vec<f32> {
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("probekit-shaders test"),
         required_limits: adapter.limits(),
@@ -328,7 +360,7 @@ fn run_gpu(adapter: &wgpu::Adapter, inp: &Inputs) -> Vec<f32> {
     });
     let b_params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("check_params"),
-        contents: &params_bytes(inp.offsets),
+        contents: &params_bytes(g, inp.offsets),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let b_read = device.create_buffer(&wgpu::BufferDescriptor {
@@ -386,15 +418,18 @@ fn run_gpu(adapter: &wgpu::Adapter, inp: &Inputs) -> Vec<f32> {
 /// Largest error of each quantity, with the first failures.
 #[derive(Default)]
 struct Report {
+    /// Magnitude of the inputs the next checks derive from.
+    unit: f32,
     rows: Vec<(&'static str, f32)>,
     failures: Vec<String>,
 }
 
 impl Report {
-    /// Compares `gpu` with `cpu` component-wise: |gpu − cpu| ≤ tol·(1 + |cpu|∞).
+    /// Compares `gpu` with `cpu` component-wise:
+    /// |gpu − cpu| ≤ tol·(unit + |cpu|∞).
     fn check(&mut self, name: &'static str, case: usize, gpu: &[f32], cpu: &[f32], tol: f32) {
         assert_eq!(gpu.len(), cpu.len());
-        let scale = 1.0 + cpu.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+        let scale = self.unit + cpu.iter().fold(0.0f32, |m, x| m.max(x.abs()));
         let err = gpu
             .iter()
             .zip(cpu)
@@ -434,21 +469,36 @@ fn wgsl_matches_rust_on_random_inputs() {
         "adapter: {} ({:?}, {:?})",
         info.name, info.device_type, info.backend
     );
-    let inp = make_inputs();
-    let out = run_gpu(&adapter, &inp);
-    assert_eq!(out.len(), CASES * CHECK_OUT_FLOATS);
+    let mut rep = Report::default();
+    for g in &GRIDS {
+        let inp = make_inputs(g);
+        let out = run_gpu(&adapter, g, &inp);
+        assert_eq!(out.len(), CASES * CHECK_OUT_FLOATS);
+        compare(g, &inp, &out, &mut rep);
+    }
+    for (name, err) in &rep.rows {
+        println!("{name:>30}: max relative error {err:.2e}");
+    }
+    assert!(
+        rep.failures.is_empty(),
+        "WGSL differs from Rust:\n{}",
+        rep.failures.join("\n")
+    );
+}
 
+/// Compares one run of `pk_check` with probekit-sh.
+fn compare(g: &Grid, inp: &Inputs, out: &[f32], rep: &mut Report) {
     // GPU arithmetic is not bit-exact (division, pow, FMA contraction), so
     // compare with a relative tolerance; codec decoding is (nearly) exact.
     const TOL: f32 = 1e-5;
     const TOL_POW: f32 = 1e-4;
-    let mut rep = Report::default();
     for case in 0..CASES {
         let o = &out[case * CHECK_OUT_FLOATS..(case + 1) * CHECK_OUT_FLOATS];
         let sh = &inp.sh[case];
         let n = inp.n[case];
         let l1: [Vec3; 4] = sh[..4].try_into().unwrap();
         let v3 = |k: usize| &o[k..k + 3];
+        rep.unit = sh_scale(case);
         rep.check(
             "irradiance_l1",
             case,
@@ -484,6 +534,7 @@ fn wgsl_matches_rust_on_random_inputs() {
             &inp.zh[case].irradiance(n).to_array(),
             TOL,
         );
+        rep.unit = 1.0;
         rep.check(
             "AmbientCube::irradiance",
             case,
@@ -491,12 +542,15 @@ fn wgsl_matches_rust_on_random_inputs() {
             &inp.cube[case].irradiance(n).to_array(),
             TOL,
         );
+        rep.unit = sh_scale(case);
         let dl1 = decode_l1(&encode_l1(&l1));
         rep.check("decode_l1", case, &o[18..30], &flat(&dl1), TOL);
         let dz = decode_zh3(&encode_zh3(&inp.zh[case]));
         rep.check("decode_zh3.l1", case, &o[30..42], &flat(&dz.l1), TOL);
         rep.check("decode_zh3.zonal", case, v3(42), &dz.zonal.to_array(), TOL);
+        rep.unit = 1.0;
         rep.check("decode_zh3.axes", case, v3(45), &dz.axes[0].to_array(), TOL);
+        rep.unit = sh_scale(case);
         rep.check(
             "decode_l2",
             case,
@@ -504,6 +558,7 @@ fn wgsl_matches_rust_on_random_inputs() {
             &flat(&decode_l2(&encode_l2(sh))),
             TOL,
         );
+        rep.unit = 1.0;
         // Cloud blending: Σ w_k · probe(idx_k) from the grid buffer.
         let mut blend = [Vec3::ZERO; 9];
         for k in 0..4 {
@@ -514,7 +569,7 @@ fn wgsl_matches_rust_on_random_inputs() {
         }
         rep.check("cloud blend", case, &o[75..102], &flat(&blend), TOL);
         // Volume: affine probes ⇒ the affine function at the clamped position.
-        let p = inp.pos[case].clamp(GRID_MIN, GRID_MAX);
+        let p = inp.pos[case].clamp(g.min, g.max);
         rep.check(
             "volume sample",
             case,
@@ -522,6 +577,7 @@ fn wgsl_matches_rust_on_random_inputs() {
             &flat(&affine_eval(&inp.affine, p)),
             TOL,
         );
+        rep.unit = sh_scale(case);
         let hz = zh3_hallucinate(&l1);
         rep.check(
             "zh3_hallucinate.zonal",
@@ -530,6 +586,7 @@ fn wgsl_matches_rust_on_random_inputs() {
             &hz.zonal.to_array(),
             TOL,
         );
+        rep.unit = 1.0;
         rep.check(
             "zh3_hallucinate.axes",
             case,
@@ -537,6 +594,7 @@ fn wgsl_matches_rust_on_random_inputs() {
             &hz.axes[0].to_array(),
             TOL,
         );
+        rep.unit = sh_scale(case);
         rep.check("eval_sh", case, v3(135), &eval_sh(sh, n).to_array(), TOL);
         let mut b1 = [Vec3::ZERO; 4];
         for i in 0..4 {
@@ -544,6 +602,7 @@ fn wgsl_matches_rust_on_random_inputs() {
                 + (l1[i] * inp.w[case][2] + dl1[i] * inp.w[case][3]);
         }
         rep.check("blend_l1", case, &o[138..150], &flat(&b1), TOL);
+        rep.unit = 1.0;
         let dc = decode_ambient_cube(&encode_ambient_cube(&inp.cube[case]));
         rep.check(
             "decode_ambient_cube",
@@ -553,12 +612,4 @@ fn wgsl_matches_rust_on_random_inputs() {
             0.0,
         );
     }
-    for (name, err) in &rep.rows {
-        println!("{name:>30}: max relative error {err:.2e}");
-    }
-    assert!(
-        rep.failures.is_empty(),
-        "WGSL differs from Rust:\n{}",
-        rep.failures.join("\n")
-    );
 }
