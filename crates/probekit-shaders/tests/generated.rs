@@ -74,3 +74,18 @@ fn generated_files_are_up_to_date() {
         "generation is not deterministic"
     );
 }
+
+#[test]
+fn docs_example_validates() {
+    let docs = include_str!("../../../docs/shaders.md");
+    let start = docs
+        .find("```wgsl\n")
+        .expect("docs/shaders.md has a ```wgsl example")
+        + 8;
+    let len = docs[start..].find("```").expect("unterminated example");
+    let example = &docs[start..start + len];
+    let source = format!("{PROBEKIT_WGSL}\n{PROBEKIT_BUFFERS_WGSL}\n{example}");
+    let (module, _) =
+        validate_wgsl("docs/shaders.md example", &source).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(module.entry_points.len(), 1);
+}
