@@ -1,0 +1,108 @@
+// probekit_check.wgsl — the reference compute kernel: calls every function
+// of probekit.wgsl and probekit_buffers.wgsl once per test case. The tests of
+// crates/probekit-shaders run it on wgpu and compare with the Rust functions;
+// the generator compiles it so that naga's HLSL/GLSL/MSL back ends emit the
+// whole library (they only write what an entry point can reach).
+//
+// Case `i` reads PK_CHECK_IN floats at check_in[i·PK_CHECK_IN]:
+//   [0..3) unit normal n, [3..30) L2 radiance SH (coefficient-major RGB),
+//   [30..33) ZH3 zonal, [33..36) ZH3 unit axis (shared), [36..54) ambient cube
+//   faces RGB, [54..58) cloud probe indices (as floats), [58..62) cloud weights,
+//   [62..65) volume sample position,
+// and writes PK_CHECK_OUT floats at check_out[i·PK_CHECK_OUT]:
+//   [0..3) L1 irradiance, [3..6) L2, [6..9) Geomerics L1, [9..12) hallucinated
+//   ZH3, [12..15) stored ZH3, [15..18) ambient cube, [18..30) decoded L1 probe i,
+//   [30..42) decoded ZH3 probe i: L1, [42..45) its zonal, [45..48) its axis,
+//   [48..75) decoded L2 probe i, [75..102) cloud blend, [102..129) volume
+//   sample, [129..132) hallucinated ZH3 zonal, [132..135) its axis,
+//   [135..138) radiance of the L2 SH in direction n, [138..150) L1 blend of
+//   (L1 part of the input, decoded L1 probe i, the same two again) with the
+//   cloud weights, [150..168) decoded ambient cube i (faces RGB).
+
+const PK_CHECK_IN: u32 = 68u;
+const PK_CHECK_OUT: u32 = 168u;
+
+struct PkCheckParams {
+    grid: PkVolumeGrid,
+    count: u32,
+    l1_offset: u32,
+    zh3_offset: u32,
+    l2_offset: u32,
+    cube_offset: u32,
+}
+
+@group(0) @binding(2) var<storage, read> check_in: array<f32>;
+@group(0) @binding(3) var<storage, read_write> check_out: array<f32>;
+@group(0) @binding(4) var<uniform> check_params: PkCheckParams;
+
+fn check_in_vec3(k: u32) -> vec3<f32> {
+    return vec3<f32>(check_in[k], check_in[k + 1u], check_in[k + 2u]);
+}
+
+fn check_put(k: u32, v: vec3<f32>) {
+    check_out[k] = v.x;
+    check_out[k + 1u] = v.y;
+    check_out[k + 2u] = v.z;
+}
+
+fn check_put_l1(k: u32, sh: array<vec3<f32>, 4>) {
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        check_put(k + 3u * i, sh[i]);
+    }
+}
+
+fn check_put_l2(k: u32, sh: PkShL2) {
+    for (var i = 0u; i < 9u; i = i + 1u) {
+        check_put(k + 3u * i, sh.c[i]);
+    }
+}
+
+@compute @workgroup_size(64)
+fn pk_check(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= check_params.count {
+        return;
+    }
+    let a = i * PK_CHECK_IN;
+    let o = i * PK_CHECK_OUT;
+    let n = check_in_vec3(a);
+    var sh: PkShL2;
+    for (var k = 0u; k < 9u; k = k + 1u) {
+        sh.c[k] = check_in_vec3(a + 3u + 3u * k);
+    }
+    let l1 = pk_l2_to_l1(sh);
+    let axis = check_in_vec3(a + 33u);
+    let zh = PkZh3(l1.c, check_in_vec3(a + 30u), array<vec3<f32>, 3>(axis, axis, axis));
+    var cube: PkAmbientCube;
+    for (var k = 0u; k < 6u; k = k + 1u) {
+        cube.faces[k] = check_in_vec3(a + 36u + 3u * k);
+    }
+    let idx = vec4<u32>(vec4<f32>(check_in[a + 54u], check_in[a + 55u], check_in[a + 56u], check_in[a + 57u]));
+    let wts = vec4<f32>(check_in[a + 58u], check_in[a + 59u], check_in[a + 60u], check_in[a + 61u]);
+    let pos = check_in_vec3(a + 62u);
+
+    check_put(o, pk_irradiance_l1(l1, n));
+    check_put(o + 3u, pk_irradiance_l2(sh, n));
+    check_put(o + 6u, pk_irradiance_geomerics_l1(l1, n));
+    check_put(o + 9u, pk_irradiance_zh3_hallucinated(l1, n));
+    check_put(o + 12u, pk_irradiance_zh3(zh, n));
+    check_put(o + 15u, pk_irradiance_ambient_cube(cube, n));
+    let l1q = pk_load_l1_q_at(check_params.l1_offset + 13u * i);
+    check_put_l1(o + 18u, l1q.c);
+    let zq = pk_load_zh3_q_at(check_params.zh3_offset + 16u * i);
+    check_put_l1(o + 30u, zq.l1);
+    check_put(o + 42u, zq.zonal);
+    check_put(o + 45u, zq.axes[0]);
+    check_put_l2(o + 48u, pk_load_l2_q_at(check_params.l2_offset + 28u * i));
+    check_put_l2(o + 75u, pk_cloud_sh_l2(idx, wts));
+    check_put_l2(o + 102u, pk_volume_sh_l2(check_params.grid, pos));
+    let hz = pk_zh3_hallucinate(l1.c);
+    check_put(o + 129u, hz.zonal);
+    check_put(o + 132u, hz.axes[0]);
+    check_put(o + 135u, pk_radiance_l2(sh, n));
+    check_put_l1(o + 138u, pk_blend_l1(l1, l1q, l1, l1q, wts).c);
+    let cq = pk_load_ambient_cube_at(check_params.cube_offset + 24u * i);
+    for (var k = 0u; k < 6u; k = k + 1u) {
+        check_put(o + 150u + 3u * k, cq.faces[k]);
+    }
+}
