@@ -7,3 +7,5 @@
 #![warn(missing_docs)]
 
 pub use probekit_sh as sh;
+
+pub mod format;

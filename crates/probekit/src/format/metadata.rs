@@ -1,0 +1,110 @@
+//! Bake metadata: the `META` section's JSON. Holds what is needed to tell
+//! two bakes apart and to reproduce one (scene hash, settings, placement
+//! method and parameters, tool version) and nothing that changes between
+//! identical bakes (no wall-clock time, no host name), so the same bake
+//! gives the same bytes.
+
+use serde::{Deserialize, Serialize};
+
+/// How the probes were placed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Placement {
+    /// `grid`, `manual`, `spawn-merge`, `gradient-ascent`, `adaptive`,
+    /// `uniform` or `octree` (volumes), ...
+    pub method: String,
+    /// The method's parameters as given (budget, tolerance, cell size ...).
+    #[serde(default)]
+    pub parameters: serde_json::Value,
+}
+
+/// The JSON stored in the `META` section. Keys serialize in a fixed order
+/// (struct order; maps inside `serde_json::Value` are sorted), so equal
+/// metadata gives equal bytes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BakeMetadata {
+    /// Version of probekit that wrote the file.
+    pub tool_version: String,
+    /// [`scene_hash`] of the scene file's bytes (and of the assets it names,
+    /// if the baker includes them).
+    pub scene_hash: String,
+    /// Placement method and parameters.
+    pub placement: Placement,
+    /// Bake settings (SH order, samples, seed, bounces, codec, ...).
+    #[serde(default)]
+    pub settings: serde_json::Value,
+}
+
+impl BakeMetadata {
+    /// Metadata stamped with this crate's version.
+    pub fn new(scene_hash: String, placement: Placement, settings: serde_json::Value) -> Self {
+        Self {
+            tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene_hash,
+            placement,
+            settings,
+        }
+    }
+
+    /// Compact JSON for [`ProbeFile::metadata`](super::ProbeFile::metadata).
+    pub fn to_json(&self) -> String {
+        // Serializing plain structs and `Value`s cannot fail.
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// Parses the `META` text of a file (`None` if it is not this shape,
+    /// e.g. a file from another tool).
+    pub fn from_json(text: &str) -> Option<Self> {
+        serde_json::from_str(text).ok()
+    }
+}
+
+/// A stable 64-bit content hash (FNV-1a), as 16 lowercase hex digits.
+/// Identifies inputs; not cryptographic.
+pub fn scene_hash(bytes: &[u8]) -> String {
+    // FNV-1a 64: offset basis and prime from Fowler, Noll and Vo's
+    // specification (draft-eastlake-fnv).
+    let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01B3);
+    }
+    format!("{h:016x}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fnv1a_published_vectors() {
+        // Test vectors of the FNV reference code (fnv.c, test_fnv.c).
+        assert_eq!(scene_hash(b""), "cbf29ce484222325");
+        assert_eq!(scene_hash(b"a"), "af63dc4c8601ec8c");
+        assert_eq!(scene_hash(b"foobar"), "85944171f73967e8");
+    }
+
+    #[test]
+    fn metadata_json_is_deterministic_and_round_trips() {
+        let settings = serde_json::json!({"seed": 7, "order": 3, "bounces": 2});
+        let m = BakeMetadata::new(
+            scene_hash(b"scene"),
+            Placement {
+                method: "adaptive".into(),
+                parameters: serde_json::json!({"budget": 500, "tolerance": 0.05}),
+            },
+            settings,
+        );
+        let a = m.to_json();
+        // Built with keys in another order: same text.
+        let settings2 = serde_json::json!({"order": 3, "bounces": 2, "seed": 7});
+        let m2 = BakeMetadata {
+            settings: settings2,
+            ..m.clone()
+        };
+        assert_eq!(a, m2.to_json());
+        assert!(a.contains(r#""method":"adaptive""#));
+        assert!(!a.contains("time"));
+        assert_eq!(BakeMetadata::from_json(&a), Some(m));
+        assert_eq!(BakeMetadata::from_json("not json"), None);
+    }
+}
