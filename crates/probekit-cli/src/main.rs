@@ -1,5 +1,54 @@
 //! The `probekit` command-line tool: a thin layer over the `probekit` library.
+//!
+//! `main` only parses arguments and dispatches to one module per subcommand
+//! under [`cmd`]; every failure is reported as one line
+//! `error: <file>: <problem>` on stderr with exit code 1.
 
-fn main() {
-    println!("probekit");
+#![warn(missing_docs)]
+
+mod cmd;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// probekit: bake and inspect diffuse lighting (light probes, spherical harmonics).
+#[derive(Debug, Parser)]
+#[command(name = "probekit", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The subcommands; each lives in `src/cmd/<name>.rs`.
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Radiance SH of an environment map, or a comparison of diffuse bases.
+    Sh(cmd::sh::ShArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Sh(args) => cmd::sh::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the context chain joined by ": ", skipping causes
+            // whose text the message already contains (library errors embed them).
+            let mut msg = String::new();
+            for cause in e.chain() {
+                let c = cause.to_string();
+                if !msg.contains(&c) {
+                    if !msg.is_empty() {
+                        msg += ": ";
+                    }
+                    msg += &c;
+                }
+            }
+            let msg = msg.replace('\n', " ");
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
-pub use probekit_sh as sh;
-
+pub mod env;
 pub mod format;
+pub mod plot;
+pub mod sh;
