@@ -9,5 +9,7 @@
 pub use probekit_sh as sh;
 
 pub mod format;
+pub mod volume;
 
 pub use format::{FormatError, ProbeFile, ProbeFileKind};
+pub use volume::{Interp, Volume, VolumeError};

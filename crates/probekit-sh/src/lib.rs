@@ -33,13 +33,13 @@ pub mod basis;
 pub mod codec;
 pub mod coeffs;
 pub mod convolve;
+pub mod geomerics;
+pub mod hl2;
 pub mod lights;
+mod numeric;
 pub mod project;
 pub mod rotate;
 pub mod window;
-pub mod geomerics;
-pub mod hl2;
-mod numeric;
 pub mod zh3;
 pub mod zonal;
 

@@ -10,3 +10,4 @@ pub mod env;
 pub mod format;
 pub mod plot;
 pub mod sh;
+pub mod volume;
