@@ -518,9 +518,7 @@ pub fn export_bevy(
     volume: &Volume,
     resolution: [u32; 3],
 ) -> Result<(Ktx2, serde_json::Value), ExportError> {
-    if resolution.iter().any(|&r| r == 0)
-        || resolution.iter().map(|&r| r as u64).product::<u64>() > 1 << 24
-    {
+    if resolution.contains(&0) || resolution.iter().map(|&r| r as u64).product::<u64>() > 1 << 24 {
         return Err(ExportError::TooLarge(resolution));
     }
     let (min, max) = volume.bounds();

@@ -53,3 +53,21 @@ pub enum VolumeBuildError {
     #[error(transparent)]
     Format(#[from] FormatError),
 }
+
+/// The `inspect --json` summary of a volume file:
+/// `{"probes":P,"leaves":L,"basis":"sh<order>/<codec>","gradients":bool,
+/// "bytes":B,"bytes_by_section":{...}}` (`probes` = samples, as for clouds).
+pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value, VolumeError> {
+    let v = Volume::from_file(file)?;
+    let by = file.bytes_by_section()?;
+    let bytes: u64 = by.values().sum();
+    Ok(serde_json::json!({
+        "kind": "volume",
+        "probes": file.positions.len(),
+        "leaves": v.leaf_count(),
+        "basis": format!("sh{}/{:?}", file.coefficients.order, file.coefficients.codec),
+        "gradients": file.gradients.is_some(),
+        "bytes": bytes,
+        "bytes_by_section": by,
+    }))
+}
