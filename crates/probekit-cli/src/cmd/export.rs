@@ -28,7 +28,7 @@ pub struct ExportArgs {
     pub encoding: String,
     /// Voxels per axis `X,Y,Z` (bevy; default the grid's probe counts, or
     /// 2^depth for an octree).
-    #[arg(long, value_delimiter = ',', num_args = 3)]
+    #[arg(long, value_delimiter = ',')]
     pub resolution: Option<Vec<u32>>,
 }
 
@@ -54,7 +54,8 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         }
         "bevy" => {
             let res = match &a.resolution {
-                Some(r) => [r[0], r[1], r[2]],
+                Some(r) if r.len() == 3 => [r[0], r[1], r[2]],
+                Some(_) => bail!("{name}: --resolution needs 3 numbers X,Y,Z"),
                 None => v
                     .grid_resolution()
                     .unwrap_or([1u32 << v.max_depth().min(8); 3]),

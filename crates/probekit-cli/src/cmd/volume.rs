@@ -31,7 +31,7 @@ pub struct VolumeArgs {
     #[arg(long, conflicts_with = "resolution")]
     pub cell: Option<f32>,
     /// Probes per axis `X,Y,Z` (uniform).
-    #[arg(long, value_delimiter = ',', num_args = 3)]
+    #[arg(long, value_delimiter = ',')]
     pub resolution: Option<Vec<u32>>,
     /// Adaptive octree.
     #[arg(long)]
@@ -52,7 +52,7 @@ pub struct VolumeArgs {
     #[arg(long)]
     pub gradients: Option<String>,
     /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres); default the scene's.
-    #[arg(long = "box", value_delimiter = ',', num_args = 6)]
+    #[arg(long = "box", value_delimiter = ',')]
     pub bbox: Option<Vec<f32>>,
     /// SH bands (1..=8).
     #[arg(long, default_value_t = 3)]
@@ -80,6 +80,12 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
     let src = LightsDemo::demo(a.order);
     let (mut min, mut max) = LightsDemo::demo_box();
     if let Some(b) = &a.bbox {
+        if b.len() != 6 {
+            bail!(
+                "{}: --box needs 6 numbers MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
+                a.scene
+            );
+        }
         min = Vec3::new(b[0], b[1], b[2]);
         max = Vec3::new(b[3], b[4], b[5]);
     }
@@ -112,7 +118,8 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         )
     } else if a.uniform {
         let res = match (&a.resolution, a.cell) {
-            (Some(r), _) => [r[0], r[1], r[2]],
+            (Some(r), _) if r.len() == 3 => [r[0], r[1], r[2]],
+            (Some(_), _) => bail!("{}: --resolution needs 3 numbers X,Y,Z", a.scene),
             (None, Some(c)) => resolution_for_cell(min, max, c).with_context(|| a.scene.clone())?,
             (None, None) => bail!("{}: --uniform needs --cell or --resolution", a.scene),
         };
