@@ -549,3 +549,102 @@ fn bevy_export_texels_are_ambient_cube_irradiance_over_pi_at_voxel_centres() {
         }
     }
 }
+
+/// Constant radiance with a geometric slab at x ∈ [0.3, 0.35]: the octree
+/// refines around it, the field stays constant.
+struct ConstantWithWall;
+impl VolumeSource for ConstantWithWall {
+    fn order(&self) -> usize {
+        2
+    }
+    fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
+        p.iter()
+            .map(|_| Captured {
+                sh: ShRgb::from_coeffs(vec![
+                    Vec3::new(1.0, 2.0, 3.0),
+                    Vec3::splat(0.5),
+                    Vec3::splat(-0.25),
+                    Vec3::ZERO,
+                ])
+                .unwrap(),
+                validity: 1.0,
+            })
+            .collect()
+    }
+    fn contains_geometry(&self, min: Vec3, max: Vec3) -> bool {
+        min.x < 0.35 && max.x > 0.3
+    }
+    fn analytic_gradients(&self, p: &[Vec3]) -> Option<Vec<Vec3>> {
+        Some(vec![Vec3::ZERO; p.len() * 12])
+    }
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn octree_volume() -> &'static Volume {
+        static V: std::sync::OnceLock<Volume> = std::sync::OnceLock::new();
+        V.get_or_init(|| {
+            let (file, _) = build_adaptive(
+                &ConstantWithWall,
+                &AdaptiveSettings {
+                    common: common(Vec3::ZERO, Vec3::ONE, GradientMode::Analytic),
+                    min_depth: 1,
+                    max_depth: 5,
+                    geometry: true,
+                    depth_factor: None,
+                    gradient_threshold: None,
+                    prediction_tolerance: None,
+                    prune_tolerance: None,
+                },
+            )
+            .unwrap();
+            assert!(file
+                .octree
+                .as_ref()
+                .unwrap()
+                .nodes
+                .iter()
+                .any(|n| n.depth == 5));
+            Volume::from_file(&file).unwrap()
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Every scheme is a normalised combination: a constant field comes
+        /// back exactly anywhere in a multi-level octree (and outside it, clamped).
+        #[test]
+        fn constant_field_is_reproduced_on_an_octree(
+            x in -0.2f32..1.2, y in -0.2f32..1.2, z in -0.2f32..1.2,
+        ) {
+            let v = octree_volume();
+            let want = ConstantWithWall.capture(&[Vec3::ZERO]).remove(0).sh.into_coeffs();
+            for i in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic, Interp::InverseDistance, Interp::LeafTrilinear] {
+                let got = sh_at(v, Vec3::new(x, y, z), i);
+                prop_assert!(dist(&got, &want) < 1e-5, "{:?}: {:?}", i, got);
+            }
+        }
+
+        /// Trilinear reproduces any affine field on any uniform grid.
+        #[test]
+        fn affine_fields_on_random_grids(
+            a in prop::array::uniform3(-2.0f32..2.0), b in prop::array::uniform3(-2.0f32..2.0),
+            lo in prop::array::uniform3(-5.0f32..5.0), ext in prop::array::uniform3(0.5f32..4.0),
+            rx in 2u32..6, ry in 2u32..6, rz in 2u32..6, t in prop::array::uniform3(0.0f32..1.0),
+        ) {
+            let (a, b) = (Vec3::from(a), Vec3::from(b));
+            let f = move |p: Vec3| vec![Vec3::splat(a.dot(p)) + b];
+            let src = FieldSource { order: 1, f, g: |_| vec![], log: Mutex::new(vec![]) };
+            let (min, max) = (Vec3::from(lo), Vec3::from(lo) + Vec3::from(ext));
+            let (file, _) = build_uniform(&src, &common(min, max, GradientMode::None), [rx, ry, rz]).unwrap();
+            let v = Volume::from_file(&file).unwrap();
+            let p = min + Vec3::from(t) * (max - min);
+            let got = sh_at(&v, p, Interp::Trilinear);
+            let want = f(p);
+            prop_assert!(dist(&got, &want) < 1e-4 * (1.0 + want[0].abs().max_element()));
+        }
+    }
+}
