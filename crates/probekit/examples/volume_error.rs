@@ -1,7 +1,8 @@
 //! Error against memory for irradiance volumes on `builtin:lights-demo`:
 //! relative RMS irradiance error over random points and normals (reference:
 //! the analytic sphere-light SH at the point), against the `.probes` bytes.
-//! `cargo run --release -p probekit --example volume_error`.
+//! `cargo run --release -p probekit --example volume_error [-- --plot FILE.png]`
+//! (with `--plot`, also a line chart of error against bytes).
 
 use glam::Vec3;
 use probekit::volume::*;
@@ -72,6 +73,15 @@ fn main() {
     }
     println!("| volume | samples | bytes (no gradients) | bytes (with gradients) | trilinear | Taylor | tricubic |");
     println!("|---|---|---|---|---|---|---|");
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = [
+        "uniform trilinear",
+        "uniform tricubic (+gradients)",
+        "adaptive trilinear",
+        "adaptive tricubic (+gradients)",
+    ]
+    .iter()
+    .map(|s| (s.to_string(), Vec::new()))
+    .collect();
     for (name, f) in rows {
         let v = Volume::from_file(&f).unwrap();
         let with: u64 = f.bytes_by_section().unwrap().values().sum();
@@ -90,6 +100,9 @@ fn main() {
                 .sum();
             errs.push((num / denom).sqrt());
         }
+        let base = if name.starts_with("uniform") { 0 } else { 2 };
+        series[base].1.push((without as f64, errs[0]));
+        series[base + 1].1.push((with as f64, errs[2]));
         println!(
             "| {name} | {} | {without} | {with} | {:.4} | {:.4} | {:.4} |",
             f.positions.len(),
@@ -97,5 +110,18 @@ fn main() {
             errs[1],
             errs[2]
         );
+    }
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--plot") {
+        let path = args.get(i + 1).expect("--plot FILE.png");
+        probekit::plot::line_chart(
+            path,
+            "Volume error vs memory (lights-demo)",
+            &series,
+            "bytes of the .probes file",
+            "relative RMS irradiance error",
+            true,
+        )
+        .expect("write plot");
     }
 }
