@@ -569,3 +569,56 @@ fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, V
         depths: o.nodes.iter().map(|n| n.depth).collect(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::VolumeGrid;
+
+    fn grid_file(res: [u32; 3], probes: usize) -> ProbeFile {
+        let mut f =
+            ProbeFile::cloud(vec![Vec3::ZERO; probes], 1, &vec![Vec3::ONE; probes]).unwrap();
+        f.kind = ProbeFileKind::Volume;
+        f.grid = Some(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+            resolution: res,
+        });
+        f
+    }
+
+    #[test]
+    fn non_volumes_and_mismatches_are_errors() {
+        let cloud = ProbeFile::cloud(vec![Vec3::ZERO], 1, &[Vec3::ONE]).unwrap();
+        assert!(matches!(
+            Volume::from_file(&cloud),
+            Err(VolumeError::NotAVolume(_))
+        ));
+        assert!(matches!(
+            Volume::from_file(&grid_file([2, 2, 2], 7)),
+            Err(VolumeError::NotAVolume(_))
+        ));
+        let mut no_struct = grid_file([2, 2, 2], 8);
+        no_struct.grid = None;
+        assert!(Volume::from_file(&no_struct).is_err());
+    }
+
+    #[test]
+    fn single_probe_axes_and_clamping() {
+        // 2 × 1 × 1 grid: x interpolates, y and z are degenerate; outside
+        // points clamp to the box.
+        let mut f = grid_file([2, 1, 1], 2);
+        f.positions = vec![Vec3::ZERO, Vec3::X];
+        f.coefficients =
+            crate::format::Coefficients::from_f32(1, &[Vec3::splat(1.0), Vec3::splat(3.0)])
+                .unwrap();
+        let v = Volume::from_file(&f).unwrap();
+        let mut out = [Vec3::ZERO; 1];
+        for (x, want) in [(0.25f32, 1.5f32), (-1.0, 1.0), (2.0, 3.0)] {
+            v.sample_sh(Vec3::new(x, 5.0, -5.0), Interp::Trilinear, &mut out)
+                .unwrap();
+            assert!((out[0].x - want).abs() < 1e-6, "{x}: {}", out[0].x);
+        }
+        assert_eq!(v.leaf_count(), 1);
+    }
+}
