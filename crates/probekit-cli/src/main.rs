@@ -24,12 +24,18 @@ struct Cli {
 enum Command {
     /// Radiance SH of an environment map, or a comparison of diffuse bases.
     Sh(cmd::sh::ShArgs),
+    /// Bake an irradiance volume (uniform grid or adaptive octree).
+    Volume(cmd::volume::VolumeArgs),
+    /// Export a volume as KTX2 3D textures or a Bevy irradiance volume.
+    Export(cmd::export::ExportArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Sh(args) => cmd::sh::run(&args),
+        Command::Volume(args) => cmd::volume::run(&args),
+        Command::Export(args) => cmd::export::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,6 +7,8 @@
 #![warn(missing_docs)]
 
 pub mod format;
+pub mod volume;
 
 pub use format::{FormatError, ProbeFile, ProbeFileKind};
 pub mod cloud;
+pub use volume::{Interp, Volume, VolumeError};

@@ -14,3 +14,8 @@ pub mod scene;
 pub mod sh;
 pub mod trace;
 pub mod cloud;
+pub mod env;
+pub mod format;
+pub mod plot;
+pub mod sh;
+pub mod volume;

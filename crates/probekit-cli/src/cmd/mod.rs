@@ -1,3 +1,5 @@
 //! One module per subcommand; each exposes `Args` (clap derive) and `run`.
 
+pub mod export;
 pub mod sh;
+pub mod volume;

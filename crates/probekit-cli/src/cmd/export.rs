@@ -1,0 +1,77 @@
+//! `probekit export VOLUME --format ktx2|bevy -o OUT [--encoding f16|quantized]
+//! [--resolution X,Y,Z]`.
+//!
+//! `ktx2`: a directory of KTX2 3D textures plus `volume.json`
+//! (`probekit::volume::export`). `bevy`: one `.ktx2` for Bevy's
+//! `IrradianceVolume` plus `OUT.json` with the `LightProbe` transform.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use probekit::format::{write_atomic, ProbeFile};
+use probekit::volume::export::{export_bevy, export_ktx2, write_ktx2_export, Ktx2Encoding};
+use probekit::volume::Volume;
+use std::path::PathBuf;
+
+/// Arguments of `probekit export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// A volume `.probes` file.
+    pub volume: PathBuf,
+    /// `ktx2` (directory) or `bevy` (one .ktx2 file).
+    #[arg(long)]
+    pub format: String,
+    /// Output directory (ktx2) or file (bevy).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// `f16` or `quantized` (ktx2).
+    #[arg(long, default_value = "f16")]
+    pub encoding: String,
+    /// Voxels per axis `X,Y,Z` (bevy; default the grid's probe counts, or
+    /// 2^depth for an octree).
+    #[arg(long, value_delimiter = ',')]
+    pub resolution: Option<Vec<u32>>,
+}
+
+/// Runs `probekit export`.
+pub fn run(a: &ExportArgs) -> Result<()> {
+    let name = a.volume.display().to_string();
+    let file = ProbeFile::load(&a.volume).with_context(|| name.clone())?;
+    let v = Volume::from_file(&file).with_context(|| name.clone())?;
+    match a.format.as_str() {
+        "ktx2" => {
+            let enc = match a.encoding.as_str() {
+                "f16" => Ktx2Encoding::F16,
+                "quantized" => Ktx2Encoding::Quantized,
+                o => bail!("{name}: --encoding {o}: expected f16 or quantized"),
+            };
+            let ex = export_ktx2(&v, enc, None).with_context(|| name.clone())?;
+            write_ktx2_export(&ex, &a.output).with_context(|| a.output.display().to_string())?;
+            println!(
+                "{}: {} textures + volume.json",
+                a.output.display(),
+                ex.textures.len()
+            );
+        }
+        "bevy" => {
+            let res = match &a.resolution {
+                Some(r) if r.len() == 3 => [r[0], r[1], r[2]],
+                Some(_) => bail!("{name}: --resolution needs 3 numbers X,Y,Z"),
+                None => v
+                    .grid_resolution()
+                    .unwrap_or([1u32 << v.max_depth().min(8); 3]),
+            };
+            let (tex, json) = export_bevy(&v, res).with_context(|| name.clone())?;
+            let out = a.output.display().to_string();
+            write_atomic(&a.output, &tex.to_bytes()).with_context(|| out.clone())?;
+            let side = a.output.with_extension("json");
+            let text = serde_json::to_string_pretty(&json).expect("JSON value");
+            write_atomic(&side, text.as_bytes()).with_context(|| side.display().to_string())?;
+            println!(
+                "{out}: Bevy irradiance volume {res:?} voxels; transform in {}",
+                side.display()
+            );
+        }
+        o => bail!("{name}: --format {o}: expected ktx2 or bevy"),
+    }
+    Ok(())
+}

@@ -1,0 +1,135 @@
+//! End-to-end tests of `probekit volume` and `probekit export`.
+
+use std::process::{Command, Output};
+
+fn probekit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_probekit"))
+        .args(args)
+        .output()
+        .expect("run probekit")
+}
+
+/// Uniform bake: the JSON counts match the resolution, the file's bytes are
+/// the sum of its sections, gradients add 3× the coefficient bytes; export to
+/// KTX2 (f16 and quantized) and Bevy writes the expected files.
+#[test]
+fn volume_bake_and_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("u.probes");
+    let o = probekit(&[
+        "volume",
+        "builtin:lights-demo",
+        "-o",
+        out.to_str().unwrap(),
+        "--uniform",
+        "--resolution",
+        "5,4,3",
+        "--gradients",
+        "analytic",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["probes"], 60);
+    assert_eq!(v["leaves"], 4 * 3 * 2);
+    let by = v["bytes_by_section"].as_object().unwrap();
+    let sum: u64 = by.values().map(|x| x.as_u64().unwrap()).sum();
+    assert_eq!(sum, v["bytes"].as_u64().unwrap());
+    assert_eq!(sum, std::fs::metadata(&out).unwrap().len());
+    let (c, g) = (
+        by["coefficients"].as_u64().unwrap(),
+        by["gradients"].as_u64().unwrap(),
+    );
+    assert!(g >= 3 * (60 * 9 * 12) && c >= 60 * 9 * 12 && g < 3 * c + 64);
+
+    let k = dir.path().join("k");
+    let o = probekit(&[
+        "export",
+        out.to_str().unwrap(),
+        "--format",
+        "ktx2",
+        "-o",
+        k.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(k.join("volume.json").exists() && k.join("sh_f16_6.ktx2").exists());
+    let b = dir.path().join("b.ktx2");
+    let o = probekit(&[
+        "export",
+        out.to_str().unwrap(),
+        "--format",
+        "bevy",
+        "-o",
+        b.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(&b).unwrap();
+    assert_eq!(&bytes[..4], &[0xAB, 0x4B, 0x54, 0x58]);
+    // Rx × 2Ry × 3Rz texels.
+    let w = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+    assert_eq!((w(20), w(24), w(28)), (5, 8, 9));
+    assert!(dir.path().join("b.json").exists());
+}
+
+/// Adaptive bake and bad input: one line naming the problem, exit code 1.
+#[test]
+fn volume_adaptive_and_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.probes");
+    let o = probekit(&[
+        "volume",
+        "builtin:lights-demo",
+        "-o",
+        out.to_str().unwrap(),
+        "--adaptive",
+        "--min-depth",
+        "1",
+        "--max-depth",
+        "3",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["probes"].as_u64().unwrap() > 27 && v["probes"].as_u64().unwrap() <= 9 * 9 * 9);
+    for args in [
+        vec![
+            "volume",
+            "nope",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--cell",
+            "1",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--resolution",
+            "1,2",
+        ],
+        vec![
+            "export",
+            "missing.probes",
+            "--format",
+            "bevy",
+            "-o",
+            "x.ktx2",
+        ],
+    ] {
+        let o = probekit(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.starts_with("error: "), "{err}");
+    }
+}

@@ -1,0 +1,664 @@
+//! Building uniform and adaptive irradiance volumes (seed 001).
+
+use super::source::{Captured, VolumeSource};
+use super::VolumeBuildError;
+use crate::format::{
+    layout::{NONE, VALIDITY_INVALID},
+    Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeFileKind, Validity, VolumeGrid,
+};
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// How per-sample SH gradients are obtained.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GradientMode {
+    /// No gradients stored.
+    None,
+    /// Central differences from 6 extra captures at `±step` along each axis
+    /// (seed 001: "project 6 additional irradiance functions").
+    Central {
+        /// Offset in metres.
+        step: f32,
+    },
+    /// The source's closed form ([`VolumeSource::analytic_gradients`]).
+    Analytic,
+}
+
+/// Settings shared by both builders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CommonSettings {
+    /// Box minimum (metres).
+    pub min: Vec3,
+    /// Box maximum (metres).
+    pub max: Vec3,
+    /// Gradient capture.
+    pub gradients: GradientMode,
+    /// Samples with validity below this are invalid and dilated.
+    pub validity_threshold: f32,
+}
+
+/// Adaptive octree settings (seed 001 "Adaptive Subdivision": min and max
+/// level and one threshold per heuristic; `None` disables a heuristic).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveSettings {
+    /// Box, gradients, validity.
+    pub common: CommonSettings,
+    /// Cells shallower than this are always subdivided.
+    pub min_depth: u32,
+    /// Cells at this depth are never subdivided (≤ 20).
+    pub max_depth: u32,
+    /// Subdivide cells that contain geometry (Greger et al. 1998).
+    pub geometry: bool,
+    /// Subdivide when the cell's largest edge exceeds `factor ×` the
+    /// smallest harmonic mean of scene depth at its corners (Pharr 2004).
+    pub depth_factor: Option<f32>,
+    /// Subdivide when `max |Δv| / (|DC| + ε)` along a cell edge, i.e. the
+    /// relative SH gradient times the cell size, exceeds this.
+    pub gradient_threshold: Option<f32>,
+    /// Subdivide when trilinear prediction from the parent's corners misses
+    /// a child corner's captured SH by more than this (relative, as above).
+    pub prediction_tolerance: Option<f32>,
+    /// After sampling, collapse a cell whose children are leaves and whose
+    /// children's samples the parent predicts within this (relative).
+    pub prune_tolerance: Option<f32>,
+}
+
+/// Counters of a build.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildStats {
+    /// Points captured in total (samples, prediction probes, gradient probes).
+    pub captures: usize,
+    /// Samples stored.
+    pub samples: usize,
+    /// Leaves (cells).
+    pub leaves: usize,
+    /// Samples replaced by dilation.
+    pub dilated: usize,
+}
+
+/// Relative SH distance used by every threshold: `‖a − b‖₂ / (|DC(ref)| + ε)`
+/// over all RGB coefficients, `ε` = 1e-4.
+pub fn relative_difference(a: &[Vec3], b: &[Vec3], reference: &[Vec3]) -> f32 {
+    let d: f32 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).length_squared())
+        .sum();
+    d.sqrt() / (reference[0].length() + 1e-4)
+}
+
+fn check_box(min: Vec3, max: Vec3) -> Result<(), VolumeBuildError> {
+    if !(min.is_finite() && max.is_finite()) || (0..3).any(|a| max[a] <= min[a]) {
+        return Err(VolumeBuildError::BadBox);
+    }
+    Ok(())
+}
+
+/// Uniform grid with `resolution` probes per axis (each ≥ 2) over the box,
+/// probes at cell corners (seed 001 "Uniform Volume Subdivision").
+pub fn build_uniform(
+    src: &dyn VolumeSource,
+    common: &CommonSettings,
+    resolution: [u32; 3],
+) -> Result<(ProbeFile, BuildStats), VolumeBuildError> {
+    check_box(common.min, common.max)?;
+    if resolution.iter().any(|&r| r < 2) {
+        return Err(VolumeBuildError::BadResolution(resolution));
+    }
+    let total = resolution.iter().map(|&r| r as u64).product::<u64>();
+    if total > 1 << 26 {
+        return Err(VolumeBuildError::TooLarge(total));
+    }
+    let [rx, ry, rz] = resolution.map(|r| r as usize);
+    let size = common.max - common.min;
+    let mut points = Vec::with_capacity(rx * ry * rz);
+    for k in 0..rz {
+        for j in 0..ry {
+            for i in 0..rx {
+                let f = Vec3::new(
+                    i as f32 / (rx - 1) as f32,
+                    j as f32 / (ry - 1) as f32,
+                    k as f32 / (rz - 1) as f32,
+                );
+                points.push(common.min + f * size);
+            }
+        }
+    }
+    let caps = src.capture(&points);
+    let mut stats = BuildStats {
+        captures: points.len(),
+        samples: points.len(),
+        leaves: (rx - 1) * (ry - 1) * (rz - 1),
+        dilated: 0,
+    };
+    // Neighbours: the 26 surrounding grid points.
+    let idx = |i: usize, j: usize, k: usize| i + rx * (j + ry * k);
+    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); points.len()];
+    for k in 0..rz {
+        for j in 0..ry {
+            for i in 0..rx {
+                for dk in -1i64..=1 {
+                    for dj in -1i64..=1 {
+                        for di in -1i64..=1 {
+                            let (a, b, c) = (i as i64 + di, j as i64 + dj, k as i64 + dk);
+                            if (di, dj, dk) == (0, 0, 0)
+                                || a < 0
+                                || b < 0
+                                || c < 0
+                                || a >= rx as i64
+                                || b >= ry as i64
+                                || c >= rz as i64
+                            {
+                                continue;
+                            }
+                            nbrs[idx(i, j, k)].push(idx(a as usize, b as usize, c as usize) as u32);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let cell = size / (Vec3::new(rx as f32, ry as f32, rz as f32) - 1.0);
+    finish(
+        src,
+        common,
+        points,
+        caps,
+        &nbrs,
+        cell.min_element(),
+        &mut stats,
+        |f| {
+            f.grid = Some(VolumeGrid {
+                min: common.min,
+                max: common.max,
+                resolution,
+            })
+        },
+    )
+    .map(|f| (f, stats))
+}
+
+/// Probes per axis for a cell size: `ceil(extent / cell) + 1`, at least 2.
+pub fn resolution_for_cell(min: Vec3, max: Vec3, cell: f32) -> Result<[u32; 3], VolumeBuildError> {
+    check_box(min, max)?;
+    if !(cell.is_finite() && cell > 0.0) {
+        return Err(VolumeBuildError::BadCell(cell));
+    }
+    let ext = max - min;
+    let mut r = [0u32; 3];
+    for a in 0..3 {
+        let n = (ext[a] / cell).ceil();
+        if n > 4096.0 {
+            return Err(VolumeBuildError::TooLarge(n as u64));
+        }
+        r[a] = (n as u32).max(1) + 1;
+    }
+    Ok(r)
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    lo: [u32; 3],
+    depth: u32,
+    first_child: usize,
+}
+
+const NO_CHILD: usize = usize::MAX;
+
+/// Lattice at max depth: captures each lattice point at most once.
+struct Lattice<'a> {
+    src: &'a dyn VolumeSource,
+    min: Vec3,
+    step: Vec3,
+    index: HashMap<[u32; 3], usize>,
+    keys: Vec<[u32; 3]>,
+    caps: Vec<Captured>,
+    captures: usize,
+}
+
+impl Lattice<'_> {
+    fn pos(&self, q: [u32; 3]) -> Vec3 {
+        self.min + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * self.step
+    }
+
+    /// Captures every not yet captured point of `qs` in one batch.
+    fn ensure(&mut self, qs: &[[u32; 3]]) {
+        let mut new = Vec::new();
+        for q in qs {
+            if !self.index.contains_key(q) {
+                self.index.insert(*q, self.keys.len() + new.len());
+                new.push(*q);
+            }
+        }
+        if new.is_empty() {
+            return;
+        }
+        let pts: Vec<Vec3> = new.iter().map(|q| self.pos(*q)).collect();
+        self.captures += pts.len();
+        self.caps.extend(self.src.capture(&pts));
+        self.keys.extend(new);
+    }
+
+    fn sh(&self, q: [u32; 3]) -> &[Vec3] {
+        self.caps[self.index[&q]].sh.coeffs()
+    }
+}
+
+fn corners(lo: [u32; 3], s: u32) -> [[u32; 3]; 8] {
+    std::array::from_fn(|c| {
+        [
+            lo[0] + s * (c as u32 & 1),
+            lo[1] + s * ((c as u32 >> 1) & 1),
+            lo[2] + s * ((c as u32 >> 2) & 1),
+        ]
+    })
+}
+
+/// The 27 lattice points of a cell's children, with trilinear weights of the
+/// parent's corners.
+fn child_points(lo: [u32; 3], s: u32) -> Vec<([u32; 3], [f32; 8])> {
+    let h = s / 2;
+    let mut out = Vec::with_capacity(27);
+    for k in 0..3u32 {
+        for j in 0..3u32 {
+            for i in 0..3u32 {
+                let f = [i as f32 * 0.5, j as f32 * 0.5, k as f32 * 0.5];
+                let w = std::array::from_fn(|c| {
+                    (0..3)
+                        .map(|a| if (c >> a) & 1 == 1 { f[a] } else { 1.0 - f[a] })
+                        .product()
+                });
+                out.push(([lo[0] + i * h, lo[1] + j * h, lo[2] + k * h], w));
+            }
+        }
+    }
+    out
+}
+
+/// Largest relative miss of trilinear prediction from the parent's corners
+/// over the 27 child lattice points (all must be captured).
+fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize) -> f32 {
+    let cs = corners(lo, s);
+    let mut pred = vec![Vec3::ZERO; n];
+    let mut worst = 0.0f32;
+    for (q, w) in child_points(lo, s) {
+        pred.fill(Vec3::ZERO);
+        for (c, wc) in cs.iter().zip(w) {
+            for (p, v) in pred.iter_mut().zip(lat.sh(*c)) {
+                *p += *v * wc;
+            }
+        }
+        worst = worst.max(relative_difference(&pred, lat.sh(q), &pred));
+    }
+    worst
+}
+
+/// Adaptive octree (seed 001 "Adaptive Octree Subdivision"): cells split by
+/// the enabled heuristics between `min_depth` and `max_depth`, then
+/// redundant children are pruned. Corner samples live on the lattice of the
+/// finest level and are captured once however many cells share them.
+pub fn build_adaptive(
+    src: &dyn VolumeSource,
+    s: &AdaptiveSettings,
+) -> Result<(ProbeFile, BuildStats), VolumeBuildError> {
+    let common = &s.common;
+    check_box(common.min, common.max)?;
+    if s.max_depth > 20 || s.min_depth > s.max_depth {
+        return Err(VolumeBuildError::BadDepth(s.min_depth, s.max_depth));
+    }
+    let n = src.order() * src.order();
+    let full = 1u32 << s.max_depth;
+    let mut lat = Lattice {
+        src,
+        min: common.min,
+        step: (common.max - common.min) / full as f32,
+        index: HashMap::new(),
+        keys: Vec::new(),
+        caps: Vec::new(),
+        captures: 0,
+    };
+    let mut cells = vec![Cell {
+        lo: [0; 3],
+        depth: 0,
+        first_child: NO_CHILD,
+    }];
+    let mut frontier = vec![0usize];
+    let mut depth_cache: HashMap<[u32; 3], f32> = HashMap::new();
+    while !frontier.is_empty() {
+        let depth = cells[frontier[0]].depth;
+        let size = full >> depth;
+        let qs: Vec<[u32; 3]> = frontier
+            .iter()
+            .flat_map(|&c| corners(cells[c].lo, size))
+            .collect();
+        lat.ensure(&qs);
+        if depth == s.max_depth {
+            break;
+        }
+        let mut split = vec![false; frontier.len()];
+        let mut undecided = Vec::new();
+        for (fi, &ci) in frontier.iter().enumerate() {
+            let c = cells[ci];
+            let cmin = lat.pos(c.lo);
+            let cmax = lat.pos([c.lo[0] + size, c.lo[1] + size, c.lo[2] + size]);
+            let edge = (cmax - cmin).max_element();
+            let cs = corners(c.lo, size);
+            let mut yes = depth < s.min_depth || (s.geometry && src.contains_geometry(cmin, cmax));
+            if !yes {
+                if let Some(f) = s.depth_factor {
+                    let hm = cs
+                        .iter()
+                        .map(|q| {
+                            *depth_cache
+                                .entry(*q)
+                                .or_insert_with(|| src.depth_harmonic_mean(lat.pos(*q)))
+                        })
+                        .fold(f32::INFINITY, f32::min);
+                    yes = edge > f * hm;
+                }
+            }
+            if !yes {
+                if let Some(t) = s.gradient_threshold {
+                    // Along the 12 edges: (corner, corner with one bit set).
+                    let worst = (0..8)
+                        .flat_map(|a| (0..3).map(move |b| (a, b)))
+                        .filter(|(a, b)| (a >> b) & 1 == 0)
+                        .map(|(a, b)| {
+                            let (va, vb) = (lat.sh(cs[a]), lat.sh(cs[a | (1 << b)]));
+                            relative_difference(va, vb, va)
+                        })
+                        .fold(0.0f32, f32::max);
+                    yes = worst > t;
+                }
+            }
+            split[fi] = yes;
+            if !yes && s.prediction_tolerance.is_some() {
+                undecided.push(fi);
+            }
+        }
+        if let Some(tol) = s.prediction_tolerance {
+            let qs: Vec<[u32; 3]> = undecided
+                .iter()
+                .flat_map(|&fi| {
+                    child_points(cells[frontier[fi]].lo, size)
+                        .into_iter()
+                        .map(|(q, _)| q)
+                })
+                .collect();
+            lat.ensure(&qs);
+            for &fi in &undecided {
+                split[fi] = prediction_error(&lat, cells[frontier[fi]].lo, size, n) > tol;
+            }
+        }
+        let mut next = Vec::new();
+        for (fi, &ci) in frontier.iter().enumerate() {
+            if !split[fi] {
+                continue;
+            }
+            let c = cells[ci];
+            let first = cells.len();
+            cells[ci].first_child = first;
+            for k in 0..8u32 {
+                let h = size / 2;
+                cells.push(Cell {
+                    lo: [
+                        c.lo[0] + h * (k & 1),
+                        c.lo[1] + h * ((k >> 1) & 1),
+                        c.lo[2] + h * ((k >> 2) & 1),
+                    ],
+                    depth: depth + 1,
+                    first_child: NO_CHILD,
+                });
+                next.push(first + k as usize);
+            }
+        }
+        frontier = next;
+    }
+    // Prune bottom-up (children are created after parents).
+    if let Some(tol) = s.prune_tolerance {
+        for ci in (0..cells.len()).rev() {
+            let c = cells[ci];
+            if c.first_child == NO_CHILD || c.depth < s.min_depth {
+                continue;
+            }
+            let all_leaves = (0..8).all(|k| cells[c.first_child + k].first_child == NO_CHILD);
+            if all_leaves && prediction_error(&lat, c.lo, full >> c.depth, n) <= tol {
+                cells[ci].first_child = NO_CHILD;
+            }
+        }
+    }
+    // Emit reachable nodes breadth-first; keep only samples used by leaves.
+    let mut order = vec![0usize];
+    let mut new_first = Vec::new();
+    let mut i = 0;
+    while i < order.len() {
+        let c = cells[order[i]];
+        if c.first_child != NO_CHILD {
+            new_first.push((i, order.len()));
+            order.extend((0..8).map(|k| c.first_child + k));
+        }
+        i += 1;
+    }
+    let mut sample_of: HashMap<usize, u32> = HashMap::new();
+    let mut keep: Vec<usize> = Vec::new();
+    let mut nodes = Vec::with_capacity(order.len());
+    let mut lists = Vec::new();
+    let mut leaf_corners: Vec<[u32; 8]> = Vec::new();
+    for &ci in &order {
+        let c = cells[ci];
+        let size = full >> c.depth;
+        let cs = corners(c.lo, size);
+        let mut node = OctreeNode {
+            min: lat.pos(c.lo),
+            max: lat.pos(cs[7]),
+            first_child: NONE,
+            depth: c.depth,
+            sample_offset: 0,
+            sample_count: 0,
+        };
+        if c.first_child == NO_CHILD {
+            node.sample_offset = lists.len() as u32;
+            node.sample_count = 8;
+            let mut lc = [0u32; 8];
+            for (k, q) in cs.iter().enumerate() {
+                let li = lat.index[q];
+                let si = *sample_of.entry(li).or_insert_with(|| {
+                    keep.push(li);
+                    (keep.len() - 1) as u32
+                });
+                lists.push(si);
+                lc[k] = si;
+            }
+            leaf_corners.push(lc);
+        }
+        nodes.push(node);
+    }
+    for (pos, first) in new_first {
+        nodes[pos].first_child = first as u32;
+    }
+    let points: Vec<Vec3> = keep.iter().map(|&li| lat.pos(lat.keys[li])).collect();
+    let caps: Vec<Captured> = keep.iter().map(|&li| lat.caps[li].clone()).collect();
+    // Neighbours for dilation: the other corners of every leaf a sample is on.
+    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); points.len()];
+    for lc in &leaf_corners {
+        for &a in lc {
+            for &b in lc {
+                if a != b && !nbrs[a as usize].contains(&b) {
+                    nbrs[a as usize].push(b);
+                }
+            }
+        }
+    }
+    let mut stats = BuildStats {
+        captures: lat.captures,
+        samples: points.len(),
+        leaves: leaf_corners.len(),
+        dilated: 0,
+    };
+    let finest = lat.step.min_element();
+    let file = finish(src, common, points, caps, &nbrs, finest, &mut stats, |f| {
+        f.octree = Some(Octree {
+            nodes,
+            samples: lists,
+        })
+    })?;
+    Ok((file, stats))
+}
+
+/// Dilation, gradients and file assembly shared by both builders.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    src: &dyn VolumeSource,
+    common: &CommonSettings,
+    points: Vec<Vec3>,
+    caps: Vec<Captured>,
+    nbrs: &[Vec<u32>],
+    finest_cell: f32,
+    stats: &mut BuildStats,
+    structure: impl FnOnce(&mut ProbeFile),
+) -> Result<ProbeFile, VolumeBuildError> {
+    let order = src.order();
+    let n = order * order;
+    let mut coeffs: Vec<Vec3> = Vec::with_capacity(points.len() * n);
+    for c in &caps {
+        if c.sh.coeffs().len() != n {
+            return Err(VolumeBuildError::SourceOrder);
+        }
+        coeffs.extend_from_slice(c.sh.coeffs());
+    }
+    let valid: Vec<bool> = caps
+        .iter()
+        .map(|c| c.validity.is_finite() && c.validity >= common.validity_threshold)
+        .collect();
+    let weights: Vec<f32> = caps.iter().map(|c| c.validity.clamp(0.0, 1.0)).collect();
+    stats.dilated = dilate(&mut coeffs, n, &valid, &weights, nbrs)?;
+    let gradients = match common.gradients {
+        GradientMode::None => None,
+        GradientMode::Analytic => Some(
+            src.analytic_gradients(&points)
+                .ok_or(VolumeBuildError::NoAnalyticGradients)?,
+        ),
+        GradientMode::Central { step } => {
+            let step = if step > 0.0 { step } else { 0.05 * finest_cell };
+            let mut probe = Vec::with_capacity(points.len() * 6);
+            for p in &points {
+                for a in 0..3 {
+                    let mut e = Vec3::ZERO;
+                    e[a] = step;
+                    probe.push(*p + e);
+                    probe.push(*p - e);
+                }
+            }
+            stats.captures += probe.len();
+            let c = src.capture(&probe);
+            let mut g = vec![Vec3::ZERO; points.len() * 3 * n];
+            for s in 0..points.len() {
+                for a in 0..3 {
+                    let (plus, minus) = (&c[s * 6 + 2 * a], &c[s * 6 + 2 * a + 1]);
+                    for k in 0..n {
+                        g[(s * 3 + a) * n + k] =
+                            (plus.sh.coeffs()[k] - minus.sh.coeffs()[k]) / (2.0 * step);
+                    }
+                }
+            }
+            Some(g)
+        }
+    };
+    if let Some(g) = &gradients {
+        if g.len() != points.len() * 3 * n || g.iter().any(|v| !v.is_finite()) {
+            return Err(VolumeBuildError::SourceOrder);
+        }
+    }
+    let validity = caps
+        .iter()
+        .zip(&valid)
+        .map(|(c, &ok)| Validity {
+            value: if c.validity.is_finite() {
+                c.validity
+            } else {
+                0.0
+            },
+            flags: if ok { 0 } else { VALIDITY_INVALID },
+        })
+        .collect();
+    let mut file = ProbeFile {
+        kind: ProbeFileKind::Volume,
+        positions: points,
+        coefficients: Coefficients::from_f32(order as u32, &coeffs)?,
+        validity: Some(validity),
+        tetrahedra: None,
+        outer: None,
+        octree: None,
+        grid: None,
+        gradients: gradients.map(|data| Gradients {
+            order: order as u32,
+            data,
+        }),
+        rigs: Vec::new(),
+        metadata: String::new(),
+    };
+    structure(&mut file);
+    file.validate()?;
+    Ok(file)
+}
+
+/// Replaces every invalid sample by the validity-weighted average of its
+/// valid (or already dilated) neighbours, ring by ring (Jacobi order, so the
+/// result does not depend on sample order). Dilated samples take part in
+/// later rings with half the weight of their sources. Returns the number of
+/// samples replaced; fails only if no sample is valid.
+pub fn dilate(
+    coeffs: &mut [Vec3],
+    n: usize,
+    valid: &[bool],
+    validity: &[f32],
+    nbrs: &[Vec<u32>],
+) -> Result<usize, VolumeBuildError> {
+    let count = valid.len();
+    let mut known: Vec<Option<f32>> = (0..count)
+        .map(|i| valid[i].then_some(validity[i].max(1e-3)))
+        .collect();
+    let todo = known.iter().filter(|k| k.is_none()).count();
+    if todo == 0 {
+        return Ok(0);
+    }
+    if todo == count {
+        return Err(VolumeBuildError::NoValidSamples);
+    }
+    let mut replaced = 0;
+    loop {
+        let mut updates = Vec::new();
+        for i in 0..count {
+            if known[i].is_some() {
+                continue;
+            }
+            let mut acc = vec![Vec3::ZERO; n];
+            let mut wsum = 0.0f32;
+            for &j in &nbrs[i] {
+                if let Some(w) = known[j as usize] {
+                    wsum += w;
+                    for k in 0..n {
+                        acc[k] += coeffs[j as usize * n + k] * w;
+                    }
+                }
+            }
+            if wsum > 0.0 {
+                acc.iter_mut().for_each(|a| *a /= wsum);
+                let w = 0.5 * wsum / nbrs[i].len().max(1) as f32;
+                updates.push((i, acc, w));
+            }
+        }
+        if updates.is_empty() {
+            // Disconnected invalid samples: nothing reaches them.
+            return Err(VolumeBuildError::NoValidSamples);
+        }
+        for (i, acc, w) in updates {
+            coeffs[i * n..(i + 1) * n].copy_from_slice(&acc);
+            known[i] = Some(w.max(1e-6));
+            replaced += 1;
+        }
+        if replaced == todo {
+            return Ok(replaced);
+        }
+    }
+}

@@ -1,0 +1,73 @@
+//! Irradiance volumes (seed 001, Tatarchuk, *Irradiance Volumes for Games*,
+//! after Greger et al. 1998): a uniform grid or an adaptive octree of
+//! radiance-SH samples with optional SH gradients, baked from any
+//! [`VolumeSource`] and written as a `.probes` file of kind volume.
+//!
+//! Queries live in `probekit_runtime::volume` (re-exported here as
+//! [`Volume`] and [`Interp`]) so engines get them without the baker.
+
+mod build;
+pub mod export;
+mod source;
+#[cfg(test)]
+mod tests;
+
+pub use build::{
+    build_adaptive, build_uniform, dilate, relative_difference, resolution_for_cell,
+    AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
+};
+pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
+pub use source::{Captured, LightsDemo, Slab, SphereLight, VolumeSource};
+
+use crate::format::FormatError;
+
+/// Why a volume cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum VolumeBuildError {
+    /// The box is empty, inverted or not finite.
+    #[error("volume box must be finite with max > min on every axis")]
+    BadBox,
+    /// A resolution axis below 2.
+    #[error("resolution {0:?}: every axis needs at least 2 probes")]
+    BadResolution([u32; 3]),
+    /// A cell size that is not a positive number.
+    #[error("cell size {0} is not a positive number")]
+    BadCell(f32),
+    /// Depth limits out of order or above 20.
+    #[error("depths min {0} / max {1}: need min <= max <= 20")]
+    BadDepth(u32, u32),
+    /// Too many samples requested.
+    #[error("{0} samples per axis or in total is too many")]
+    TooLarge(u64),
+    /// Every sample is invalid (nothing to dilate from).
+    #[error("no valid sample to dilate from")]
+    NoValidSamples,
+    /// The source returned SH of another order than it declared, or
+    /// non-finite gradients.
+    #[error("the capture source returned data of the wrong size or non-finite values")]
+    SourceOrder,
+    /// `GradientMode::Analytic` with a source that has no closed form.
+    #[error("the source has no closed-form gradients; use central differences")]
+    NoAnalyticGradients,
+    /// The file could not be assembled.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+}
+
+/// The `inspect --json` summary of a volume file:
+/// `{"probes":P,"leaves":L,"basis":"sh<order>/<codec>","gradients":bool,
+/// "bytes":B,"bytes_by_section":{...}}` (`probes` = samples, as for clouds).
+pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value, VolumeError> {
+    let v = Volume::from_file(file)?;
+    let by = file.bytes_by_section()?;
+    let bytes: u64 = by.values().sum();
+    Ok(serde_json::json!({
+        "kind": "volume",
+        "probes": file.positions.len(),
+        "leaves": v.leaf_count(),
+        "basis": format!("sh{}/{:?}", file.coefficients.order, file.coefficients.codec),
+        "gradients": file.gradients.is_some(),
+        "bytes": bytes,
+        "bytes_by_section": by,
+    }))
+}

@@ -1,0 +1,217 @@
+//! What the volume builder captures from: the [`VolumeSource`] abstraction
+//! (the path-traced capture of a scene plugs in here) and [`LightsDemo`], an
+//! analytic source made of sphere lights and occluding slabs.
+
+use crate::sh::lights::sphere_light_sh_and_gradient;
+use crate::sh::ShRgb;
+use glam::Vec3;
+
+/// One captured sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Captured {
+    /// Radiance SH at the point.
+    pub sh: ShRgb,
+    /// Validity in `[0, 1]` (fraction of rays that did not hit back faces;
+    /// 1 = fully valid). Samples under the builder's threshold are dilated.
+    pub validity: f32,
+}
+
+/// A scene the volume builder can sample. Calls are batched so that an
+/// implementation can capture in parallel; results must not depend on the
+/// batch composition or thread count (determinism).
+pub trait VolumeSource: Sync {
+    /// SH order (bands) of [`Self::capture`]'s results.
+    fn order(&self) -> usize;
+
+    /// Radiance SH and validity at each point, in order.
+    fn capture(&self, points: &[Vec3]) -> Vec<Captured>;
+
+    /// Whether scene geometry intersects the box `[min, max]` (Greger et
+    /// al.'s subdivision heuristic, seed 001). Default: no geometry.
+    fn contains_geometry(&self, _min: Vec3, _max: Vec3) -> bool {
+        false
+    }
+
+    /// Harmonic mean `N / Σ 1/dᵢ` of the ray distances to the scene from `p`
+    /// (seed 001 after Pharr & Humphreys); `f32::INFINITY` where nothing is
+    /// hit. Default: infinity.
+    fn depth_harmonic_mean(&self, _p: Vec3) -> f32 {
+        f32::INFINITY
+    }
+
+    /// Closed-form spatial gradients at `points`, layout
+    /// `[(p·3 + axis)·order² + c]` (per metre), if the source knows them.
+    fn analytic_gradients(&self, _points: &[Vec3]) -> Option<Vec<Vec3>> {
+        None
+    }
+}
+
+/// A sphere light (uniform emitter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereLight {
+    /// Centre (metres).
+    pub center: Vec3,
+    /// Radius (metres).
+    pub radius: f32,
+    /// Emitted radiance (linear RGB).
+    pub radiance: Vec3,
+}
+
+/// An opaque axis-aligned slab `[lo, hi]` along `axis` (0 = x, 1 = y, 2 = z),
+/// infinite in the two other axes: it blocks every light on its other side
+/// (a coarse occluder, tests only: partially hidden lights are not clipped)
+/// and points inside it capture as invalid (black, validity 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slab {
+    /// Axis normal to the slab.
+    pub axis: usize,
+    /// Lower face coordinate.
+    pub lo: f32,
+    /// Upper face coordinate.
+    pub hi: f32,
+}
+
+/// Analytic source: sphere lights (closed-form SH and SH gradients,
+/// `probekit_sh::lights::sphere_light_sh_and_gradient`) behind optional
+/// slabs that cut the light field with a discontinuity. `builtin:lights-demo`
+/// of the CLI until scenes land.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightsDemo {
+    /// SH order of captures.
+    pub order: usize,
+    /// The lights.
+    pub lights: Vec<SphereLight>,
+    /// The occluders.
+    pub slabs: Vec<Slab>,
+}
+
+impl LightsDemo {
+    /// The demo scene of `builtin:lights-demo`: a 4 m room-sized box
+    /// `[-2, 2]³` lit by a warm and a cool sphere light, with a slab at
+    /// `x ∈ [0.9, 1.1]` shadowing the warm light from the `x > 1.1` side.
+    pub fn demo(order: usize) -> Self {
+        Self {
+            order,
+            lights: vec![
+                SphereLight {
+                    center: Vec3::new(-1.0, 1.2, 0.3),
+                    radius: 0.25,
+                    radiance: Vec3::new(8.0, 6.0, 3.5),
+                },
+                SphereLight {
+                    center: Vec3::new(1.5, -0.5, -1.0),
+                    radius: 0.3,
+                    radiance: Vec3::new(1.0, 2.0, 4.0),
+                },
+            ],
+            slabs: vec![Slab {
+                axis: 0,
+                lo: 0.9,
+                hi: 1.1,
+            }],
+        }
+    }
+
+    /// The demo's bounding box.
+    pub fn demo_box() -> (Vec3, Vec3) {
+        (Vec3::splat(-2.0), Vec3::splat(2.0))
+    }
+
+    fn inside_slab(&self, p: Vec3) -> bool {
+        self.slabs
+            .iter()
+            .any(|s| p[s.axis] > s.lo && p[s.axis] < s.hi)
+    }
+
+    fn visible(&self, p: Vec3, l: &SphereLight) -> bool {
+        self.slabs.iter().all(|s| {
+            let (a, b) = (p[s.axis], l.center[s.axis]);
+            !((a <= s.lo && b >= s.hi) || (a >= s.hi && b <= s.lo))
+        })
+    }
+
+    /// Value (and gradient, layout `[axis·n + c]`) at one point.
+    fn eval(&self, p: Vec3, value: &mut [Vec3], grad: Option<&mut [Vec3]>) {
+        let n = self.order * self.order;
+        value.fill(Vec3::ZERO);
+        let mut gacc = vec![Vec3::ZERO; 3 * n];
+        if !self.inside_slab(p) {
+            let mut v = vec![Vec3::ZERO; n];
+            let mut g = vec![[Vec3::ZERO; 3]; n];
+            for l in self.lights.iter().filter(|l| self.visible(p, l)) {
+                sphere_light_sh_and_gradient(
+                    self.order, p, l.center, l.radius, l.radiance, &mut v, &mut g,
+                );
+                for c in 0..n {
+                    value[c] += v[c];
+                    for a in 0..3 {
+                        gacc[a * n + c] += g[c][a];
+                    }
+                }
+            }
+        }
+        if let Some(out) = grad {
+            out.copy_from_slice(&gacc);
+        }
+    }
+}
+
+impl VolumeSource for LightsDemo {
+    fn order(&self) -> usize {
+        self.order
+    }
+
+    fn capture(&self, points: &[Vec3]) -> Vec<Captured> {
+        let n = self.order * self.order;
+        points
+            .iter()
+            .map(|&p| {
+                let mut v = vec![Vec3::ZERO; n];
+                self.eval(p, &mut v, None);
+                Captured {
+                    sh: ShRgb::from_coeffs(v).expect("square length"),
+                    validity: if self.inside_slab(p) { 0.0 } else { 1.0 },
+                }
+            })
+            .collect()
+    }
+
+    fn contains_geometry(&self, min: Vec3, max: Vec3) -> bool {
+        self.slabs
+            .iter()
+            .any(|s| min[s.axis] < s.hi && max[s.axis] > s.lo)
+    }
+
+    /// Closed form for infinite slabs: rays towards a plane at distance `d`
+    /// travel `d / cos θ`, so `Σ 1/dᵢ / N → (1/4π)∫_hemisphere cos θ / d dω =
+    /// 1/(4d)` per plane; rays away from every plane escape (`1/d = 0`).
+    fn depth_harmonic_mean(&self, p: Vec3) -> f32 {
+        let mut inv = 0.0f32;
+        if self.inside_slab(p) {
+            return 0.0;
+        }
+        for s in &self.slabs {
+            let d = if p[s.axis] <= s.lo {
+                s.lo - p[s.axis]
+            } else {
+                p[s.axis] - s.hi
+            };
+            inv += 1.0 / (4.0 * d.max(1e-6));
+        }
+        if inv > 0.0 {
+            1.0 / inv
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    fn analytic_gradients(&self, points: &[Vec3]) -> Option<Vec<Vec3>> {
+        let n = self.order * self.order;
+        let mut out = vec![Vec3::ZERO; points.len() * 3 * n];
+        let mut v = vec![Vec3::ZERO; n];
+        for (p, g) in points.iter().zip(out.chunks_exact_mut(3 * n)) {
+            self.eval(*p, &mut v, Some(g));
+        }
+        Some(out)
+    }
+}
