@@ -6,9 +6,11 @@
 
 #![warn(missing_docs)]
 
+pub use probekit_sh as sh;
+
+pub mod cloud;
 pub mod format;
 pub mod volume;
 
 pub use format::{FormatError, ProbeFile, ProbeFileKind};
-pub mod cloud;
 pub use volume::{Interp, Volume, VolumeError};

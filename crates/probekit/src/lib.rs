@@ -7,15 +7,11 @@
 #![warn(missing_docs)]
 
 pub mod bake;
+pub mod cloud;
 pub mod env;
 pub mod format;
 pub mod plot;
 pub mod scene;
 pub mod sh;
 pub mod trace;
-pub mod cloud;
-pub mod env;
-pub mod format;
-pub mod plot;
-pub mod sh;
 pub mod volume;

@@ -172,8 +172,7 @@ pub enum FormatError {
         /// Declared bytes per probe.
         stride: u32,
     },
-    /// The codec is known but its decoder is not compiled in (feature
-    /// `pending-codecs`).
+    /// The codec is known but this build cannot decode it.
     #[error("codec {0} is not available in this build")]
     CodecUnavailable(&'static str),
     /// A file kind id this reader does not know.
