@@ -31,6 +31,7 @@
 pub mod basis;
 pub mod coeffs;
 pub mod convolve;
+pub mod lights;
 pub mod project;
 pub mod rotate;
 pub mod window;
