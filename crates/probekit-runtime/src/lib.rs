@@ -7,3 +7,7 @@
 #![warn(missing_docs)]
 
 pub use probekit_sh as sh;
+
+pub mod format;
+
+pub use format::{FormatError, ProbeFile, ProbeFileKind};

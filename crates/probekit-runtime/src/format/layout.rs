@@ -1,0 +1,176 @@
+//! Constants of the `.probes` layout shared by the reader (here) and the
+//! writer (`probekit::format`). The byte-by-byte specification is
+//! `docs/file-format.md`; field offsets below are pinned by tests.
+
+use std::fmt;
+
+/// The first 8 bytes of every `.probes` file.
+pub const MAGIC: [u8; 8] = *b"PROBEKIT";
+/// Major version written and read. A file with a larger major is refused.
+pub const VERSION_MAJOR: u16 = 1;
+/// Minor version written. Files with a larger minor load; their unknown
+/// sections are skipped.
+pub const VERSION_MINOR: u16 = 0;
+/// Bytes in the fixed file header.
+pub const HEADER_LEN: usize = 48;
+/// Bytes in one section-table entry.
+pub const ENTRY_LEN: usize = 32;
+/// Every section starts at a multiple of this, and every array inside a
+/// section starts at a multiple of this relative to the section start, so a
+/// loader can reinterpret an aligned buffer as `&[f32]`/`&[u32]` without
+/// copying (16 also suits SIMD and GPU upload).
+pub const ALIGN: usize = 16;
+/// Bytes in the fixed header that starts every section.
+pub const SECTION_HEADER_LEN: usize = 16;
+/// Bytes in one octree node record.
+pub const OCTREE_NODE_LEN: usize = 40;
+/// Bytes in one rig record header.
+pub const RIG_HEADER_LEN: usize = 80;
+/// "No element": hull neighbour, leaf node's children, face without a tetrahedron.
+pub const NONE: u32 = u32::MAX;
+
+/// Validity flag: the probe lies inside geometry (or sees too many back faces).
+pub const VALIDITY_INVALID: u32 = 1 << 0;
+/// Validity flag: the probe was moved out of geometry (virtual offset) before capture.
+pub const VALIDITY_VIRTUAL_OFFSET: u32 = 1 << 1;
+
+/// Rounds `n` up to a multiple of [`ALIGN`]; `None` on overflow.
+pub const fn pad16(n: usize) -> Option<usize> {
+    match n.checked_add(ALIGN - 1) {
+        Some(v) => Some(v & !(ALIGN - 1)),
+        None => None,
+    }
+}
+
+/// A section identifier: four ASCII bytes read as a little-endian `u32`
+/// (so `POSN` is the bytes `50 4F 53 4E`, shown in hex dumps as-is).
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct SectionId(pub u32);
+
+impl SectionId {
+    /// Probe positions.
+    pub const POSITIONS: Self = Self::from_fourcc(*b"POSN");
+    /// SH coefficients in a codec.
+    pub const COEFFICIENTS: Self = Self::from_fourcc(*b"COEF");
+    /// Per-probe validity and flags.
+    pub const VALIDITY: Self = Self::from_fourcc(*b"VALD");
+    /// Tetrahedra: vertices, neighbours, barycentric matrices.
+    pub const TETRAHEDRA: Self = Self::from_fourcc(*b"TETS");
+    /// Outer cells: the hull-face table.
+    pub const OUTER: Self = Self::from_fourcc(*b"OUTR");
+    /// Octree nodes and their sample lists (adaptive volumes).
+    pub const OCTREE: Self = Self::from_fourcc(*b"OCTR");
+    /// Uniform volume grid: box and resolution.
+    pub const GRID: Self = Self::from_fourcc(*b"GRID");
+    /// Per-probe SH gradients.
+    pub const GRADIENTS: Self = Self::from_fourcc(*b"GRAD");
+    /// Irradiance rigs.
+    pub const RIGS: Self = Self::from_fourcc(*b"RIGS");
+    /// Bake metadata (UTF-8 JSON).
+    pub const METADATA: Self = Self::from_fourcc(*b"META");
+    /// Pseudo-id naming the file header in errors and size tables.
+    pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
+
+    /// Every section this version knows, in the order the writer emits them.
+    pub const KNOWN: [Self; 10] = [
+        Self::POSITIONS,
+        Self::COEFFICIENTS,
+        Self::VALIDITY,
+        Self::TETRAHEDRA,
+        Self::OUTER,
+        Self::OCTREE,
+        Self::GRID,
+        Self::GRADIENTS,
+        Self::RIGS,
+        Self::METADATA,
+    ];
+
+    /// The id of a four-character code.
+    pub const fn from_fourcc(code: [u8; 4]) -> Self {
+        Self(u32::from_le_bytes(code))
+    }
+
+    /// The four bytes of the id.
+    pub const fn fourcc(self) -> [u8; 4] {
+        self.0.to_le_bytes()
+    }
+
+    /// The snake_case name used in `bytes_by_section` tables and messages
+    /// (`"positions"`, `"coefficients"`, ...); unknown ids give `None`.
+    pub fn name(self) -> Option<&'static str> {
+        Some(match self {
+            Self::POSITIONS => "positions",
+            Self::COEFFICIENTS => "coefficients",
+            Self::VALIDITY => "validity",
+            Self::TETRAHEDRA => "tetrahedra",
+            Self::OUTER => "outer_cells",
+            Self::OCTREE => "octree",
+            Self::GRID => "grid",
+            Self::GRADIENTS => "gradients",
+            Self::RIGS => "rigs",
+            Self::METADATA => "metadata",
+            Self::HEADER => "header",
+            _ => return None,
+        })
+    }
+}
+
+impl fmt::Display for SectionId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.name() {
+            Some(n) => f.write_str(n),
+            None => {
+                let b = self.fourcc();
+                if b.iter().all(|c| c.is_ascii_graphic()) {
+                    write!(f, "'{}'", String::from_utf8_lossy(&b))
+                } else {
+                    write!(f, "{:#010x}", self.0)
+                }
+            }
+        }
+    }
+}
+
+impl fmt::Debug for SectionId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "SectionId({self})")
+    }
+}
+
+/// Byte offsets of the header fields (see `docs/file-format.md`).
+pub mod header {
+    /// `[u8; 8]` magic.
+    pub const MAGIC: usize = 0;
+    /// `u16` major version.
+    pub const MAJOR: usize = 8;
+    /// `u16` minor version.
+    pub const MINOR: usize = 10;
+    /// `u32` file kind (0 cloud, 1 volume, 2 rig).
+    pub const KIND: usize = 12;
+    /// `u32` flags (none defined; writers write 0, readers ignore).
+    pub const FLAGS: usize = 16;
+    /// `u32` number of section-table entries.
+    pub const SECTION_COUNT: usize = 20;
+    /// `u64` total file length in bytes.
+    pub const FILE_LEN: usize = 24;
+    /// `u32` CRC-32 of bytes `0..32` followed by the whole section table.
+    pub const CRC: usize = 32;
+    /// Bytes `36..48` are reserved (written 0, ignored).
+    pub const RESERVED: usize = 36;
+}
+
+/// Byte offsets inside one section-table entry.
+pub mod entry {
+    /// `u32` section id.
+    pub const ID: usize = 0;
+    /// `u32` reserved (written 0, ignored).
+    pub const RESERVED0: usize = 4;
+    /// `u64` offset of the section from the start of the file.
+    pub const OFFSET: usize = 8;
+    /// `u64` length of the section in bytes (a multiple of 16).
+    pub const LENGTH: usize = 16;
+    /// `u32` CRC-32 of the section's bytes.
+    pub const CRC: usize = 24;
+    /// `u32` reserved (written 0, ignored).
+    pub const RESERVED1: usize = 28;
+}

@@ -1,0 +1,328 @@
+//! The `.probes` file: one versioned little-endian binary format for probe
+//! clouds, irradiance volumes and irradiance rigs.
+//!
+//! The byte-by-byte specification, for engines writing their own loader, is
+//! `docs/file-format.md`. In short: a 48-byte header (magic `PROBEKIT`,
+//! major/minor version, kind, flags, section count, file length, CRC-32 of
+//! header and table), a table of 32-byte section entries (id, offset,
+//! length, CRC-32), then sections, each starting on a 16-byte boundary with
+//! a 16-byte section header followed by arrays that each start 16-aligned.
+//!
+//! [`ProbeFile::from_bytes`] checks everything before trusting anything:
+//! bounds with checked arithmetic, checksums, counts against lengths (no
+//! allocation larger than the file), index ranges, finiteness. It never
+//! panics on any input (fuzzed: `fuzz/` and `tests/fuzz_reader.rs`).
+//!
+//! [`ProbeFile::to_bytes`] is the inverse, deterministic (same
+//! [`ProbeFile`] → same bytes). The baking library (`probekit::format`)
+//! adds codec encoding and atomic file writing.
+
+mod codec;
+mod crc;
+mod error;
+pub mod layout;
+mod read;
+mod validate;
+mod write;
+
+pub use codec::{f16_is_non_finite, f16_to_f32, Codec, Coefficients};
+pub use crc::{crc32, Crc32};
+pub use error::FormatError;
+pub use layout::SectionId;
+pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
+pub use write::{assemble_file, SectionBuilder};
+
+use glam::Vec3;
+use std::path::Path;
+
+/// What a file holds; decides which sections are required.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ProbeFileKind {
+    /// A probe cloud (positions, coefficients, usually tetrahedra). Id 0.
+    Cloud,
+    /// An irradiance volume: uniform (`GRID`) or adaptive (`OCTR`). Id 1.
+    Volume,
+    /// Irradiance rigs (`RIGS`), possibly without probes. Id 2.
+    Rig,
+}
+
+impl ProbeFileKind {
+    /// Id stored in the header.
+    pub const fn id(self) -> u32 {
+        match self {
+            Self::Cloud => 0,
+            Self::Volume => 1,
+            Self::Rig => 2,
+        }
+    }
+
+    /// The kind with header id `id`.
+    pub fn from_id(id: u32) -> Result<Self, FormatError> {
+        match id {
+            0 => Ok(Self::Cloud),
+            1 => Ok(Self::Volume),
+            2 => Ok(Self::Rig),
+            _ => Err(FormatError::UnknownKind(id)),
+        }
+    }
+
+    /// `"cloud"`, `"volume"` or `"rig"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Cloud => "cloud",
+            Self::Volume => "volume",
+            Self::Rig => "rig",
+        }
+    }
+}
+
+/// Capture validity of one probe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Validity {
+    /// Fraction of the probe's capture rays that hit front faces or escaped
+    /// (1 = fully valid), or whatever finite score the baker documents.
+    pub value: f32,
+    /// Bit set of [`layout::VALIDITY_INVALID`] and
+    /// [`layout::VALIDITY_VIRTUAL_OFFSET`]; other bits are kept, not interpreted.
+    pub flags: u32,
+}
+
+/// Tetrahedra of a probe cloud (structure of arrays, one entry per tetrahedron).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TetSection {
+    /// The four probe indices of each tetrahedron.
+    pub vertices: Vec<[u32; 4]>,
+    /// `neighbours[t][i]` is the tetrahedron across the face opposite
+    /// `vertices[t][i]`, or [`layout::NONE`] on the hull.
+    pub neighbours: Vec<[u32; 4]>,
+    /// Row-major 3×4 matrix `M` giving barycentric coordinates of point `p`:
+    /// `b_i = M[i][0]·x + M[i][1]·y + M[i][2]·z + M[i][3]` for `i = 0..3`,
+    /// `b_3 = 1 − b_0 − b_1 − b_2` (weights of `vertices[t][0..4]`).
+    pub barycentric: Vec<[[f32; 4]; 3]>,
+}
+
+/// Outer cells: the table of convex-hull faces from which points outside the
+/// hull are extrapolated (structure of arrays, one entry per hull face).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OuterCells {
+    /// The three probe indices of each hull face, counter-clockwise seen
+    /// from outside.
+    pub vertices: Vec<[u32; 3]>,
+    /// `adjacent[f][i]` is the hull face sharing the edge opposite
+    /// `vertices[f][i]`.
+    pub adjacent: Vec<[u32; 3]>,
+    /// Face plane `(n, d)` with outward unit normal `n`: a point `p` is
+    /// outside the face when `n·p + d > 0`.
+    pub planes: Vec<[f32; 4]>,
+    /// The tetrahedron owning each face, or [`layout::NONE`].
+    pub tetrahedra: Vec<u32>,
+}
+
+/// One node of an adaptive volume's octree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OctreeNode {
+    /// Box minimum corner (metres, world space).
+    pub min: Vec3,
+    /// Box maximum corner.
+    pub max: Vec3,
+    /// Index of the first of 8 consecutive children, or [`layout::NONE`] for
+    /// a leaf. Child `k` covers the octant with bit 0 of `k` = +x half, bit 1
+    /// = +y, bit 2 = +z. Children always come after their parent.
+    pub first_child: u32,
+    /// Depth (root = 0).
+    pub depth: u32,
+    /// First entry of this node's sample list in [`Octree::samples`].
+    pub sample_offset: u32,
+    /// Length of the sample list. For a leaf, the first 8 entries are its
+    /// corners in the same bit order as children; further entries are
+    /// samples of finer neighbours on its faces and edges.
+    pub sample_count: u32,
+}
+
+/// An adaptive volume's octree: nodes (root first) and the sample lists
+/// they index (probe indices).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Octree {
+    /// Nodes; node 0 is the root.
+    pub nodes: Vec<OctreeNode>,
+    /// Concatenated per-node sample lists: probe indices.
+    pub samples: Vec<u32>,
+}
+
+/// A uniform volume's grid: probes at the corners of `resolution − 1` cells
+/// per axis, probe `(i, j, k)` at index `i + rx·(j + ry·k)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeGrid {
+    /// Box minimum corner (metres, world space).
+    pub min: Vec3,
+    /// Box maximum corner.
+    pub max: Vec3,
+    /// Probes per axis (x, y, z), each at least 1.
+    pub resolution: [u32; 3],
+}
+
+/// Spatial SH gradients per probe: `data[(p·3 + axis)·order² + c]` is
+/// `∂ coefficient c / ∂ axis` (axis 0 = x, 1 = y, 2 = z) of probe `p`, per
+/// metre, RGB.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Gradients {
+    /// SH order of the gradients (may be lower than the coefficients').
+    pub order: u32,
+    /// `3·order²` vectors per probe.
+    pub data: Vec<Vec3>,
+}
+
+/// Basis along one axis of a tensor-product rig (seed 000, Yuan et al.).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AxisModel {
+    /// `{1}`: one function.
+    Constant,
+    /// `{1, t}`: two functions.
+    Gradient,
+    /// `N` hat functions (N ≥ 1).
+    Lattice(u32),
+}
+
+impl AxisModel {
+    /// Number of basis functions along the axis.
+    pub const fn count(self) -> u32 {
+        match self {
+            Self::Constant => 1,
+            Self::Gradient => 2,
+            Self::Lattice(n) => n,
+        }
+    }
+}
+
+/// A rig model M(p, c) over the mesh's bounding box (seed 000).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RigModel {
+    /// One SH vector.
+    Constant,
+    /// One SH vector plus three gradient vectors (4 parameters).
+    Gradient,
+    /// Tensor product of one [`AxisModel`] per axis (lattice = all axes
+    /// lattices; the paper's car is `[Lattice(3), Gradient, Constant]`).
+    Tensor([AxisModel; 3]),
+}
+
+impl RigModel {
+    /// Number of SH vectors the rig holds; `None` on overflow.
+    pub fn parameter_count(self) -> Option<u32> {
+        match self {
+            Self::Constant => Some(1),
+            Self::Gradient => Some(4),
+            Self::Tensor(a) => a[0]
+                .count()
+                .checked_mul(a[1].count())?
+                .checked_mul(a[2].count()),
+        }
+    }
+}
+
+/// One entry of a rig's analytic/rig transition table (seed 000 §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transition {
+    /// Normalized light distance `N(r) = 4D²/r²`.
+    pub distance: f32,
+    /// Error in reflected radiance at that distance, in 8-bit grey levels.
+    pub error: f32,
+}
+
+/// A fitted irradiance rig for one mesh and rig type.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rig {
+    /// Mesh name (UTF-8) the rig belongs to.
+    pub name: String,
+    /// The model.
+    pub model: RigModel,
+    /// SH order of the rig parameters and of the SH sampled at its points.
+    pub order: u32,
+    /// Mesh bounding box minimum (mesh coordinates, metres).
+    pub bbox_min: Vec3,
+    /// Mesh bounding box maximum.
+    pub bbox_max: Vec3,
+    /// Sample points on the mesh surface (mesh coordinates).
+    pub samples: Vec<Vec3>,
+    /// Row-major `parameters × samples` fitting matrix `L = (MᵀM)⁻¹Mᵀ`:
+    /// parameter `k` = Σ_j `L[k][j]` · SH(sample `j`), per coefficient and channel.
+    pub fitting: Vec<f32>,
+    /// Error against normalized light distance, by increasing distance.
+    pub transitions: Vec<Transition>,
+}
+
+/// Everything a `.probes` file holds, decoded and validated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProbeFile {
+    /// Cloud, volume or rig.
+    pub kind: ProbeFileKind,
+    /// Probe (or volume sample) positions, metres, world space.
+    pub positions: Vec<Vec3>,
+    /// Radiance SH per probe, one per position.
+    pub coefficients: Coefficients,
+    /// Capture validity per probe.
+    pub validity: Option<Vec<Validity>>,
+    /// Tetrahedralization of a cloud.
+    pub tetrahedra: Option<TetSection>,
+    /// Outer cells (hull faces) of a cloud.
+    pub outer: Option<OuterCells>,
+    /// Octree of an adaptive volume.
+    pub octree: Option<Octree>,
+    /// Grid of a uniform volume.
+    pub grid: Option<VolumeGrid>,
+    /// SH gradients per probe.
+    pub gradients: Option<Gradients>,
+    /// Irradiance rigs (empty: no `RIGS` section).
+    pub rigs: Vec<Rig>,
+    /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
+    /// placement, tool version; never a wall-clock time).
+    pub metadata: String,
+}
+
+impl ProbeFile {
+    /// A cloud of `positions` with lossless `f32` coefficients and nothing else.
+    pub fn cloud(positions: Vec<Vec3>, order: u32, coeffs: &[Vec3]) -> Result<Self, FormatError> {
+        Ok(Self {
+            kind: ProbeFileKind::Cloud,
+            positions,
+            coefficients: Coefficients::from_f32(order, coeffs)?,
+            validity: None,
+            tetrahedra: None,
+            outer: None,
+            octree: None,
+            grid: None,
+            gradients: None,
+            rigs: Vec::new(),
+            metadata: String::new(),
+        })
+    }
+
+    /// Number of probes (volume samples).
+    pub fn probe_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Parses and validates a whole file. Never panics; every problem is a
+    /// [`FormatError`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {
+        read::parse(bytes)
+    }
+
+    /// Reads and parses the file at `path`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, FormatError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| FormatError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(&bytes)
+    }
+
+    /// Checks the invariants the reader guarantees (counts agree, indices in
+    /// range, topology consistent, floats finite, kind's sections present).
+    /// The writer calls this before writing, so no file it writes is refused.
+    pub fn validate(&self) -> Result<(), FormatError> {
+        validate::validate(self)
+    }
+}

@@ -1,0 +1,579 @@
+//! Shared test helpers: a file with every section, a small PRNG, and a
+//! checksum re-sealer so mutations reach the section parsers.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use probekit_runtime::format::layout::{self, entry, header, ENTRY_LEN, HEADER_LEN, NONE};
+use probekit_runtime::format::*;
+
+/// SplitMix64: tiny deterministic generator for tests.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
+    }
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+    pub fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.f32(), self.f32(), self.f32())
+    }
+}
+
+/// A cloud of 5 probes holding every section the format knows, with
+/// consistent indices: two tetrahedra sharing a face, a 4-face hull table,
+/// a root-plus-8-leaves octree, gradients, two rigs and JSON metadata.
+pub fn full_file() -> ProbeFile {
+    let mut rng = Rng(7);
+    let positions = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+    ];
+    let order = 3;
+    let coeffs: Vec<Vec3> = (0..positions.len() * 9).map(|_| rng.vec3()).collect();
+    let mut f = ProbeFile::cloud(positions, order, &coeffs).unwrap();
+    f.validity = Some(
+        (0..5)
+            .map(|i| Validity {
+                value: i as f32 / 4.0,
+                flags: if i == 2 {
+                    layout::VALIDITY_INVALID | layout::VALIDITY_VIRTUAL_OFFSET
+                } else {
+                    0
+                },
+            })
+            .collect(),
+    );
+    f.tetrahedra = Some(TetSection {
+        vertices: vec![[0, 1, 2, 3], [4, 1, 2, 3]],
+        neighbours: vec![[1, NONE, NONE, NONE], [0, NONE, NONE, NONE]],
+        barycentric: (0..2)
+            .map(|_| [0; 3].map(|_| [0; 4].map(|_| rng.f32())))
+            .collect(),
+    });
+    f.outer = Some(OuterCells {
+        vertices: vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [4, 2, 1]],
+        adjacent: vec![[1, 2, 3], [2, 0, 3], [0, 1, 3], [0, 1, 2]],
+        planes: (0..4).map(|_| [0; 4].map(|_| rng.f32())).collect(),
+        tetrahedra: vec![0, 0, 0, 1],
+    });
+    let mut nodes = vec![OctreeNode {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+        first_child: 1,
+        depth: 0,
+        sample_offset: 0,
+        sample_count: 0,
+    }];
+    for k in 0..8u32 {
+        let lo = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32) * 0.5;
+        nodes.push(OctreeNode {
+            min: lo,
+            max: lo + 0.5,
+            first_child: NONE,
+            depth: 1,
+            sample_offset: k * 8,
+            sample_count: 8 + (k == 3) as u32,
+        });
+    }
+    f.octree = Some(Octree {
+        nodes,
+        samples: (0..65).map(|i| i % 5).collect(),
+    });
+    f.grid = Some(VolumeGrid {
+        min: Vec3::splat(-1.0),
+        max: Vec3::splat(2.0),
+        resolution: [5, 1, 1],
+    });
+    f.gradients = Some(Gradients {
+        order: 2,
+        data: (0..5 * 3 * 4).map(|_| rng.vec3()).collect(),
+    });
+    f.rigs = vec![
+        Rig {
+            name: "car".into(),
+            model: RigModel::Tensor([
+                AxisModel::Lattice(3),
+                AxisModel::Gradient,
+                AxisModel::Constant,
+            ]),
+            order: 3,
+            bbox_min: Vec3::new(-2.0, 0.0, -1.0),
+            bbox_max: Vec3::new(2.0, 1.5, 1.0),
+            samples: (0..7).map(|_| rng.vec3()).collect(),
+            fitting: (0..6 * 7).map(|_| rng.f32()).collect(),
+            transitions: vec![
+                Transition {
+                    distance: 0.5,
+                    error: 12.0,
+                },
+                Transition {
+                    distance: 2.0,
+                    error: 3.0,
+                },
+                Transition {
+                    distance: 8.0,
+                    error: 0.5,
+                },
+            ],
+        },
+        Rig {
+            name: "dinosaur ü".into(),
+            model: RigModel::Gradient,
+            order: 2,
+            bbox_min: Vec3::ZERO,
+            bbox_max: Vec3::ONE,
+            samples: (0..3).map(|_| rng.vec3()).collect(),
+            fitting: (0..4 * 3).map(|_| rng.f32()).collect(),
+            transitions: vec![],
+        },
+    ];
+    f.metadata =
+        r#"{"placement":{"method":"adaptive"},"scene_hash":"abc","tool_version":"0.1.0"}"#.into();
+    f
+}
+
+/// Recomputes every section CRC (for entries whose range lies in the file)
+/// and the header CRC, so a mutated file gets past the checksums and
+/// exercises the parsers behind them.
+pub fn reseal(bytes: &mut [u8]) {
+    if bytes.len() < HEADER_LEN {
+        return;
+    }
+    let count =
+        u32::from_le_bytes(bytes[header::SECTION_COUNT..][..4].try_into().unwrap()) as usize;
+    let Some(table_end) = count
+        .checked_mul(ENTRY_LEN)
+        .and_then(|t| t.checked_add(HEADER_LEN))
+    else {
+        return;
+    };
+    if table_end > bytes.len() {
+        return;
+    }
+    for k in 0..count {
+        let e = HEADER_LEN + k * ENTRY_LEN;
+        let off = u64::from_le_bytes(bytes[e + entry::OFFSET..][..8].try_into().unwrap());
+        let len = u64::from_le_bytes(bytes[e + entry::LENGTH..][..8].try_into().unwrap());
+        if let Some(end) = off.checked_add(len) {
+            if end <= bytes.len() as u64 {
+                let c = crc32(&bytes[off as usize..end as usize]);
+                bytes[e + entry::CRC..e + entry::CRC + 4].copy_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    let mut c = Crc32::new();
+    c.update(&bytes[..header::CRC]);
+    c.update(&bytes[HEADER_LEN..table_end]);
+    let c = c.finish();
+    bytes[header::CRC..header::CRC + 4].copy_from_slice(&c.to_le_bytes());
+}
+
+/// Table entry `k`: (id, offset, length).
+pub fn entry_of(bytes: &[u8], k: usize) -> (SectionId, usize, usize) {
+    let e = HEADER_LEN + k * ENTRY_LEN;
+    let id = u32::from_le_bytes(bytes[e..][..4].try_into().unwrap());
+    let off = u64::from_le_bytes(bytes[e + entry::OFFSET..][..8].try_into().unwrap());
+    let len = u64::from_le_bytes(bytes[e + entry::LENGTH..][..8].try_into().unwrap());
+    (SectionId(id), off as usize, len as usize)
+}
+
+/// Offset and length of section `id` in a file.
+pub fn find_section(bytes: &[u8], id: SectionId) -> (usize, usize) {
+    let count =
+        u32::from_le_bytes(bytes[header::SECTION_COUNT..][..4].try_into().unwrap()) as usize;
+    (0..count)
+        .map(|k| entry_of(bytes, k))
+        .find(|e| e.0 == id)
+        .map(|e| (e.1, e.2))
+        .expect("section present")
+}
+
+pub fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
+    bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+/// Checks an error's variant.
+pub type Expect = fn(&FormatError) -> bool;
+
+fn with_sections(f: &ProbeFile, edit: impl FnOnce(&mut Vec<(SectionId, Vec<u8>)>)) -> Vec<u8> {
+    let bytes = f.to_bytes().unwrap();
+    let (_, sections) = read_sections(&bytes).unwrap();
+    let mut owned: Vec<(SectionId, Vec<u8>)> =
+        sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect();
+    edit(&mut owned);
+    assemble_file(f.kind.id(), layout::VERSION_MINOR, 0, &owned)
+}
+
+/// Patches `edit` into section `id`'s bytes (offsets relative to the
+/// section), then re-seals the checksums.
+fn patch(base: &[u8], id: SectionId, edit: impl FnOnce(&mut [u8])) -> Vec<u8> {
+    let mut b = base.to_vec();
+    let (off, len) = find_section(&b, id);
+    edit(&mut b[off..off + len]);
+    reseal(&mut b);
+    b
+}
+
+fn patch_header(base: &[u8], edit: impl FnOnce(&mut [u8])) -> Vec<u8> {
+    let mut b = base.to_vec();
+    edit(&mut b);
+    reseal(&mut b);
+    b
+}
+
+/// Broken files, each named for what is wrong, with the error it must give.
+/// `valid_full` is the one good file (it must load and equal [`full_file`]).
+pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
+    let f = full_file();
+    let good = f.to_bytes().unwrap();
+    let entry_field = |k: usize, field: usize| HEADER_LEN + k * ENTRY_LEN + field;
+    let mut v: Vec<(&'static str, Vec<u8>, Expect)> = vec![];
+    v.push(("valid_full", good.clone(), |_| false));
+    v.push(("empty_file", vec![], |e| {
+        matches!(e, FormatError::Truncated { .. })
+    }));
+    v.push((
+        "bad_magic",
+        {
+            let mut b = good.clone();
+            b[0] = b'Q';
+            b
+        },
+        |e| matches!(e, FormatError::BadMagic),
+    ));
+    v.push((
+        "text_file",
+        b"# not a probe file, just some text\n".to_vec(),
+        |e| matches!(e, FormatError::BadMagic),
+    ));
+    v.push((
+        "newer_major_version",
+        patch_header(&good, |b| {
+            b[header::MAJOR..header::MAJOR + 2].copy_from_slice(&2u16.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::UnsupportedVersion { major: 2, .. }),
+    ));
+    v.push(("truncated_header", good[..40].to_vec(), |e| {
+        matches!(
+            e,
+            FormatError::Truncated {
+                needed: 48,
+                len: 40
+            }
+        )
+    }));
+    v.push(("truncated_table", good[..HEADER_LEN + 40].to_vec(), |e| {
+        matches!(e, FormatError::Truncated { .. })
+    }));
+    v.push(
+        ("truncated_section", good[..good.len() - 16].to_vec(), |e| {
+            matches!(e, FormatError::Truncated { .. })
+        }),
+    );
+    v.push((
+        "trailing_bytes",
+        {
+            let mut b = good.clone();
+            b.extend_from_slice(&[0; 16]);
+            b
+        },
+        |e| matches!(e, FormatError::LengthMismatch { .. }),
+    ));
+    v.push((
+        "header_checksum",
+        {
+            let mut b = good.clone();
+            b[header::FLAGS] ^= 1;
+            b
+        },
+        |e| matches!(e, FormatError::ChecksumMismatch { what, .. } if what == "header"),
+    ));
+    v.push((
+        "section_checksum",
+        {
+            let mut b = good.clone();
+            let (off, _) = find_section(&b, SectionId::POSITIONS);
+            b[off + 20] ^= 0x40;
+            b
+        },
+        |e| matches!(e, FormatError::ChecksumMismatch { what, .. } if what == "positions"),
+    ));
+    v.push((
+        "section_out_of_bounds",
+        patch_header(&good, |b| {
+            let at = entry_field(1, entry::OFFSET);
+            let off = b.len() as u64;
+            b[at..at + 8].copy_from_slice(&off.to_le_bytes());
+        }),
+        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
+    ));
+    v.push((
+        "section_length_overflow",
+        patch_header(&good, |b| {
+            let at = entry_field(1, entry::LENGTH);
+            b[at..at + 8].copy_from_slice(&(!15u64).to_le_bytes());
+        }),
+        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
+    ));
+    v.push((
+        "section_inside_table",
+        patch_header(&good, |b| {
+            let at = entry_field(0, entry::OFFSET);
+            b[at..at + 8].copy_from_slice(&16u64.to_le_bytes());
+        }),
+        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
+    ));
+    v.push((
+        "section_misaligned",
+        patch_header(&good, |b| {
+            let at = entry_field(1, entry::OFFSET);
+            let off = u64::from_le_bytes(b[at..at + 8].try_into().unwrap()) + 4;
+            b[at..at + 8].copy_from_slice(&off.to_le_bytes());
+        }),
+        |e| matches!(e, FormatError::SectionMisaligned { .. }),
+    ));
+    v.push((
+        "sections_overlap",
+        patch_header(&good, |b| {
+            let off = entry_field(0, entry::OFFSET);
+            let o0 = b[off..off + 8].to_vec();
+            let at = entry_field(1, entry::OFFSET);
+            b[at..at + 8].copy_from_slice(&o0);
+        }),
+        |e| matches!(e, FormatError::SectionOverlap { .. }),
+    ));
+    v.push((
+        "duplicate_section",
+        patch_header(&good, |b| {
+            put_u32(b, entry_field(2, entry::ID), SectionId::POSITIONS.0)
+        }),
+        |e| matches!(e, FormatError::DuplicateSection(id) if *id == SectionId::POSITIONS),
+    ));
+    v.push((
+        "unknown_section_same_minor",
+        patch_header(&good, |b| {
+            put_u32(
+                b,
+                entry_field(2, entry::ID),
+                SectionId::from_fourcc(*b"XXXX").0,
+            )
+        }),
+        |e| matches!(e, FormatError::UnknownSection(_)),
+    ));
+    v.push((
+        "missing_positions",
+        with_sections(&f, |s| s.retain(|(id, _)| *id != SectionId::POSITIONS)),
+        |e| matches!(e, FormatError::MissingSection(id) if *id == SectionId::POSITIONS),
+    ));
+    v.push((
+        "volume_without_grid_or_octree",
+        {
+            let mut g = f.clone();
+            g.kind = ProbeFileKind::Volume;
+            g.grid = None;
+            g.octree = None;
+            let b = g.clone().to_bytes();
+            assert!(b.is_err());
+            g.kind = ProbeFileKind::Cloud;
+            patch_header(&g.to_bytes().unwrap(), |b| put_u32(b, header::KIND, 1))
+        },
+        |e| matches!(e, FormatError::MissingSection(id) if *id == SectionId::GRID),
+    ));
+    v.push((
+        "unknown_kind",
+        patch_header(&good, |b| put_u32(b, header::KIND, 7)),
+        |e| matches!(e, FormatError::UnknownKind(7)),
+    ));
+    v.push((
+        "positions_count_too_large",
+        patch(&good, SectionId::POSITIONS, |s| put_u32(s, 0, 6)),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::POSITIONS),
+    ));
+    v.push((
+        "positions_count_absurd",
+        patch(&good, SectionId::POSITIONS, |s| put_u32(s, 0, u32::MAX)),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::POSITIONS),
+    ));
+    v.push(("section_shorter_than_its_header", with_sections(&f, |s| {
+        s.iter_mut().find(|(id, _)| *id == SectionId::METADATA).unwrap().1 = vec![];
+    }), |e| matches!(e, FormatError::SectionSize { id, expected: 16, .. } if *id == SectionId::METADATA)));
+    v.push((
+        "rig_counts_overflow",
+        patch(&good, SectionId::RIGS, |s| {
+            // First rig: a 65535 × 65535 × 1 lattice with u32::MAX samples.
+            let r = 16;
+            put_u32(s, r, 2);
+            for a in 0..3 {
+                put_u32(s, r + 4 + 4 * a, 2);
+            }
+            put_u32(s, r + 16, 65535);
+            put_u32(s, r + 20, 65535);
+            put_u32(s, r + 24, 1);
+            put_u32(s, r + 32, u32::MAX);
+            put_u32(s, r + 36, 65535 * 65535);
+        }),
+        |e| matches!(e, FormatError::CountOverflow(id) if *id == SectionId::RIGS),
+    ));
+    v.push((
+        "rig_unknown_model",
+        patch(&good, SectionId::RIGS, |s| put_u32(s, 16, 9)),
+        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::RIGS),
+    ));
+    v.push(("coefficients_fewer_than_positions", with_sections(&f, |s| {
+        let c = s.iter_mut().find(|(id, _)| *id == SectionId::COEFFICIENTS).unwrap();
+        let mut sec = SectionBuilder::new([0, 3, 4, 108]);
+        sec.bytes(&c.1[16..16 + 4 * 108]);
+        c.1 = sec.finish();
+    }), |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 4 } if *id == SectionId::COEFFICIENTS)));
+    v.push((
+        "unknown_codec",
+        patch(&good, SectionId::COEFFICIENTS, |s| put_u32(s, 0, 9)),
+        |e| matches!(e, FormatError::UnknownCodec(9)),
+    ));
+    v.push((
+        "codec_order_mismatch",
+        patch(&good, SectionId::COEFFICIENTS, |s| put_u32(s, 0, 2)),
+        |e| {
+            matches!(
+                e,
+                FormatError::CodecOrderMismatch {
+                    codec: "l1",
+                    order: 3,
+                    ..
+                }
+            )
+        },
+    ));
+    v.push((
+        "nan_position",
+        patch(&good, SectionId::POSITIONS, |s| {
+            s[16 + 12 * 3 + 4..16 + 12 * 3 + 8].copy_from_slice(&f32::NAN.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::NonFinite { id, element: 3 } if *id == SectionId::POSITIONS),
+    ));
+    v.push(("infinite_coefficient", patch(&good, SectionId::COEFFICIENTS, |s| {
+        s[16 + 108 * 2 + 8..16 + 108 * 2 + 12].copy_from_slice(&f32::INFINITY.to_le_bytes())
+    }), |e| matches!(e, FormatError::NonFinite { id, element: 2 } if *id == SectionId::COEFFICIENTS)));
+    v.push((
+        "nan_barycentric_matrix",
+        patch(&good, SectionId::TETRAHEDRA, |s| {
+            s[16 + 32 + 32 + 48 + 4..16 + 32 + 32 + 48 + 8].copy_from_slice(&f32::NAN.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::NonFinite { id, element: 1 } if *id == SectionId::TETRAHEDRA),
+    ));
+    v.push((
+        "tet_vertex_out_of_range",
+        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 16 + 8, 5)),
+        |e| {
+            matches!(
+                e,
+                FormatError::IndexOutOfRange {
+                    value: 5,
+                    limit: 5,
+                    element: 1,
+                    ..
+                }
+            )
+        },
+    ));
+    v.push((
+        "tet_neighbour_out_of_range",
+        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 32 + 4, 2)),
+        |e| {
+            matches!(
+                e,
+                FormatError::IndexOutOfRange {
+                    value: 2,
+                    limit: 2,
+                    element: 0,
+                    ..
+                }
+            )
+        },
+    ));
+    v.push((
+        "tet_repeated_vertex",
+        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 4, 0)),
+        |e| matches!(e, FormatError::InvalidTopology { element: 0, .. }),
+    ));
+    v.push((
+        "tet_neighbours_not_symmetric",
+        patch(&good, SectionId::TETRAHEDRA, |s| {
+            put_u32(s, 16 + 32 + 16, u32::MAX)
+        }),
+        |e| matches!(e, FormatError::InvalidTopology { element: 0, .. }),
+    ));
+    v.push((
+        "hull_face_adjacent_out_of_range",
+        patch(&good, SectionId::OUTER, |s| put_u32(s, 16 + 48, 4)),
+        |e| {
+            matches!(
+                e,
+                FormatError::IndexOutOfRange {
+                    value: 4,
+                    limit: 4,
+                    ..
+                }
+            )
+        },
+    ));
+    v.push((
+        "octree_child_before_parent",
+        patch(&good, SectionId::OCTREE, |s| {
+            // Node 1 (a leaf) claims node 1.. as children: a cycle.
+            put_u32(s, 16 + 40 + 24, 1)
+        }),
+        |e| matches!(e, FormatError::IndexOutOfRange { element: 1, .. }),
+    ));
+    v.push((
+        "octree_sample_list_out_of_range",
+        patch(&good, SectionId::OCTREE, |s| {
+            put_u32(s, 16 + 40 * 8 + 32, 60)
+        }),
+        |e| matches!(e, FormatError::IndexOutOfRange { element: 8, .. }),
+    ));
+    v.push((
+        "octree_inverted_box",
+        patch(&good, SectionId::OCTREE, |s| {
+            s[16..20].copy_from_slice(&5.0f32.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::InvalidValue { element: 0, .. }),
+    ));
+    v.push(("grid_resolution_mismatch", {
+        let mut g = f.clone();
+        g.octree = None;
+        let bytes = g.to_bytes().unwrap();
+        patch(&bytes, SectionId::GRID, |s| put_u32(s, 4, 2))
+    }, |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 10 } if *id == SectionId::GRID)));
+    v.push((
+        "metadata_not_utf8",
+        patch(&good, SectionId::METADATA, |s| s[16] = 0xFF),
+        |e| matches!(e, FormatError::InvalidUtf8(id) if *id == SectionId::METADATA),
+    ));
+    v.push((
+        "validity_count_mismatch",
+        with_sections(&f, |s| {
+            let c = s
+                .iter_mut()
+                .find(|(id, _)| *id == SectionId::VALIDITY)
+                .unwrap();
+            let mut sec = SectionBuilder::new([3, 0, 0, 0]);
+            sec.bytes(&c.1[16..16 + 24]);
+            c.1 = sec.finish();
+        }),
+        |e| matches!(e, FormatError::CountMismatch { id, .. } if *id == SectionId::VALIDITY),
+    ));
+    v
+}

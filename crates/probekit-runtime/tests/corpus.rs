@@ -1,0 +1,116 @@
+//! The corpus of broken files in `tests/corpus/`: each file is named for
+//! what is wrong with it and must give its error variant (and never panic).
+//! `valid_full.probes` is a good file from format 1.0 that must keep loading.
+//!
+//! Regenerate after a deliberate format change with
+//! `PROBEKIT_REGEN_CORPUS=1 cargo test -p probekit-runtime --test corpus`.
+
+mod common;
+
+use common::*;
+use probekit_runtime::format::*;
+use std::path::PathBuf;
+
+fn corpus_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/corpus")
+}
+
+#[test]
+fn every_corpus_file_gives_its_error() {
+    let dir = corpus_dir();
+    if std::env::var_os("PROBEKIT_REGEN_CORPUS").is_some() {
+        std::fs::create_dir_all(&dir).unwrap();
+        for (name, bytes, _) in corpus_cases() {
+            std::fs::write(dir.join(format!("{name}.probes")), bytes).unwrap();
+        }
+    }
+    let cases = corpus_cases();
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_str().unwrap().to_string();
+        let (_, generated, expect) = cases
+            .iter()
+            .find(|c| c.0 == name)
+            .unwrap_or_else(|| panic!("corpus file {name} has no expected error"));
+        let bytes = std::fs::read(&path).unwrap();
+        let result = ProbeFile::from_bytes(&bytes);
+        if name == "valid_full" {
+            assert_eq!(
+                result.unwrap(),
+                full_file(),
+                "the 1.0 reference file no longer loads"
+            );
+            assert_eq!(
+                &bytes, generated,
+                "the writer's output changed: format drift"
+            );
+        } else {
+            let err = result.expect_err(&name);
+            assert!(expect(&err), "{name}: unexpected error {err:?}");
+            // Messages are one line and name the problem.
+            assert!(!err.to_string().contains('\n'));
+        }
+        seen += 1;
+    }
+    assert_eq!(seen, cases.len(), "every case has a committed file");
+}
+
+#[test]
+fn generated_cases_match_expectations() {
+    // The same checks on the in-memory cases, so a new case fails here
+    // before its file is committed.
+    for (name, bytes, expect) in corpus_cases() {
+        match ProbeFile::from_bytes(&bytes) {
+            Ok(f) => assert_eq!(name, "valid_full", "{name} loaded: {:?}", f.kind),
+            Err(e) => assert!(expect(&e), "{name}: unexpected error {e:?}"),
+        }
+    }
+}
+
+#[test]
+fn load_reports_missing_file_and_writer_refuses_invalid_contents() {
+    let err = ProbeFile::load("/nonexistent/dir/x.probes").unwrap_err();
+    assert!(matches!(err, FormatError::Io { .. }));
+    assert!(err.to_string().contains("/nonexistent/dir/x.probes"));
+
+    let mut f = full_file();
+    f.tetrahedra.as_mut().unwrap().vertices[0][0] = 99;
+    assert!(matches!(
+        f.to_bytes(),
+        Err(FormatError::IndexOutOfRange { value: 99, .. })
+    ));
+
+    let mut f = full_file();
+    f.positions[0].x = f32::NAN;
+    assert!(matches!(f.to_bytes(), Err(FormatError::NonFinite { .. })));
+
+    let mut f = full_file();
+    f.rigs[0].transitions.swap(0, 1);
+    assert!(matches!(
+        f.to_bytes(),
+        Err(FormatError::InvalidValue { .. })
+    ));
+
+    assert!(matches!(
+        Coefficients::from_f32(3, &[glam::Vec3::ZERO; 10]),
+        Err(FormatError::Unrepresentable(_))
+    ));
+}
+
+#[cfg(not(feature = "pending-codecs"))]
+#[test]
+fn quantized_codecs_load_as_bytes_but_do_not_decode_without_the_feature() {
+    let mut f = full_file();
+    f.coefficients = Coefficients {
+        codec: Codec::L1Q13,
+        order: 2,
+        data: (0..5 * 13).map(|i| i as u8).collect(),
+    };
+    let back = ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap();
+    assert_eq!(back.coefficients.data, f.coefficients.data);
+    assert!(matches!(
+        back.coefficients.to_f32(),
+        Err(FormatError::CodecUnavailable("l1"))
+    ));
+}
