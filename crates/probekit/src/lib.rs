@@ -6,4 +6,6 @@
 
 #![warn(missing_docs)]
 
-pub use probekit_sh as sh;
+pub mod env;
+pub mod plot;
+pub mod sh;
