@@ -9,5 +9,6 @@
 pub use probekit_sh as sh;
 
 pub mod format;
+pub mod rig;
 
 pub use format::{FormatError, ProbeFile, ProbeFileKind};
