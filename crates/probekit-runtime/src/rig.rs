@@ -335,7 +335,11 @@ mod tests {
             let ux: f32 = w[..m].iter().map(|&(k, v)| v * (k % 4) as f32).sum();
             assert!((ux - (p.x + 1.0) / 4.0 * 3.0).abs() < 1e-4);
         }
-        let gg = RigModel::Tensor([AxisModel::Gradient, AxisModel::Gradient, AxisModel::Constant]);
+        let gg = RigModel::Tensor([
+            AxisModel::Gradient,
+            AxisModel::Gradient,
+            AxisModel::Constant,
+        ]);
         let p = Vec3::new(2.0, 0.5, 0.1);
         let m = rig_weights(gg, lo, hi, p, &mut w);
         let (tx, ty) = (2.0 * 0.75 - 1.0, 2.0 * 0.25 - 1.0);
@@ -373,7 +377,11 @@ mod tests {
     #[test]
     fn update_is_matrix_product() {
         let mut r = rig(
-            RigModel::Tensor([AxisModel::Lattice(3), AxisModel::Gradient, AxisModel::Constant]),
+            RigModel::Tensor([
+                AxisModel::Lattice(3),
+                AxisModel::Gradient,
+                AxisModel::Constant,
+            ]),
             5,
         );
         for (i, f) in r.fitting.iter_mut().enumerate() {

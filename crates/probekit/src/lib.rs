@@ -8,4 +8,5 @@
 
 pub mod env;
 pub mod plot;
+pub mod rig;
 pub mod sh;
