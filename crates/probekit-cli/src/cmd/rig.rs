@@ -128,6 +128,31 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
             report.stats.rel_rmse, report.stats.max_grey, report.stats.l_white
         );
         println!(
+            "  spatial error vs per-vertex SH of the same lights: rel RMSE {:.4}, max {:.2} grey levels",
+            report.stats_vs_sh.rel_rmse, report.stats_vs_sh.max_grey
+        );
+        if !report.thresholds.is_empty() {
+            let t: Vec<String> = report
+                .fitted
+                .rig
+                .transitions
+                .iter()
+                .map(|t| format!("{:.2}:{:.3}", t.distance, t.error))
+                .collect();
+            println!(
+                "  error table (distance/R : grey levels, unitized light): {}",
+                t.join(" ")
+            );
+            let (c, r) = mesh.bounding_sphere();
+            for (i, (l, th)) in lights.iter().zip(&report.thresholds).enumerate() {
+                let x = l.position().distance(c + at) / r;
+                println!(
+                    "  light {i}: at {x:.2} R, transition at {th:.2} R, {:?}",
+                    report.zones[i]
+                );
+            }
+        }
+        println!(
             "  frame: {:.0} ns (rig update + per-vertex), brute-force analytic {:.0} ns, ratio {:.2}",
             report.ns_per_frame,
             report.ns_brute_force,

@@ -92,6 +92,10 @@ pub struct RunReport {
     pub exact: Vec<Vec3>,
     /// Errors of `approx` against `exact`.
     pub stats: split::ErrorStats,
+    /// Errors of `approx` against the per-vertex SH of the rig's lights
+    /// (plus the analytic ones exactly): the rig's spatial error alone,
+    /// without the SH truncation every rig shares.
+    pub stats_vs_sh: split::ErrorStats,
     /// Median wall time of one frame: SH at the samples for the rig's
     /// lights, the rig update and the per-vertex evaluation (with analytic
     /// lights), single thread, ns.
@@ -182,6 +186,8 @@ pub fn run(
     split::update_from_lights(&mut frame, &fitted, cfg.at, lights, &weights);
     split::split_irradiance(&frame, mesh, cfg.at, lights, &weights, &table, &mut approx);
     let stats = split::error_stats(&approx, &exact, Some(l_white));
+    let sh_ref = split::sh_reference_irradiance(mesh, cfg.at, lights, &weights, cfg.order);
+    let stats_vs_sh = split::error_stats(&approx, &sh_ref, Some(l_white));
     let (mut ns_per_frame, mut ns_brute_force) = (0.0, 0.0);
     if time {
         ns_per_frame = time_ns(|| {
@@ -202,6 +208,7 @@ pub fn run(
         approx,
         exact,
         stats,
+        stats_vs_sh,
         ns_per_frame,
         ns_brute_force,
     })
