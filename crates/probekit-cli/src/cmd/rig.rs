@@ -189,8 +189,10 @@ fn render(
     let l_white = report.stats.l_white;
     let mut runs = Vec::new();
     for s in &specs {
+        // Rigs are compared with each other with every light in the rig.
         let c = RunConfig {
             spec: *s,
+            split: false,
             ..cfg.clone()
         };
         runs.push((s, run_rig(mesh, "mesh", lights, &c, false)?));
@@ -215,7 +217,7 @@ fn render(
         irradiance: &report.exact,
         error_grey: None,
     });
-    comparison_figure(out, mesh, &cols, l_white, 8.0)?;
+    comparison_figure(out, mesh, &cols, l_white, 64.0)?;
     let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("rig");
     let zones_path = out.with_file_name(format!("{stem}_zones.png"));
     let world = mesh.translated(cfg.at);

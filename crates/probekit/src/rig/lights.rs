@@ -160,7 +160,11 @@ impl Light {
     /// point and spot: `I·max(0, n·ω)/d²`; disk: Lambert's polygon formula
     /// for a [`DISK_POLYGON_EDGES`]-gon clipped to the horizon. `table`, when
     /// given, replaces the sphere's closed form by its 128 × 128 tabulation
-    /// (what a renderer's analytic path does, seed 000 §3.2).
+    /// (what a renderer's analytic path does, seed 000 §3.2), and the disk
+    /// by the sphere of equal projected area and radiance looked up in the
+    /// same table (cheap, as a shader would do it; approximate near the disk
+    /// — the Frostbite course notes use the same sphere-for-disk horizon
+    /// handling; the polygon stays the reference).
     pub fn irradiance(&self, p: Vec3, n: Vec3, table: Option<&SphereTable>) -> Vec3 {
         match *self {
             Light::Sphere {
@@ -218,11 +222,20 @@ impl Light {
                 radius,
                 intensity,
             } => {
-                if (p - position).dot(direction) <= 0.0 {
+                let w = p - position;
+                let d = w.length();
+                if w.dot(direction) <= 0.0 || d <= 0.0 {
                     return Vec3::ZERO;
                 }
                 let l = intensity / (PI * radius * radius);
-                l * disk_polygon_irradiance(p, n, position, direction, radius)
+                match table {
+                    Some(t) => {
+                        // Equivalent sphere (same projected area, radiance).
+                        let req = radius * (w.dot(direction) / d).sqrt();
+                        l * t.lookup(-n.dot(w) / d, (req / d).min(1.0))
+                    }
+                    None => l * disk_polygon_irradiance(p, n, position, direction, radius),
+                }
             }
         }
     }
@@ -601,6 +614,33 @@ mod tests {
                 (got - reference).abs() < 0.01 * reference + 2e-3,
                 "{n}: {got} vs {reference}"
             );
+        }
+    }
+
+    /// The shader-style disk (equivalent sphere through the table) against
+    /// the polygon reference: close away from the disk, for tilted views.
+    #[test]
+    fn disk_equivalent_sphere_is_close_away_from_the_disk() {
+        let disk = Light::Disk {
+            position: Vec3::ZERO,
+            direction: Vec3::Y,
+            radius: 0.2,
+            intensity: Vec3::ONE,
+        };
+        let t = SphereTable::default();
+        for p in [
+            Vec3::new(0.0, 1.5, 0.0),
+            Vec3::new(1.0, 1.0, 0.3),
+            Vec3::new(-0.4, 2.0, 0.8),
+        ] {
+            for n in [-p.normalize(), Vec3::new(0.3, -1.0, 0.2).normalize()] {
+                let exact = disk.irradiance(p, n, None).x;
+                let approx = disk.irradiance(p, n, Some(&t)).x;
+                assert!(
+                    (approx / exact - 1.0).abs() < 0.03,
+                    "{p} {n}: {approx} vs {exact}"
+                );
+            }
         }
     }
 
