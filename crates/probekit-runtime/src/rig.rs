@@ -353,6 +353,27 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// Any tensor rig's weights are a partition of unity when every
+        /// axis is a lattice or constant, and at most MAX_WEIGHTS are written.
+        #[test]
+        fn lattice_weights_sum_to_one(
+            nx in 1u32..9, ny in 1u32..9, nz in 1u32..9,
+            x in -2.0f32..4.0, y in -1.0f32..3.0, z in -1.0f32..1.0,
+        ) {
+            let m = RigModel::Tensor([
+                AxisModel::Lattice(nx),
+                AxisModel::Lattice(ny),
+                AxisModel::Lattice(nz),
+            ]);
+            let mut w = [(0, 0.0); MAX_WEIGHTS];
+            let n = rig_weights(m, Vec3::new(-1.0, 0.0, -0.5), Vec3::new(3.0, 2.0, 0.5), Vec3::new(x, y, z), &mut w);
+            let s: f32 = w[..n].iter().map(|v| v.1).sum();
+            proptest::prop_assert!((s - 1.0).abs() < 1e-5);
+            proptest::prop_assert!(w[..n].iter().all(|v| v.0 < nx * ny * nz && v.1 >= 0.0));
+        }
+    }
+
     #[test]
     fn shape_errors_are_typed() {
         let mut r = rig(RigModel::Gradient, 3);

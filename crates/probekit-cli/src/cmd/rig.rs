@@ -58,6 +58,10 @@ pub struct RigArgs {
     /// maps) here, and the zone picture beside it as <stem>_zones.png.
     #[arg(long)]
     pub render: Option<PathBuf>,
+    /// Write the fitted rig (sample points, fitting matrix, transition
+    /// table) as a rig-only .probes file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
@@ -158,6 +162,12 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
             report.ns_brute_force,
             report.ns_brute_force / report.ns_per_frame.max(1.0)
         );
+    }
+    if let Some(out) = &a.out {
+        let bytes = probekit::rig::fit::rig_file(std::slice::from_ref(&report.fitted))
+            .to_bytes()
+            .map_err(|e| anyhow!("{}: {e}", out.display()))?;
+        std::fs::write(out, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", out.display()))?;
     }
     if let Some(out) = &a.render {
         render(out, &mesh, &lights, &cfg, &report)?;
