@@ -86,8 +86,11 @@ impl FittedRig {
         if !(1..=probekit_sh::MAX_ORDER).contains(&order) {
             return Err(RigSetupError::Order(order));
         }
-        if samples == 0 {
+        if samples == 0 || samples > super::MAX_SAMPLES {
             return Err(RigSetupError::Samples);
+        }
+        if spec.parameter_count() > super::MAX_PARAMETERS {
+            return Err(RigSetupError::TooManyParameters(spec.parameter_count()));
         }
         let pts = sample::distribute_samples(mesh, samples, seed);
         let (lo, hi) = mesh.bbox();
@@ -242,6 +245,29 @@ mod tests {
             let c: f64 = row.iter().zip(y.iter()).map(|(a, b)| *a as f64 * b).sum();
             assert!((c - direct[kk]).abs() < 1e-4 * (1.0 + direct.amax()));
         }
+    }
+
+    #[test]
+    fn oversized_requests_are_typed_errors() {
+        let car = mesh::car();
+        let big: RigSpec = "lattice:64x64x1".parse().unwrap();
+        assert_eq!(
+            FittedRig::fit(&car, big, 3, 16, 1, "c").unwrap_err(),
+            RigSetupError::TooManyParameters(4096)
+        );
+        let g: RigSpec = "gradient".parse().unwrap();
+        assert_eq!(
+            FittedRig::fit(&car, g, 3, 0, 1, "c").unwrap_err(),
+            RigSetupError::Samples
+        );
+        assert_eq!(
+            FittedRig::fit(&car, g, 3, 100_000, 1, "c").unwrap_err(),
+            RigSetupError::Samples
+        );
+        assert_eq!(
+            FittedRig::fit(&car, g, 9, 16, 1, "c").unwrap_err(),
+            RigSetupError::Order(9)
+        );
     }
 
     /// Rigs travel through a `.probes` file unchanged: write, read back, and

@@ -35,6 +35,13 @@ use std::str::FromStr;
 /// thousands of SH vectors is not a rig any more).
 pub const MAX_AXIS_SAMPLES: u32 = 64;
 
+/// Most sample points per rig: sampling costs O(N²) (farthest point and
+/// Lloyd over 8·N candidates) and the fit O(N·K²).
+pub const MAX_SAMPLES: usize = 8192;
+
+/// Most SH vectors per rig (the SVD is dense, O(N·K²)).
+pub const MAX_PARAMETERS: usize = 1024;
+
 /// Problems setting up a rig: bad spec, mesh, scene or parameters.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -59,9 +66,12 @@ pub enum RigSetupError {
     /// SH order outside `1..=8`.
     #[error("SH order {0} outside 1..=8")]
     Order(usize),
-    /// Zero samples requested.
-    #[error("a rig needs at least one sample point")]
+    /// Zero samples, or more than [`MAX_SAMPLES`].
+    #[error("a rig needs 1..=8192 sample points")]
     Samples,
+    /// More SH vectors than [`MAX_PARAMETERS`].
+    #[error("rig has {0} SH vectors; at most 1024 are supported")]
+    TooManyParameters(usize),
 }
 
 /// A rig type as written on the command line (see module docs).
