@@ -28,6 +28,8 @@ enum Command {
     Volume(cmd::volume::VolumeArgs),
     /// Export a volume as KTX2 3D textures or a Bevy irradiance volume.
     Export(cmd::export::ExportArgs),
+    /// Fit an irradiance rig to a mesh among lights and compare it with the exact lighting.
+    Rig(cmd::rig::RigArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +38,7 @@ fn main() -> ExitCode {
         Command::Sh(args) => cmd::sh::run(&args),
         Command::Volume(args) => cmd::volume::run(&args),
         Command::Export(args) => cmd::export::run(&args),
+        Command::Rig(args) => cmd::rig::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,6 +10,7 @@ pub use probekit_sh as sh;
 
 pub mod cloud;
 pub mod format;
+pub mod rig;
 pub mod volume;
 
 pub use format::{FormatError, ProbeFile, ProbeFileKind};

@@ -11,6 +11,7 @@ pub mod cloud;
 pub mod env;
 pub mod format;
 pub mod plot;
+pub mod rig;
 pub mod scene;
 pub mod sh;
 pub mod trace;

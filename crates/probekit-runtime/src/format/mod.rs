@@ -224,9 +224,13 @@ impl RigModel {
 /// One entry of a rig's analytic/rig transition table (seed 000 §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transition {
-    /// Normalized light distance `N(r) = 4D²/r²`.
+    /// Light distance from the object's bounding-sphere centre, in
+    /// bounding-sphere radii (`probekit::rig::split` writes these).
     pub distance: f32,
-    /// Error in reflected radiance at that distance, in 8-bit grey levels.
+    /// Error in reflected radiance at that distance, in 8-bit grey levels,
+    /// for a light normalised so that its reflected radiance at the
+    /// bounding-sphere point nearest to it is white (the role of the paper's
+    /// `N(r)`; `probekit::rig::split` module docs).
     pub error: f32,
 }
 

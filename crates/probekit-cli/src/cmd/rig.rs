@@ -1,0 +1,254 @@
+//! `probekit rig MESH --scene SCENE --rig SPEC --at x,y,z [--json] ...`:
+//! fits an irradiance rig (seed 000) to a mesh placed at a point among the
+//! scene's lights, splits the lights into analytic / transition / rig zones,
+//! and reports the per-vertex error against the exact lighting and the cost
+//! of a frame.
+
+use anyhow::{anyhow, Context};
+use clap::{Args, ValueEnum};
+use glam::Vec3;
+use probekit::rig::render::{comparison_figure, zones_figure, Column};
+use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
+use probekit::rig::RigSpec;
+use std::path::{Path, PathBuf};
+
+/// On or off.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Switch {
+    /// On.
+    On,
+    /// Off.
+    Off,
+}
+
+/// Arguments of `probekit rig`.
+#[derive(Args, Debug)]
+pub struct RigArgs {
+    /// The mesh: builtin:car or builtin:character.
+    pub mesh: String,
+    /// The lights: builtin:rig-demo, builtin:paper-cost, or a scene .toml ([[light]] tables).
+    #[arg(long)]
+    pub scene: String,
+    /// Rig type: constant, gradient, lattice:NXxNYxNZ or mixed:X,Y,Z (c, g, lN per axis).
+    #[arg(long)]
+    pub rig: String,
+    /// Where the mesh's origin is placed, x,y,z (metres).
+    #[arg(long, default_value = "0,0,0", allow_hyphen_values = true)]
+    pub at: String,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Analytic/rig split (off: every light through the rig).
+    #[arg(long, value_enum, default_value = "on")]
+    pub split: Switch,
+    /// Sample points on the mesh.
+    #[arg(long, default_value_t = 512)]
+    pub samples: usize,
+    /// SH order (bands; 3 = L2).
+    #[arg(long, default_value_t = 3)]
+    pub order: usize,
+    /// White level (reflected radiance) for grey levels; default: the
+    /// largest exact reflected radiance over the mesh.
+    #[arg(long)]
+    pub white: Option<f32>,
+    /// Target error of the split, grey levels.
+    #[arg(long, default_value_t = 1.0)]
+    pub target: f32,
+    /// Write the comparison picture (all rig types + exact, error heat
+    /// maps) here, and the zone picture beside it as <stem>_zones.png.
+    #[arg(long)]
+    pub render: Option<PathBuf>,
+    /// Write the fitted rig (sample points, fitting matrix, transition
+    /// table) as a rig-only .probes file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow!("--at {s:?}: expected x,y,z"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => Err(anyhow!("--at {s:?}: expected three finite numbers x,y,z")),
+    }
+}
+
+/// The JSON line of the issue.
+fn json(spec: &RigSpec, r: &RunReport) -> String {
+    let (a, t, g) = r.zone_counts();
+    serde_json::json!({
+        "rig": spec.to_string(),
+        "parameters": spec.parameter_count(),
+        "samples": r.fitted.rig.samples.len(),
+        "rel_rmse": r.stats.rel_rmse,
+        "max_error_grey_levels": r.stats.max_grey,
+        "lights": {"analytic": a, "transition": t, "rig": g},
+        "ns_per_frame": r.ns_per_frame.round() as u64,
+    })
+    .to_string()
+}
+
+/// Runs `probekit rig`.
+pub fn run(a: RigArgs) -> anyhow::Result<()> {
+    let spec: RigSpec = a.rig.parse().map_err(|e| anyhow!("--rig: {e}"))?;
+    let at = parse_vec3(&a.at)?;
+    let mesh = load_mesh(&a.mesh).with_context(|| a.mesh.clone())?;
+    let lights = load_lights(&a.scene)?;
+    if let Some(w) = a.white {
+        if !(w > 0.0 && w.is_finite()) {
+            return Err(anyhow!("--white {w}: must be a positive number"));
+        }
+    }
+    let cfg = RunConfig {
+        spec,
+        at,
+        split: a.split == Switch::On,
+        samples: a.samples,
+        order: a.order,
+        white: a.white,
+        target_grey: a.target,
+        ..RunConfig::default()
+    };
+    let report = run_rig(&mesh, &a.mesh, &lights, &cfg, true).with_context(|| a.mesh.clone())?;
+    if a.json {
+        println!("{}", json(&spec, &report));
+    } else {
+        let (an, tr, rg) = report.zone_counts();
+        println!(
+            "rig {spec} on {} at {at}: {} SH vectors, {} samples",
+            a.mesh,
+            spec.parameter_count(),
+            report.fitted.rig.samples.len()
+        );
+        println!(
+            "  lights: {an} analytic, {tr} transition, {rg} rig (of {})",
+            lights.len()
+        );
+        println!(
+            "  per-vertex error vs exact: rel RMSE {:.4}, max {:.2} grey levels (white {:.4})",
+            report.stats.rel_rmse, report.stats.max_grey, report.stats.l_white
+        );
+        println!(
+            "  spatial error vs per-vertex SH of the same lights: rel RMSE {:.4}, max {:.2} grey levels",
+            report.stats_vs_sh.rel_rmse, report.stats_vs_sh.max_grey
+        );
+        if !report.thresholds.is_empty() {
+            let t: Vec<String> = report
+                .fitted
+                .rig
+                .transitions
+                .iter()
+                .map(|t| format!("{:.2}:{:.3}", t.distance, t.error))
+                .collect();
+            println!(
+                "  error table (distance/R : grey levels, unitized light): {}",
+                t.join(" ")
+            );
+            let (c, r) = mesh.bounding_sphere();
+            for (i, (l, th)) in lights.iter().zip(&report.thresholds).enumerate() {
+                let x = l.position().distance(c + at) / r;
+                println!(
+                    "  light {i}: at {x:.2} R, transition at {th:.2} R, {:?}",
+                    report.zones[i]
+                );
+            }
+        }
+        println!(
+            "  frame: {:.0} ns (rig update + per-vertex), brute-force analytic {:.0} ns, ratio {:.2}",
+            report.ns_per_frame,
+            report.ns_brute_force,
+            report.ns_brute_force / report.ns_per_frame.max(1.0)
+        );
+    }
+    if let Some(out) = &a.out {
+        let bytes = probekit::rig::fit::rig_file(std::slice::from_ref(&report.fitted))
+            .to_bytes()
+            .map_err(|e| anyhow!("{}: {e}", out.display()))?;
+        std::fs::write(out, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", out.display()))?;
+    }
+    if let Some(out) = &a.render {
+        render(out, &mesh, &lights, &cfg, &report)?;
+    }
+    Ok(())
+}
+
+fn render(
+    out: &Path,
+    mesh: &probekit::rig::mesh::Mesh,
+    lights: &[probekit::rig::lights::Light],
+    cfg: &RunConfig,
+    report: &RunReport,
+) -> anyhow::Result<()> {
+    let mut specs: Vec<RigSpec> = [
+        "constant",
+        "gradient",
+        "lattice:2x2x3",
+        "lattice:3x2x2",
+        "mixed:l3,g,c",
+        "lattice:8x4x2",
+    ]
+    .iter()
+    .map(|s| s.parse().expect("built-in spec"))
+    .collect();
+    if !specs.contains(&cfg.spec) {
+        specs.push(cfg.spec);
+    }
+    let l_white = report.stats.l_white;
+    let mut runs = Vec::new();
+    for s in &specs {
+        // Rigs are compared with each other with every light in the rig.
+        let c = RunConfig {
+            spec: *s,
+            split: false,
+            ..cfg.clone()
+        };
+        runs.push((s, run_rig(mesh, "mesh", lights, &c, false)?));
+    }
+    let grey = |r: &RunReport| -> Vec<f32> {
+        r.approx
+            .iter()
+            .zip(&r.exact)
+            .map(|(x, e)| 255.0 * (*x - *e).abs().max_element() / std::f32::consts::PI / l_white)
+            .collect()
+    };
+    let mut cols: Vec<Column> = runs
+        .iter()
+        .map(|(s, r)| Column {
+            name: s.to_string(),
+            irradiance: &r.approx,
+            error_grey: Some(grey(r)),
+        })
+        .collect();
+    cols.push(Column {
+        name: "exact".into(),
+        irradiance: &report.exact,
+        error_grey: None,
+    });
+    comparison_figure(out, mesh, &cols, l_white, 64.0)?;
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("rig");
+    let zones_path = out.with_file_name(format!("{stem}_zones.png"));
+    let world = mesh.translated(cfg.at);
+    let lw: Vec<(Vec3, f32)> = lights
+        .iter()
+        .zip(&report.zones)
+        .map(|(l, z)| (l.position(), z.rig_weight()))
+        .collect();
+    zones_figure(&zones_path, &world, &report.approx, l_white, &lw)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn at_parses_and_rejects() {
+        assert_eq!(parse_vec3("1,-2, 3.5").unwrap(), Vec3::new(1.0, -2.0, 3.5));
+        assert!(parse_vec3("1,2").is_err());
+        assert!(parse_vec3("1,2,x").is_err());
+        assert!(parse_vec3("1,2,inf").is_err());
+    }
+}
