@@ -43,31 +43,9 @@ pub const N_T: usize = 32;
 /// Gauss–Legendre nodes over the polar angle `θ`.
 pub const N_THETA: usize = 10;
 
-/// Gauss–Legendre nodes and weights on `[−1, 1]`, by Newton iteration on `P_n`.
+/// Gauss–Legendre nodes and weights on `[−1, 1]` (the crate's one implementation).
 fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        // Tricomi's initial guess, then Newton.
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0f64, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            // P_n = p1, P_{n−1} = p0
-            dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-            let dx = p1 / dp;
-            x -= dx;
-            if dx.abs() < 1e-15 {
-                break;
-            }
-        }
-        out.push((x, 2.0 / ((1.0 - x * x) * dp * dp)));
-    }
-    out
+    crate::numeric::gauss_legendre(n, -1.0, 1.0)
 }
 
 fn gl_theta() -> &'static [(f64, f64)] {
