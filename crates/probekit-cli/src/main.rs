@@ -22,6 +22,18 @@ struct Cli {
 /// The subcommands; each lives in `src/cmd/<name>.rs`.
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Bake a probe cloud (grid or given positions; `--shard I/N` for one part).
+    Bake(cmd::bake::BakeArgs),
+    /// Join shard parts into the file a single-machine bake writes.
+    Merge(cmd::bake::MergeArgs),
+    /// Capture one probe's radiance SH and validity (JSON).
+    Capture(cmd::probes::CaptureArgs),
+    /// Ground-truth irradiance at points with normals (JSON).
+    Reference(cmd::probes::ReferenceArgs),
+    /// Irradiance from a baked cloud or volume at points with normals (JSON).
+    Query(cmd::probes::QueryArgs),
+    /// Summarise a probe file: probes, tetrahedra, basis, bytes per section.
+    Inspect(cmd::probes::InspectArgs),
     /// Radiance SH of an environment map, or a comparison of diffuse bases.
     Sh(cmd::sh::ShArgs),
     /// Bake an irradiance volume (uniform grid or adaptive octree).
@@ -35,6 +47,12 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Bake(args) => cmd::bake::run(&args),
+        Command::Merge(args) => cmd::bake::merge(&args),
+        Command::Capture(args) => cmd::probes::capture(&args),
+        Command::Reference(args) => cmd::probes::reference(&args),
+        Command::Query(args) => cmd::probes::query(&args),
+        Command::Inspect(args) => cmd::probes::inspect(&args),
         Command::Sh(args) => cmd::sh::run(&args),
         Command::Volume(args) => cmd::volume::run(&args),
         Command::Export(args) => cmd::export::run(&args),
