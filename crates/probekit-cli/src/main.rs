@@ -34,11 +34,13 @@ enum Command {
     Query(cmd::probes::QueryArgs),
     /// Summarise a probe file: probes, tetrahedra, basis, bytes per section.
     Inspect(cmd::probes::InspectArgs),
+    /// Re-encode a probe file's coefficients; reports size and irradiance error.
+    Convert(cmd::convert::ConvertArgs),
     /// Radiance SH of an environment map, or a comparison of diffuse bases.
     Sh(cmd::sh::ShArgs),
     /// Bake an irradiance volume (uniform grid or adaptive octree).
     Volume(cmd::volume::VolumeArgs),
-    /// Export a volume as KTX2 3D textures or a Bevy irradiance volume.
+    /// Export a volume (KTX2, Bevy) or a probe cloud (JSON, CSV).
     Export(cmd::export::ExportArgs),
     /// Fit an irradiance rig to a mesh among lights and compare it with the exact lighting.
     Rig(cmd::rig::RigArgs),
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Reference(args) => cmd::probes::reference(&args),
         Command::Query(args) => cmd::probes::query(&args),
         Command::Inspect(args) => cmd::probes::inspect(&args),
+        Command::Convert(args) => cmd::convert::run(&args),
         Command::Sh(args) => cmd::sh::run(&args),
         Command::Volume(args) => cmd::volume::run(&args),
         Command::Export(args) => cmd::export::run(&args),
