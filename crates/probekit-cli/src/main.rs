@@ -22,11 +22,25 @@ struct Cli {
 /// The subcommands; each lives in `src/cmd/<name>.rs`.
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Bake a probe cloud (grid or given positions; `--shard I/N` for one part).
+    Bake(cmd::bake::BakeArgs),
+    /// Join shard parts into the file a single-machine bake writes.
+    Merge(cmd::bake::MergeArgs),
+    /// Capture one probe's radiance SH and validity (JSON).
+    Capture(cmd::probes::CaptureArgs),
+    /// Ground-truth irradiance at points with normals (JSON).
+    Reference(cmd::probes::ReferenceArgs),
+    /// Irradiance from a baked cloud or volume at points with normals (JSON).
+    Query(cmd::probes::QueryArgs),
+    /// Summarise a probe file: probes, tetrahedra, basis, bytes per section.
+    Inspect(cmd::probes::InspectArgs),
+    /// Re-encode a probe file's coefficients; reports size and irradiance error.
+    Convert(cmd::convert::ConvertArgs),
     /// Radiance SH of an environment map, or a comparison of diffuse bases.
     Sh(cmd::sh::ShArgs),
     /// Bake an irradiance volume (uniform grid or adaptive octree).
     Volume(cmd::volume::VolumeArgs),
-    /// Export a volume as KTX2 3D textures or a Bevy irradiance volume.
+    /// Export a volume (KTX2, Bevy) or a probe cloud (JSON, CSV).
     Export(cmd::export::ExportArgs),
     /// Fit an irradiance rig to a mesh among lights and compare it with the exact lighting.
     Rig(cmd::rig::RigArgs),
@@ -35,6 +49,13 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Bake(args) => cmd::bake::run(&args),
+        Command::Merge(args) => cmd::bake::merge(&args),
+        Command::Capture(args) => cmd::probes::capture(&args),
+        Command::Reference(args) => cmd::probes::reference(&args),
+        Command::Query(args) => cmd::probes::query(&args),
+        Command::Inspect(args) => cmd::probes::inspect(&args),
+        Command::Convert(args) => cmd::convert::run(&args),
         Command::Sh(args) => cmd::sh::run(&args),
         Command::Volume(args) => cmd::volume::run(&args),
         Command::Export(args) => cmd::export::run(&args),

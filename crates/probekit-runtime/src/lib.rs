@@ -13,5 +13,6 @@ pub mod format;
 pub mod rig;
 pub mod volume;
 
+pub use cloud::{ProbeCloud, ProbeCloudError};
 pub use format::{FormatError, ProbeFile, ProbeFileKind};
 pub use volume::{Interp, Volume, VolumeError};

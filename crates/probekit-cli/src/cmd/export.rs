@@ -36,6 +36,9 @@ pub struct ExportArgs {
 pub fn run(a: &ExportArgs) -> Result<()> {
     let name = a.volume.display().to_string();
     let file = ProbeFile::load(&a.volume).with_context(|| name.clone())?;
+    if file.tetrahedra.is_some() {
+        return export_cloud(a, &file);
+    }
     let v = Volume::from_file(&file).with_context(|| name.clone())?;
     match a.format.as_str() {
         "ktx2" => {
@@ -73,5 +76,49 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         }
         o => bail!("{name}: --format {o}: expected ktx2 or bevy"),
     }
+    Ok(())
+}
+
+/// Clouds: `--format json` writes `{"probes":[{"position":[x,y,z],
+/// "sh":[[r,g,b],...]}],"tetrahedra":[[a,b,c,d],...]}`; `--format csv` a
+/// header `x,y,z,c0_r,c0_g,c0_b,...` and one row per probe (radiance SH).
+fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
+    let name = a.volume.display().to_string();
+    let coeffs = file.coefficients.to_f32().with_context(|| name.clone())?;
+    let n = file.coefficients.coeffs_per_probe();
+    let out = a.output.display().to_string();
+    let text = match a.format.as_str() {
+        "json" => {
+            let probes: Vec<serde_json::Value> = file
+                .positions
+                .iter()
+                .zip(coeffs.chunks(n))
+                .map(|(p, c)| {
+                    let sh: Vec<[f32; 3]> = c.iter().map(|v| v.to_array()).collect();
+                    serde_json::json!({ "position": p.to_array(), "sh": sh })
+                })
+                .collect();
+            let tets = file.tetrahedra.as_ref().map(|t| t.vertices.clone());
+            serde_json::json!({ "probes": probes, "tetrahedra": tets }).to_string()
+        }
+        "csv" => {
+            let mut s = String::from("x,y,z");
+            for k in 0..n {
+                s += &format!(",c{k}_r,c{k}_g,c{k}_b");
+            }
+            s.push('\n');
+            for (p, c) in file.positions.iter().zip(coeffs.chunks(n)) {
+                s += &format!("{},{},{}", p.x, p.y, p.z);
+                for v in c {
+                    s += &format!(",{},{},{}", v.x, v.y, v.z);
+                }
+                s.push('\n');
+            }
+            s
+        }
+        o => bail!("{name}: --format {o}: a probe cloud exports as json or csv"),
+    };
+    write_atomic(&a.output, text.as_bytes()).with_context(|| out.clone())?;
+    println!("{out}: {} probes", file.positions.len());
     Ok(())
 }

@@ -1,6 +1,10 @@
 //! One module per subcommand; each exposes `Args` (clap derive) and `run`.
 
+pub mod bake;
+pub mod convert;
 pub mod export;
+pub mod probes;
 pub mod rig;
 pub mod sh;
+pub mod util;
 pub mod volume;

@@ -28,6 +28,7 @@
 //! The result converts to the runtime's [`probekit_runtime::cloud::TetMesh`]
 //! with [`Tetrahedralization::to_tet_mesh`].
 
+pub mod file;
 pub mod predicates;
 
 use glam::Vec3;

@@ -1,0 +1,251 @@
+//! `probekit capture`, `reference`, `query` and `inspect`: one probe, ground
+//! truth, and questions to a baked file.
+
+use super::util::{load_probes, load_scene, parse_vec3, read_csv, rgb};
+use anyhow::{anyhow, bail, Context, Result};
+use clap::Args;
+use glam::Vec3;
+use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit_runtime::cloud::WalkState;
+use probekit_runtime::{Interp, ProbeCloud, Volume};
+use std::path::PathBuf;
+
+/// Arguments of `probekit capture`.
+#[derive(Debug, Args)]
+pub struct CaptureArgs {
+    /// Scene file or `builtin:demo`.
+    pub scene: String,
+    /// The point `x,y,z` (metres).
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: String,
+    /// SH bands.
+    #[arg(long)]
+    pub order: Option<usize>,
+    /// Receiver directions.
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Print JSON (the only output form).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `probekit capture`: `{"coefficients":[[r,g,b],...],"validity":{...}}`.
+pub fn capture(a: &CaptureArgs) -> Result<()> {
+    let scene = load_scene(&a.scene)?;
+    let p = parse_vec3(&a.at, "--at")?;
+    let mut s = CaptureSettings::from_scene(&scene);
+    if let Some(o) = a.order {
+        s.order = o;
+    }
+    if let Some(n) = a.samples {
+        s.samples = n;
+    }
+    let baker = Baker::new(&scene).with_context(|| a.scene.clone())?;
+    let r = baker.capture(p, 0, &s).with_context(|| a.scene.clone())?;
+    let v = &r.validity;
+    let coeffs: Vec<[f32; 3]> = r.sh.coeffs().iter().map(|&c| rgb(c)).collect();
+    println!(
+        "{}",
+        serde_json::json!({
+            "position": rgb(r.position),
+            "coefficients": coeffs,
+            "validity": {
+                "backface_fraction": v.backface_fraction,
+                "harmonic_mean_distance": v.harmonic_mean_distance,
+                "nearest_distance": v.nearest_distance,
+                "valid": v.valid,
+                "offset": rgb(v.offset),
+                "offset_applied": v.offset_applied,
+            }
+        })
+    );
+    Ok(())
+}
+
+/// Arguments of `probekit reference`.
+#[derive(Debug, Args)]
+pub struct ReferenceArgs {
+    /// Scene file or `builtin:demo`.
+    pub scene: String,
+    /// CSV rows `x,y,z,nx,ny,nz`.
+    #[arg(long)]
+    pub points: PathBuf,
+    /// Most samples per point (default: until 1 % precision, ≤ 262144).
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Print JSON (the only output form).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `probekit reference`: `{"irradiance":[[r,g,b],...]}` in row order.
+pub fn reference(a: &ReferenceArgs) -> Result<()> {
+    let scene = load_scene(&a.scene)?;
+    let rows = read_csv(&a.points, 6)?;
+    let mut s = ReferenceSettings::default();
+    if let Some(n) = a.samples {
+        if n == 0 {
+            bail!("--samples 0: expected at least 1");
+        }
+        s.max_samples = n;
+        s.min_samples = s.min_samples.min(n);
+    }
+    let baker = Baker::new(&scene).with_context(|| a.scene.clone())?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (i, r) in rows.iter().enumerate() {
+        let p = Vec3::new(r[0], r[1], r[2]);
+        let n = Vec3::new(r[3], r[4], r[5]);
+        if n.length_squared() < 1e-12 {
+            bail!("{}: row {}: zero normal", a.points.display(), i + 1);
+        }
+        let e = baker
+            .reference_irradiance(p, n.normalize(), i as u64, &s)
+            .with_context(|| format!("{}: row {}", a.points.display(), i + 1))?;
+        out.push(rgb(e.irradiance));
+    }
+    println!("{}", serde_json::json!({ "irradiance": out }));
+    Ok(())
+}
+
+/// Arguments of `probekit query`.
+#[derive(Debug, Args)]
+pub struct QueryArgs {
+    /// A cloud or volume `.probes` file.
+    pub probes: PathBuf,
+    /// One point `x,y,z`.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: Option<String>,
+    /// Its normal `x,y,z` (default `0,1,0`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub normal: Option<String>,
+    /// CSV rows `x,y,z,nx,ny,nz` instead of `--at`.
+    #[arg(long)]
+    pub points: Option<PathBuf>,
+    /// Volumes: trilinear (default), taylor or tricubic.
+    #[arg(long, default_value = "trilinear")]
+    pub interp: String,
+    /// Print JSON (the only output form).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Either kind of baked file, ready to query.
+enum Probes {
+    Cloud(ProbeCloud, WalkState),
+    Volume(Volume, Interp),
+}
+
+impl Probes {
+    fn irradiance(&mut self, p: Vec3, n: Vec3) -> Result<Vec3> {
+        match self {
+            Probes::Cloud(c, st) => Ok(c.irradiance(p, n, st)),
+            Probes::Volume(v, i) => Ok(v.irradiance(p, n, *i)?),
+        }
+    }
+}
+
+/// Runs `probekit query`: `{"irradiance":[r,g,b]}` for `--at`, or
+/// `{"irradiance":[[r,g,b],...]}` for `--points`.
+pub fn query(a: &QueryArgs) -> Result<()> {
+    let name = a.probes.display().to_string();
+    let file = load_probes(&a.probes)?;
+    let mut probes = if file.tetrahedra.is_some() {
+        Probes::Cloud(
+            ProbeCloud::from_file(&file).with_context(|| name.clone())?,
+            WalkState::new(),
+        )
+    } else {
+        let interp = match a.interp.as_str() {
+            "trilinear" => Interp::Trilinear,
+            "taylor" => Interp::Taylor,
+            "tricubic" => Interp::Tricubic,
+            o => bail!("--interp {o}: expected trilinear, taylor or tricubic"),
+        };
+        Probes::Volume(
+            Volume::from_file(&file).with_context(|| name.clone())?,
+            interp,
+        )
+    };
+    match (&a.at, &a.points) {
+        (Some(at), None) => {
+            let p = parse_vec3(at, "--at")?;
+            let n = parse_vec3(a.normal.as_deref().unwrap_or("0,1,0"), "--normal")?;
+            if n.length_squared() < 1e-12 {
+                bail!("--normal: zero vector");
+            }
+            let e = probes
+                .irradiance(p, n.normalize())
+                .with_context(|| name.clone())?;
+            println!("{}", serde_json::json!({ "irradiance": rgb(e) }));
+        }
+        (None, Some(csv)) => {
+            let rows = read_csv(csv, 6)?;
+            let mut out = Vec::with_capacity(rows.len());
+            for (i, r) in rows.iter().enumerate() {
+                let n = Vec3::new(r[3], r[4], r[5]);
+                if n.length_squared() < 1e-12 {
+                    bail!("{}: row {}: zero normal", csv.display(), i + 1);
+                }
+                let e = probes
+                    .irradiance(Vec3::new(r[0], r[1], r[2]), n.normalize())
+                    .with_context(|| name.clone())?;
+                out.push(rgb(e));
+            }
+            println!("{}", serde_json::json!({ "irradiance": out }));
+        }
+        _ => return Err(anyhow!("query needs exactly one of --at or --points")),
+    }
+    Ok(())
+}
+
+/// Arguments of `probekit inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// A `.probes` file.
+    pub probes: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra",
+/// "basis","invalid","bytes","bytes_by_section","placement","scene_hash"}`;
+/// volumes: [`probekit::volume::inspect_json`].
+pub fn inspect(a: &InspectArgs) -> Result<()> {
+    let name = a.probes.display().to_string();
+    let file = load_probes(&a.probes)?;
+    let j = if file.tetrahedra.is_none() && (file.grid.is_some() || file.octree.is_some()) {
+        probekit::volume::inspect_json(&file).with_context(|| name.clone())?
+    } else {
+        let by = file.bytes_by_section().with_context(|| name.clone())?;
+        let bytes: u64 = by.values().sum();
+        let meta = probekit::format::BakeMetadata::from_json(&file.metadata);
+        let part: Option<serde_json::Value> =
+            serde_json::from_str::<serde_json::Value>(&file.metadata)
+                .ok()
+                .and_then(|v| v.get("part").cloned());
+        let invalid = file.validity.as_ref().map_or(0, |v| {
+            v.iter()
+                .filter(|x| x.flags & probekit::format::layout::VALIDITY_INVALID != 0)
+                .count()
+        });
+        serde_json::json!({
+            "kind": if part.is_some() { "cloud-part" } else { "cloud" },
+            "probes": file.positions.len(),
+            "tetrahedra": file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
+            "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
+            "invalid": invalid,
+            "bytes": bytes,
+            "bytes_by_section": by,
+            "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
+            "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),
+            "part": part,
+        })
+    };
+    if a.json {
+        println!("{j}");
+    } else {
+        println!("{name}: {}", serde_json::to_string_pretty(&j)?);
+    }
+    Ok(())
+}

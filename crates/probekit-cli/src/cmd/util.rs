@@ -1,0 +1,72 @@
+//! Helpers shared by the probe commands: CSV rows, `x,y,z` arguments,
+//! loading scenes and probe files with one-line errors.
+
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use probekit::format::ProbeFile;
+use probekit::scene::Scene;
+use std::path::Path;
+
+/// Reads a CSV of `cols` finite numbers per row (header line optional,
+/// blank lines and `#` comments skipped). Errors name the file and line.
+pub fn read_csv(path: &Path, cols: usize) -> Result<Vec<Vec<f32>>> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path).with_context(|| format!("{name}"))?;
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed: Result<Vec<f32>, _> = fields.iter().map(|f| f.parse::<f32>()).collect();
+        let row = match parsed {
+            Ok(r) => r,
+            Err(_) if rows.is_empty() && i == 0 => continue, // header
+            Err(_) => bail!("{name}: line {}: expected {cols} numbers", i + 1),
+        };
+        if row.len() != cols {
+            bail!(
+                "{name}: line {}: expected {cols} numbers, found {}",
+                i + 1,
+                row.len()
+            );
+        }
+        if row.iter().any(|v| !v.is_finite()) {
+            bail!("{name}: line {}: NaN or infinite value", i + 1);
+        }
+        rows.push(row);
+    }
+    if rows.is_empty() {
+        bail!("{name}: no rows");
+    }
+    Ok(rows)
+}
+
+/// Parses `x,y,z` (finite).
+pub fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
+    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
+    match v {
+        Ok(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => Ok(Vec3::new(v[0], v[1], v[2])),
+        _ => bail!("{what} {s}: expected three finite numbers x,y,z"),
+    }
+}
+
+/// Loads a scene (path or `builtin:demo`), printing its warnings to stderr.
+pub fn load_scene(name: &str) -> Result<Scene> {
+    let scene = Scene::load(name).with_context(|| name.to_string())?;
+    for w in &scene.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    Ok(scene)
+}
+
+/// Loads a `.probes` file.
+pub fn load_probes(path: &Path) -> Result<ProbeFile> {
+    ProbeFile::load(path).with_context(|| path.display().to_string())
+}
+
+/// `[r, g, b]` for JSON.
+pub fn rgb(v: Vec3) -> [f32; 3] {
+    v.to_array()
+}

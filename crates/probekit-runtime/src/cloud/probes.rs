@@ -1,0 +1,227 @@
+//! [`ProbeCloud`]: a loaded probe cloud answering "radiance SH / irradiance
+//! at this point" by blending the four probes of the enclosing tetrahedron
+//! with their barycentric weights (seed 003, after Cupisz, GDC 2012), or the
+//! closest hull triangle's probes outside the hull (see [`super`]).
+
+use super::{CloudError, TetMesh, WalkState};
+use crate::format::{FormatError, ProbeFile};
+use glam::Vec3;
+use thiserror::Error;
+
+/// Why a [`ProbeCloud`] cannot be built from a file.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ProbeCloudError {
+    /// The file has no `TETS` section (e.g. a volume, or a shard part).
+    #[error("the file has no tetrahedra (not a probe cloud, or an unmerged shard part)")]
+    NoTetrahedra,
+    /// The coefficients could not be decoded.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// The tetrahedra are invalid.
+    #[error(transparent)]
+    Cloud(#[from] CloudError),
+}
+
+/// Probe positions, tetrahedra and decoded radiance SH (linear RGB, f32).
+#[derive(Debug, Clone)]
+pub struct ProbeCloud {
+    mesh: TetMesh,
+    coeffs: Vec<Vec3>,
+    order: u32,
+}
+
+impl ProbeCloud {
+    /// Builds a cloud from a loaded file: its positions, its `TETS` vertices
+    /// and neighbours (via [`TetMesh::new`], which validates them) and its
+    /// coefficients decoded to f32 (`order²` per probe).
+    pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
+        let tets = file
+            .tetrahedra
+            .as_ref()
+            .ok_or(ProbeCloudError::NoTetrahedra)?;
+        let mesh = TetMesh::new(
+            file.positions.clone(),
+            tets.vertices.clone(),
+            tets.neighbours.clone(),
+        )?;
+        Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)
+    }
+
+    /// Builds a cloud from a mesh and `order²` radiance SH coefficients per
+    /// probe of the mesh.
+    pub fn new(mesh: TetMesh, order: u32, coeffs: Vec<Vec3>) -> Result<Self, ProbeCloudError> {
+        let n = (order * order) as usize;
+        if order == 0 || coeffs.len() != n * mesh.positions().len() {
+            return Err(FormatError::Unrepresentable(
+                "coefficient count does not match probes × order²",
+            )
+            .into());
+        }
+        Ok(Self {
+            mesh,
+            coeffs,
+            order,
+        })
+    }
+
+    /// The tetrahedral mesh.
+    pub fn mesh(&self) -> &TetMesh {
+        &self.mesh
+    }
+
+    /// SH bands per probe.
+    pub fn order(&self) -> u32 {
+        self.order
+    }
+
+    /// Coefficients per probe (`order²`).
+    pub fn coeffs_per_probe(&self) -> usize {
+        (self.order * self.order) as usize
+    }
+
+    /// Number of probes.
+    pub fn probe_count(&self) -> usize {
+        self.mesh.positions().len()
+    }
+
+    /// The radiance SH of probe `i` (`order²` coefficients).
+    pub fn probe_sh(&self, i: usize) -> &[Vec3] {
+        let n = self.coeffs_per_probe();
+        &self.coeffs[i * n..(i + 1) * n]
+    }
+
+    /// Interpolated radiance SH at `p` into `out` (its first
+    /// `min(out.len(), order²)` coefficients): the barycentric blend of
+    /// [`TetMesh::weights_at`]. No allocation.
+    pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
+        let n = self.coeffs_per_probe();
+        let m = out.len().min(n);
+        out.iter_mut().for_each(|c| *c = Vec3::ZERO);
+        let (probes, weights) = self.mesh.weights_at(p, state);
+        for (&i, &w) in probes.iter().zip(&weights) {
+            if w == 0.0 {
+                continue;
+            }
+            let src = &self.coeffs[i as usize * n..i as usize * n + m];
+            for (o, c) in out[..m].iter_mut().zip(src) {
+                *o += *c * w;
+            }
+        }
+    }
+
+    /// Irradiance `E(n)` (not divided by π) at `p` for unit normal `n`: the
+    /// clamped-cosine convolution ([`probekit_sh::irradiance`]) of the
+    /// blended radiance SH. No allocation.
+    pub fn irradiance(&self, p: Vec3, n: Vec3, state: &mut WalkState) -> Vec3 {
+        let mut buf = [Vec3::ZERO; probekit_sh::MAX_COEFFS];
+        let k = self.coeffs_per_probe();
+        self.sh_at(p, state, &mut buf[..k]);
+        probekit_sh::irradiance(&buf[..k], n)
+    }
+
+    /// [`Self::irradiance`] for many `(point, normal)` pairs; `out` is cleared
+    /// and refilled (allocates only to grow).
+    pub fn irradiance_many(
+        &self,
+        points: &[Vec3],
+        normals: &[Vec3],
+        state: &mut WalkState,
+        out: &mut Vec<Vec3>,
+    ) {
+        out.clear();
+        out.extend(
+            points
+                .iter()
+                .zip(normals)
+                .map(|(&p, &n)| self.irradiance(p, n, state)),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::HULL;
+
+    /// Radiance SH that varies linearly with position: c_k(p) = a_k + B_k·p.
+    fn field(p: Vec3, k: usize) -> Vec3 {
+        let k = k as f32;
+        Vec3::new(
+            0.5 + 0.1 * k + p.x - 0.3 * p.y,
+            1.0 - 0.2 * k + 0.7 * p.z,
+            0.25 * k + p.x + p.y + p.z,
+        )
+    }
+
+    /// Two tetrahedra sharing the face (1, 2, 3).
+    fn cloud() -> ProbeCloud {
+        let pos = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z, Vec3::splat(1.0)];
+        let tets = vec![[0, 1, 2, 3], [4, 3, 2, 1]];
+        let neighbors = vec![[1, HULL, HULL, HULL], [0, HULL, HULL, HULL]];
+        let mesh = TetMesh::new(pos.clone(), tets, neighbors).unwrap();
+        let coeffs: Vec<Vec3> = pos
+            .iter()
+            .flat_map(|&p| (0..9).map(move |k| field(p, k)))
+            .collect();
+        ProbeCloud::new(mesh, 3, coeffs).unwrap()
+    }
+
+    #[test]
+    fn reproduces_a_linear_field_inside() {
+        let c = cloud();
+        let mut st = WalkState::new();
+        let mut out = [Vec3::ZERO; 9];
+        for p in [
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(0.6, 0.6, 0.5),
+            Vec3::new(0.25, 0.25, 0.25),
+        ] {
+            c.sh_at(p, &mut st, &mut out);
+            for (k, o) in out.iter().enumerate() {
+                assert!((*o - field(p, k)).abs().max_element() < 1e-5, "{p} {k}");
+            }
+            // Irradiance against a direct cosine-weighted sum over the sphere
+            // of the exact field's SH (independent quadrature).
+            let n = Vec3::new(0.3, 0.8, -0.52).normalize();
+            let exact: Vec<Vec3> = (0..9).map(|k| field(p, k)).collect();
+            let mut e = Vec3::ZERO;
+            let m = 20_000;
+            for i in 0..m {
+                let d = probekit_sh::fibonacci_point(i, m);
+                let cos = n.dot(d).max(0.0);
+                e += probekit_sh::convolve::eval_sh(&exact, d) * cos;
+            }
+            e *= 4.0 * std::f32::consts::PI / m as f32;
+            let got = c.irradiance(p, n, &mut st);
+            assert!((got - e).abs().max_element() < 2e-2 * e.abs().max_element().max(1.0));
+        }
+    }
+
+    #[test]
+    fn outside_points_get_hull_values() {
+        let c = cloud();
+        let mut st = WalkState::new();
+        let mut out = [Vec3::ZERO; 9];
+        // Below the face z = 0: the closest hull point is (0.2, 0.3, 0).
+        c.sh_at(Vec3::new(0.2, 0.3, -2.0), &mut st, &mut out);
+        let q = Vec3::new(0.2, 0.3, 0.0);
+        for (k, o) in out.iter().enumerate() {
+            assert!((*o - field(q, k)).abs().max_element() < 1e-5);
+        }
+        // Far beyond vertex 0 along (-1,-1,-1): the vertex itself.
+        c.sh_at(Vec3::splat(-5.0), &mut st, &mut out);
+        for (k, o) in out.iter().enumerate() {
+            assert!((*o - field(Vec3::ZERO, k)).abs().max_element() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn files_without_tetrahedra_are_refused() {
+        let f = ProbeFile::cloud(vec![Vec3::ZERO], 1, &[Vec3::ONE]).unwrap();
+        assert!(matches!(
+            ProbeCloud::from_file(&f),
+            Err(ProbeCloudError::NoTetrahedra)
+        ));
+    }
+}
