@@ -1,5 +1,6 @@
 use super::eval::*;
 use super::*;
+use crate::bake::ReferenceSettings;
 use crate::scene::Scene;
 
 fn fast_settings() -> CaptureSettings {
@@ -144,4 +145,66 @@ fn metrics_match_hand_computation() {
     assert!((m.rel_rmse - (192.0f32 / 15.0).sqrt()).abs() < 1e-5);
     assert_eq!(m.leaks, 1);
     assert_eq!(m.points, 2);
+}
+
+/// Error of a cloud at `positions` captured with `s`, on fixed eval points.
+fn cloud_error(
+    baker: &Baker,
+    positions: &[Vec3],
+    s: &CaptureSettings,
+    pts: &[EvalPoint],
+    truth: &[Vec3],
+) -> Metrics {
+    let sh: Vec<ShRgb> = baker
+        .capture_many(positions, 0, s, &|_, _| {})
+        .unwrap()
+        .into_iter()
+        .map(|r| r.sh)
+        .collect();
+    let mesh = tetrahedralize(positions)
+        .unwrap()
+        .to_tet_mesh(positions)
+        .unwrap();
+    let pred = interpolate_cloud(&mesh, &sh, pts);
+    metrics(&pred, truth, mean_luminance(truth))
+}
+
+#[test]
+#[ignore = "fails today: adaptive (105 probes) rel_rmse 2.68 vs grid (95) 0.73; see docs/bench/placement.md"]
+fn adaptive_beats_grid_at_equal_probe_count() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let s = CaptureSettings {
+        samples: 128,
+        bounces: 1,
+        ..Default::default()
+    };
+    let m = PlacementMethod::Adaptive {
+        budget: 96,
+        tolerance: 0.0,
+    };
+    let a = place(&baker, scene.bake_box(), &m, &s, &|_, _, _| {}).unwrap();
+    let g = grid_points(&scene.bake_box(), None, Some(a.positions.len())).unwrap();
+    let g: Vec<Vec3> = g
+        .into_iter()
+        .filter(|p| !inside_geometry(baker.tracer(), *p))
+        .collect();
+    let pts = sample_points(baker.tracer(), &scene.bake_box(), 150, 7);
+    let rs = ReferenceSettings {
+        relative_precision: 0.05,
+        min_samples: 256,
+        max_samples: 2048,
+        bounces: 1,
+        ..Default::default()
+    };
+    let truth = reference(&baker, &pts, &rs).unwrap();
+    let ea = cloud_error(&baker, &a.positions, &s, &pts, &truth);
+    let eg = cloud_error(&baker, &g, &s, &pts, &truth);
+    eprintln!(
+        "adaptive {} probes {ea:?}; grid {} probes {eg:?}",
+        a.positions.len(),
+        g.len()
+    );
+    assert!(g.len() >= a.positions.len() * 8 / 10);
+    assert!(ea.rel_rmse < eg.rel_rmse, "adaptive {ea:?} grid {eg:?}");
 }
