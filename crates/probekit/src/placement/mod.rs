@@ -554,9 +554,12 @@ fn adaptive(
         let n = st.positions.len();
         let batch = (budget - n).min((n / 4).max(4));
         let tri = tetrahedralize(&st.positions)?;
-        let mesh: TetMesh = tri
-            .to_tet_mesh(&st.positions)
-            .map_err(|e| PlacementError::BadParameter(e.to_string()))?;
+        // The f32 runtime mesh may reject a sliver the exact tetrahedralization
+        // keeps; then refinement stops with what it has.
+        let mesh: TetMesh = match tri.to_tet_mesh(&st.positions) {
+            Ok(m) => m,
+            Err(_) => break,
+        };
         // Candidates: centroids of the largest tets and of the highest-contrast
         // tets, plus jittered points.
         let lum_e: Vec<f32> = st
