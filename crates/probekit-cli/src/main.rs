@@ -44,6 +44,8 @@ enum Command {
     Export(cmd::export::ExportArgs),
     /// Fit an irradiance rig to a mesh among lights and compare it with the exact lighting.
     Rig(cmd::rig::RigArgs),
+    /// Error of a probe cloud against path-traced ground truth.
+    Eval(cmd::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -60,6 +62,7 @@ fn main() -> ExitCode {
         Command::Volume(args) => cmd::volume::run(&args),
         Command::Export(args) => cmd::export::run(&args),
         Command::Rig(args) => cmd::rig::run(args),
+        Command::Eval(args) => cmd::eval::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -33,9 +33,15 @@ pub struct BakeArgs {
     /// Scene file (`.toml`, `.gltf`, `.glb`, `.obj`) or `builtin:demo`.
     #[arg(default_value = "builtin:demo")]
     pub scene: String,
-    /// `grid` (default) or `manual` (= `--positions`).
+    /// `grid` (default), `manual` (= `--positions`) or `adaptive` (`--budget`, `--tolerance`).
     #[arg(long)]
     pub placement: Option<String>,
+    /// Adaptive placement: probe budget.
+    #[arg(long, default_value_t = 256)]
+    pub budget: usize,
+    /// Adaptive placement: stop when the mean relative disagreement is below this.
+    #[arg(long, default_value_t = 0.02)]
+    pub tolerance: f32,
     /// CSV of probe positions `x,y,z` (header optional).
     #[arg(long)]
     pub positions: Option<PathBuf>,
@@ -157,10 +163,37 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         (Some("manual"), None) => bail!("--placement manual needs --positions FILE.csv"),
         (Some("grid") | None, None) => "grid",
         (Some("grid"), Some(_)) => bail!("--placement grid and --positions exclude each other"),
-        // Hook: further placement methods (probekit::placement) plug in here.
-        (Some(o), _) => bail!("--placement {o}: expected grid or manual"),
+        (Some("adaptive"), None) => "adaptive",
+        (Some("adaptive"), Some(_)) => {
+            bail!("--placement adaptive and --positions exclude each other")
+        }
+        (Some(o), _) => bail!("--placement {o}: expected grid, manual or adaptive"),
     };
-    let (points, parameters) = if let Some(p) = &a.positions {
+    let (points, parameters) = if method == "adaptive" {
+        let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
+        let settings = CaptureSettings::from_scene(&scene);
+        let pb = ProgressBar::new(a.budget as u64);
+        let placed = probekit::placement::place(
+            &baker,
+            scene.bake_box(),
+            &probekit::placement::PlacementMethod::Adaptive {
+                budget: a.budget,
+                tolerance: a.tolerance,
+            },
+            &settings,
+            &|_, done, total| {
+                pb.set_length(total as u64);
+                pb.set_position(done as u64)
+            },
+        )
+        .with_context(|| format!("{}: adaptive placement", a.scene))?;
+        pb.finish_and_clear();
+        let n = placed.positions.len();
+        (
+            placed.positions,
+            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "count": n }),
+        )
+    } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;
         let pts: Vec<Vec3> = rows.iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect();
         let n = pts.len();

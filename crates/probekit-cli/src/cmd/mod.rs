@@ -2,6 +2,7 @@
 
 pub mod bake;
 pub mod convert;
+pub mod eval;
 pub mod export;
 pub mod probes;
 pub mod rig;

@@ -1,0 +1,176 @@
+//! # Evaluating probe sets against path-traced ground truth
+//!
+//! Sample points in free space of a bake box (not inside geometry, not within
+//! 1 cm of a surface) with random unit normals, compute reference irradiance
+//! with [`Baker::reference_irradiance`], and compare an interpolation.
+//!
+//! Metrics (RGB irradiance `E`, not divided by π):
+//! * `rel_rmse = sqrt(mean |E_pred − E_true|²) / sqrt(mean |E_true|²)` (normalised RMSE);
+//! * `p95_rel_error`: 95th percentile of `|E_pred − E_true| / (|E_true| + 0.01·mean|E_true|)`;
+//! * `leaks`: points whose interpolated luminance exceeds 4× the true
+//!   luminance plus 1 % of the mean true luminance (issue 5).
+
+use super::inside_geometry;
+use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
+use crate::bake::{BakeError, Baker, ReferenceSettings};
+use crate::scene::Aabb;
+use crate::trace::{Ray, Tracer};
+use glam::{Vec2, Vec3};
+use probekit_runtime::cloud::{TetMesh, WalkState};
+use probekit_sh::ShRgb;
+
+/// Minimum distance of an evaluation point from any surface, metres.
+pub const SURFACE_CLEARANCE: f32 = 0.01;
+
+/// One evaluation point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EvalPoint {
+    /// Position, metres.
+    pub position: Vec3,
+    /// Unit normal of the receiver.
+    pub normal: Vec3,
+}
+
+/// `n` deterministic points (seeded) in free space of `b`: rejected when
+/// inside geometry ([`inside_geometry`]) or when any of 26 rays of length
+/// [`SURFACE_CLEARANCE`] hits a surface. Gives up after `200·n` tries.
+pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<EvalPoint> {
+    let mut dirs = Vec::new();
+    for x in -1i32..=1 {
+        for y in -1i32..=1 {
+            for z in -1i32..=1 {
+                if (x, y, z) != (0, 0, 0) {
+                    dirs.push(Vec3::new(x as f32, y as f32, z as f32).normalize());
+                }
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(n);
+    let size = b.size();
+    let mut tries = 0u64;
+    while out.len() < n && tries < 200 * n as u64 + 1000 {
+        let mut rng = SampleRng::new(seed, 0x4556_414c, tries);
+        tries += 1;
+        let p = b.min + Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * size;
+        let normal = sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32()));
+        if dirs.iter().any(|d| {
+            tracer
+                .closest_hit(&Ray::new(p, *d), SURFACE_CLEARANCE)
+                .is_some()
+        }) {
+            continue;
+        }
+        if inside_geometry(tracer, p) {
+            continue;
+        }
+        out.push(EvalPoint {
+            position: p,
+            normal,
+        });
+    }
+    out
+}
+
+/// Reference irradiance at each point (index = row number).
+pub fn reference(
+    baker: &Baker,
+    points: &[EvalPoint],
+    s: &ReferenceSettings,
+) -> Result<Vec<Vec3>, BakeError> {
+    points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            Ok(baker
+                .reference_irradiance(p.position, p.normal, i as u64, s)?
+                .irradiance)
+        })
+        .collect()
+}
+
+/// Error figures of a prediction against ground truth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Metrics {
+    /// Points evaluated.
+    pub points: usize,
+    /// Normalised RMSE (see the module docs).
+    pub rel_rmse: f32,
+    /// 95th percentile of the per-point relative error.
+    pub p95_rel_error: f32,
+    /// Leak count.
+    pub leaks: usize,
+}
+
+fn lum(v: Vec3) -> f32 {
+    0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z
+}
+
+/// Metrics of `pred` against `truth`; `mean_truth_lum` is the mean true
+/// luminance over all evaluated points (the leak floor uses it, also for a
+/// region's subset).
+pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
+    let n = pred.len().min(truth.len());
+    if n == 0 {
+        return Metrics {
+            points: 0,
+            rel_rmse: 0.0,
+            p95_rel_error: 0.0,
+            leaks: 0,
+        };
+    }
+    let mean_abs = truth[..n].iter().map(|t| t.length() as f64).sum::<f64>() / n as f64;
+    let (mut se, mut st) = (0.0f64, 0.0f64);
+    let mut rel = Vec::with_capacity(n);
+    let mut leaks = 0;
+    for (p, t) in pred.iter().zip(truth).take(n) {
+        se += (*p - *t).length_squared() as f64;
+        st += t.length_squared() as f64;
+        rel.push((*p - *t).length() / (t.length() + 0.01 * mean_abs as f32).max(1e-12));
+        if lum(*p) > 4.0 * lum(*t) + 0.01 * mean_truth_lum {
+            leaks += 1;
+        }
+    }
+    rel.sort_by(f32::total_cmp);
+    let k = ((0.95 * n as f32).ceil() as usize).clamp(1, n) - 1;
+    Metrics {
+        points: n,
+        rel_rmse: if st > 0.0 {
+            (se / st).sqrt() as f32
+        } else {
+            0.0
+        },
+        p95_rel_error: rel[k],
+        leaks,
+    }
+}
+
+/// Mean luminance of `truth`.
+pub fn mean_luminance(truth: &[Vec3]) -> f32 {
+    if truth.is_empty() {
+        0.0
+    } else {
+        truth.iter().map(|t| lum(*t)).sum::<f32>() / truth.len() as f32
+    }
+}
+
+/// Interpolated irradiance of a probe cloud (radiance SH per probe, blended
+/// with the mesh's barycentric weights, then convolved) at each point.
+pub fn interpolate_cloud(mesh: &TetMesh, sh: &[ShRgb], points: &[EvalPoint]) -> Vec<Vec3> {
+    let mut ws = WalkState::new();
+    let order = sh.first().map_or(1, |s| s.order());
+    points
+        .iter()
+        .map(|p| {
+            let (idx, w) = mesh.weights_at(p.position, &mut ws);
+            let mut acc = ShRgb::zeros(order);
+            for k in 0..4 {
+                if w[k] != 0.0 {
+                    if let Some(s) = sh.get(idx[k] as usize) {
+                        acc.add_scaled(s, w[k]);
+                    }
+                }
+            }
+            acc.irradiance(p.normal)
+        })
+        .collect()
+}

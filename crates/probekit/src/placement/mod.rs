@@ -1,0 +1,661 @@
+//! # Probe placement
+//!
+//! Where to put the probes of a cloud: a uniform `grid`, `manual` positions, or
+//! `adaptive` (ours, the default): start from a coarse grid, then repeatedly
+//! capture candidate points and insert those where the barycentric
+//! interpolation of the current probes disagrees most with the captured
+//! lighting, until a probe budget or a relative-error tolerance is met.
+//!
+//! Every method ends with **leak prevention** after seed 003 (Cupisz, "Light
+//! probe interpolation using tetrahedral tessellations", GDC 2012, and the
+//! placement paper summarised in `shared/seeds/003_*`): every tetrahedron edge
+//! is ray-traced in both directions; where it crosses geometry, a probe is
+//! inserted on each side near the hit, offset along the surface normal by a
+//! fraction of the edge length (hits nearly parallel to the surface are
+//! skipped, new probes keep a minimum distance from existing ones), and the
+//! points are re-tetrahedralized; this repeats a few times. Interpolation
+//! across a wall is then confined to a thin band around it.
+//!
+//! No placed probe is inside geometry: candidates are rejected by a
+//! first-hit back-face vote ([`inside_geometry`]), and captures whose
+//! validity says invalid are dropped.
+
+pub mod eval;
+
+use crate::bake::sampling::SampleRng;
+use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::cloud::{tetrahedralize, DelaunayError};
+use crate::scene::Aabb;
+use crate::trace::{Ray, Tracer};
+use glam::Vec3;
+use probekit_runtime::cloud::{TetMesh, WalkState};
+use probekit_sh::ShRgb;
+use std::collections::BTreeSet;
+use thiserror::Error;
+
+/// Receiver samples per probe used while placing (captures are reused by the
+/// bake when its own sample count is not larger).
+pub const PLACEMENT_SAMPLES: u32 = 256;
+
+/// How to place probes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlacementMethod {
+    /// Uniform grid over the bake box: cell size in metres, or about `budget`
+    /// probes (one of them; cell wins when both are given). Cell centres are
+    /// used, so no probe lies on the box faces.
+    Grid {
+        /// Cell edge length, metres.
+        cell: Option<f32>,
+        /// Approximate number of probes.
+        budget: Option<usize>,
+    },
+    /// Given positions (metres), kept as they are except those inside geometry.
+    Manual(Vec<Vec3>),
+    /// Error-driven refinement (see the module docs).
+    Adaptive {
+        /// Probe count to stop at (leak-prevention probes of the last pass may
+        /// exceed it by a few percent).
+        budget: usize,
+        /// Stop when the mean relative irradiance error at the candidates of a
+        /// round falls below this (e.g. 0.05).
+        tolerance: f32,
+    },
+    /// Seed 003's spawn-merge placement (not implemented yet).
+    SpawnMerge {
+        /// Contrast threshold.
+        contrast: f32,
+        /// Minimum probe distance, metres.
+        min_distance: f32,
+    },
+    /// Seed 003's gradient-ascent placement (not implemented yet).
+    GradientAscent {
+        /// Number of probes.
+        budget: usize,
+        /// Use indirect light only for the gradient field.
+        indirect_only: bool,
+    },
+}
+
+impl PlacementMethod {
+    /// Short name as used on the command line (`grid`, `manual`, `adaptive`, ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            PlacementMethod::Grid { .. } => "grid",
+            PlacementMethod::Manual(_) => "manual",
+            PlacementMethod::Adaptive { .. } => "adaptive",
+            PlacementMethod::SpawnMerge { .. } => "spawn-merge",
+            PlacementMethod::GradientAscent { .. } => "gradient-ascent",
+        }
+    }
+}
+
+/// Why placement failed.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum PlacementError {
+    /// The method exists in the interface but has no implementation yet.
+    #[error("placement method `{0}` is not implemented yet")]
+    NotImplemented(&'static str),
+    /// A parameter is out of range.
+    #[error("bad placement parameter: {0}")]
+    BadParameter(String),
+    /// Capturing failed.
+    #[error(transparent)]
+    Bake(#[from] BakeError),
+    /// The probes could not be tetrahedralized (e.g. fewer than 4, co-planar).
+    #[error(transparent)]
+    Delaunay(#[from] DelaunayError),
+}
+
+/// What placement did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlacementStats {
+    /// Method name.
+    pub method: String,
+    /// Refinement rounds run (adaptive).
+    pub rounds: u32,
+    /// Probes captured during placement, candidates included.
+    pub captures: usize,
+    /// Candidate points rejected as inside geometry or invalid.
+    pub rejected_inside: usize,
+    /// Probes inserted by leak prevention.
+    pub leak_probes: usize,
+    /// Crossing extent before leak prevention (see [`crossing_extent`]), metres.
+    pub crossing_before: f32,
+    /// Crossing extent after leak prevention, metres.
+    pub crossing_after: f32,
+    /// Mean relative error at the last round's candidates (adaptive).
+    pub last_mean_error: Option<f32>,
+}
+
+/// Result of [`place`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placement {
+    /// Probe positions, metres.
+    pub positions: Vec<Vec3>,
+    /// Radiance SH captured during placement at [`PLACEMENT_SAMPLES`] (or the
+    /// settings' count if lower), one per position; `Some` only when the
+    /// settings' sample count is not above what placement used, so the bake
+    /// can reuse them.
+    pub captured: Option<Vec<ShRgb>>,
+    /// What happened.
+    pub stats: PlacementStats,
+}
+
+/// Leak-prevention parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeakSettings {
+    /// Passes of trace–insert–retetrahedralize.
+    pub iterations: u32,
+    /// Offset of an inserted probe from the hit, as a fraction of the edge length.
+    pub offset_fraction: f32,
+    /// Offset bounds, metres.
+    pub min_offset: f32,
+    /// Largest offset, metres.
+    pub max_offset: f32,
+    /// Hits with `|cos(edge, normal)|` below this are skipped (surface-parallel).
+    pub min_cos: f32,
+    /// No new probe closer than this fraction of the offset to another probe.
+    pub min_distance_fraction: f32,
+}
+
+impl Default for LeakSettings {
+    fn default() -> Self {
+        Self {
+            iterations: 2,
+            offset_fraction: 0.1,
+            min_offset: 0.05,
+            max_offset: 0.4,
+            min_cos: 0.2,
+            min_distance_fraction: 0.8,
+        }
+    }
+}
+
+/// True when `p` is inside closed geometry: of 7 fixed, well-spread rays, a
+/// majority first hit a back face (the scenes' meshes are closed and
+/// outward-facing). A ray that hits nothing votes "outside".
+pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
+    const DIRS: [[f32; 3]; 7] = [
+        [0.577, 0.577, 0.577],
+        [-0.577, 0.577, -0.577],
+        [0.577, -0.577, -0.577],
+        [-0.577, -0.577, 0.577],
+        [0.267, 0.802, -0.535],
+        [-0.802, 0.267, 0.535],
+        [0.535, -0.267, 0.802],
+    ];
+    let mut back = 0;
+    for d in DIRS {
+        let ray = Ray::new(p, Vec3::from(d).normalize());
+        if let Some(h) = tracer.closest_hit(&ray, f32::INFINITY) {
+            if !h.front_face {
+                back += 1;
+            }
+        }
+    }
+    back * 2 > DIRS.len()
+}
+
+/// Cell-centred uniform grid over `b`: cell size `cell`, or about `budget`
+/// points. At least 2 points per axis.
+pub fn grid_points(
+    b: &Aabb,
+    cell: Option<f32>,
+    budget: Option<usize>,
+) -> Result<Vec<Vec3>, PlacementError> {
+    let size = b.size();
+    if b.is_empty() || !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0) || !size.is_finite() {
+        return Err(PlacementError::BadParameter("bake box is empty".into()));
+    }
+    let cell = match (cell, budget) {
+        (Some(c), _) if c.is_finite() && c > 0.0 => c,
+        (Some(c), _) => {
+            return Err(PlacementError::BadParameter(format!(
+                "grid cell {c} must be > 0"
+            )))
+        }
+        (None, Some(n)) if n >= 8 => (size.x * size.y * size.z / n as f32).cbrt(),
+        (None, Some(n)) => {
+            return Err(PlacementError::BadParameter(format!(
+                "grid budget {n} must be ≥ 8"
+            )))
+        }
+        (None, None) => {
+            return Err(PlacementError::BadParameter(
+                "grid needs a cell size or a budget".into(),
+            ))
+        }
+    };
+    let dims = (size / cell)
+        .round()
+        .max(Vec3::splat(2.0))
+        .min(Vec3::splat(1024.0));
+    let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
+    let mut out = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let f = Vec3::new(
+                    (i as f32 + 0.5) / nx as f32,
+                    (j as f32 + 0.5) / ny as f32,
+                    (k as f32 + 0.5) / nz as f32,
+                );
+                out.push(b.min + f * size);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Unique edges of tetrahedra, as sorted index pairs in increasing order.
+pub fn tet_edges(tets: &[[u32; 4]]) -> Vec<(u32, u32)> {
+    let mut set = BTreeSet::new();
+    for t in tets {
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let (a, b) = (t[i].min(t[j]), t[i].max(t[j]));
+                set.insert((a, b));
+            }
+        }
+    }
+    set.into_iter().collect()
+}
+
+/// Number of tetrahedron edges of the Delaunay tetrahedralization of
+/// `points` that cross geometry, and their crossing extent: for each such
+/// edge, the free length on both sides over which interpolation spans the
+/// surface (distance from each end point to the first surface seen from it),
+/// summed, in metres. Leak prevention shrinks the extent.
+pub fn crossing_extent(tracer: &Tracer, points: &[Vec3]) -> Result<(usize, f32), PlacementError> {
+    let tri = tetrahedralize(points)?;
+    let mut count = 0;
+    let mut extent = 0.0f64;
+    for (a, b) in tet_edges(&tri.tets) {
+        let (pa, pb) = (points[a as usize], points[b as usize]);
+        let d = pb - pa;
+        let len = d.length();
+        if len <= 0.0 {
+            continue;
+        }
+        let dir = d / len;
+        if let Some(h) = tracer.closest_hit(&Ray::new(pa, dir), len) {
+            count += 1;
+            let back = tracer
+                .closest_hit(&Ray::new(pb, -dir), len)
+                .map_or(len - h.t, |h2| h2.t);
+            extent += (h.t + back) as f64;
+        }
+    }
+    Ok((count, extent as f32))
+}
+
+/// Probes so far: positions, captured SH, and the next capture index.
+struct State<'a, 'b> {
+    baker: &'a Baker<'b>,
+    settings: CaptureSettings,
+    positions: Vec<Vec3>,
+    sh: Vec<ShRgb>,
+    next_index: usize,
+    stats: PlacementStats,
+}
+
+impl State<'_, '_> {
+    /// Captures `points` (already filtered for inside-geometry); returns the
+    /// valid ones as (position, SH).
+    fn capture(&mut self, points: &[Vec3]) -> Result<Vec<(Vec3, ShRgb)>, PlacementError> {
+        let res = self
+            .baker
+            .capture_many(points, self.next_index, &self.settings, &|_, _| {})?;
+        self.next_index += points.len();
+        self.stats.captures += points.len();
+        let mut out = Vec::with_capacity(res.len());
+        for r in res {
+            if r.validity.valid && !inside_geometry(self.baker.tracer(), r.position) {
+                out.push((r.position, r.sh));
+            } else {
+                self.stats.rejected_inside += 1;
+            }
+        }
+        Ok(out)
+    }
+
+    fn filter_free(&mut self, pts: Vec<Vec3>) -> Vec<Vec3> {
+        let tracer = self.baker.tracer();
+        let n = pts.len();
+        let out: Vec<Vec3> = pts
+            .into_iter()
+            .filter(|p| !inside_geometry(tracer, *p))
+            .collect();
+        self.stats.rejected_inside += n - out.len();
+        out
+    }
+
+    fn add(&mut self, v: Vec<(Vec3, ShRgb)>) {
+        for (p, s) in v {
+            self.positions.push(p);
+            self.sh.push(s);
+        }
+    }
+
+    /// One or more passes of leak prevention; at most `limit` probes added.
+    fn fix_leaks(&mut self, ls: &LeakSettings, limit: usize) -> Result<(), PlacementError> {
+        let mut added_total = 0;
+        for _ in 0..ls.iterations {
+            if added_total >= limit {
+                break;
+            }
+            let new = leak_points(self.baker.tracer(), &self.positions, ls)?;
+            if new.is_empty() {
+                break;
+            }
+            let new = self.filter_free(new);
+            let mut got = self.capture(&new)?;
+            got.truncate(limit - added_total);
+            added_total += got.len();
+            self.stats.leak_probes += got.len();
+            self.add(got);
+        }
+        Ok(())
+    }
+}
+
+/// Points leak prevention would insert for the Delaunay tetrahedralization of
+/// `points` (one pass; see the module docs), in a deterministic order.
+pub fn leak_points(
+    tracer: &Tracer,
+    points: &[Vec3],
+    ls: &LeakSettings,
+) -> Result<Vec<Vec3>, PlacementError> {
+    let tri = tetrahedralize(points)?;
+    let mut cands = Vec::new();
+    for (a, b) in tet_edges(&tri.tets) {
+        let (pa, pb) = (points[a as usize], points[b as usize]);
+        let d = pb - pa;
+        let len = d.length();
+        if len <= 1e-6 {
+            continue;
+        }
+        let dir = d / len;
+        let off = (ls.offset_fraction * len).clamp(ls.min_offset, ls.max_offset);
+        for (o, dd) in [(pa, dir), (pb, -dir)] {
+            if let Some(h) = tracer.closest_hit(&Ray::new(o, dd), len) {
+                let n = h.facing_normal();
+                if n.dot(dd).abs() < ls.min_cos {
+                    continue;
+                }
+                // Not beyond the probe the ray started from.
+                let o2 = off.min(0.5 * h.t);
+                cands.push((h.point + n * o2, o2));
+            }
+        }
+    }
+    // Minimum distance to existing and newly accepted probes (spatial hash).
+    let cell = ls.max_offset.max(1e-3);
+    let key = |p: Vec3| {
+        let q = (p / cell).floor();
+        (q.x as i64, q.y as i64, q.z as i64)
+    };
+    let mut hash: std::collections::HashMap<(i64, i64, i64), Vec<Vec3>> = Default::default();
+    for &p in points {
+        hash.entry(key(p)).or_default().push(p);
+    }
+    let mut out = Vec::new();
+    for (p, o) in cands {
+        if !p.is_finite() {
+            continue;
+        }
+        let r = ls.min_distance_fraction * o;
+        let k = key(p);
+        let mut near = false;
+        'n: for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = hash.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
+                        if v.iter().any(|q| q.distance_squared(p) < r * r) {
+                            near = true;
+                            break 'n;
+                        }
+                    }
+                }
+            }
+        }
+        if !near {
+            hash.entry(k).or_default().push(p);
+            out.push(p);
+        }
+    }
+    Ok(out)
+}
+
+/// Relative irradiance disagreement between two radiance SH: the largest
+/// difference of irradiance luminance over the 6 axis normals, divided by the
+/// mean irradiance luminance of `truth` over them (plus a small floor).
+pub fn relative_disagreement(pred: &ShRgb, truth: &ShRgb, floor: f32) -> f32 {
+    const N: [Vec3; 6] = [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ];
+    let lum = |v: Vec3| 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z;
+    let mut maxd = 0.0f32;
+    let mut mean = 0.0f32;
+    for n in N {
+        let t = lum(truth.irradiance(n));
+        maxd = maxd.max((lum(pred.irradiance(n)) - t).abs());
+        mean += t.max(0.0) / 6.0;
+    }
+    maxd / (mean + floor)
+}
+
+/// Places probes in `bake_box` with `method`. Captures during placement use
+/// `settings` with the sample count lowered to [`PLACEMENT_SAMPLES`].
+/// `progress(phase, done, total)` reports each phase. Deterministic for a
+/// given scene, method and settings (any thread count).
+pub fn place(
+    baker: &Baker,
+    bake_box: Aabb,
+    method: &PlacementMethod,
+    settings: &CaptureSettings,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Placement, PlacementError> {
+    settings.validate()?;
+    let mut cs = settings.clone();
+    cs.samples = cs.samples.min(PLACEMENT_SAMPLES);
+    let reusable = settings.samples <= PLACEMENT_SAMPLES;
+    let mut st = State {
+        baker,
+        settings: cs,
+        positions: Vec::new(),
+        sh: Vec::new(),
+        next_index: 0,
+        stats: PlacementStats {
+            method: method.name().into(),
+            ..Default::default()
+        },
+    };
+    let ls = LeakSettings::default();
+    match method {
+        PlacementMethod::SpawnMerge { .. } => {
+            return Err(PlacementError::NotImplemented("spawn-merge"))
+        }
+        PlacementMethod::GradientAscent { .. } => {
+            return Err(PlacementError::NotImplemented("gradient-ascent"))
+        }
+        PlacementMethod::Grid { cell, budget } => {
+            let pts = grid_points(&bake_box, *cell, *budget)?;
+            let pts = st.filter_free(pts);
+            progress("grid", pts.len(), pts.len());
+            return Ok(Placement {
+                positions: pts,
+                captured: None,
+                stats: st.stats,
+            });
+        }
+        PlacementMethod::Manual(p) => {
+            if let Some(i) = p.iter().position(|q| !q.is_finite()) {
+                return Err(PlacementError::BadParameter(format!(
+                    "manual position {i} is not finite"
+                )));
+            }
+            let pts = st.filter_free(p.clone());
+            progress("manual", pts.len(), pts.len());
+            return Ok(Placement {
+                positions: pts,
+                captured: None,
+                stats: st.stats,
+            });
+        }
+        PlacementMethod::Adaptive { budget, tolerance } => {
+            if *budget < 8 {
+                return Err(PlacementError::BadParameter(format!(
+                    "adaptive budget {budget} must be ≥ 8"
+                )));
+            }
+            if !(tolerance.is_finite() && *tolerance >= 0.0) {
+                return Err(PlacementError::BadParameter(format!(
+                    "tolerance {tolerance} must be ≥ 0"
+                )));
+            }
+            adaptive(&mut st, &bake_box, *budget, *tolerance, &ls, progress)?;
+        }
+    }
+    let captured = reusable.then(|| st.sh.clone());
+    Ok(Placement {
+        positions: st.positions,
+        captured,
+        stats: st.stats,
+    })
+}
+
+fn adaptive(
+    st: &mut State,
+    bbox: &Aabb,
+    budget: usize,
+    tolerance: f32,
+    ls: &LeakSettings,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<(), PlacementError> {
+    let coarse = grid_points(bbox, None, Some((budget / 8).max(8)))?;
+    let coarse = st.filter_free(coarse);
+    let got = st.capture(&coarse)?;
+    st.add(got);
+    progress("coarse", st.positions.len(), budget);
+    let (_, before) = crossing_extent(st.baker.tracer(), &st.positions)?;
+    st.stats.crossing_before = before;
+    st.fix_leaks(ls, budget.saturating_sub(st.positions.len()) / 2)?;
+    let mut round = 0u32;
+    let size = bbox.size();
+    while st.positions.len() < budget {
+        round += 1;
+        let n = st.positions.len();
+        let batch = (budget - n).min((n / 4).max(4));
+        let tri = tetrahedralize(&st.positions)?;
+        // The f32 runtime mesh may reject a sliver the exact tetrahedralization
+        // keeps; then refinement stops with what it has.
+        let mesh: TetMesh = match tri.to_tet_mesh(&st.positions) {
+            Ok(m) => m,
+            Err(_) => break,
+        };
+        // Candidates: centroids of the largest tets and of the highest-contrast
+        // tets, plus jittered points.
+        let lum_e: Vec<f32> = st
+            .sh
+            .iter()
+            .map(|s| s.irradiance(Vec3::Y).length() + s.irradiance(Vec3::NEG_Y).length())
+            .collect();
+        let mut scored: Vec<(f32, f32, usize)> = tri
+            .tets
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let p: Vec<Vec3> = t.iter().map(|&k| st.positions[k as usize]).collect();
+                let vol = ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) / 6.0).abs();
+                let l: Vec<f32> = t.iter().map(|&k| lum_e[k as usize]).collect();
+                let (lo, hi) = l
+                    .iter()
+                    .fold((f32::MAX, f32::MIN), |a, &x| (a.0.min(x), a.1.max(x)));
+                let contrast = (hi - lo) / (hi + lo + 1e-6);
+                (vol, contrast * vol.cbrt(), i)
+            })
+            .collect();
+        let ncand = 3 * batch;
+        let centroid = |i: usize| -> Vec3 {
+            tri.tets[i]
+                .iter()
+                .map(|&k| st.positions[k as usize])
+                .sum::<Vec3>()
+                / 4.0
+        };
+        let mut cands = Vec::with_capacity(ncand);
+        scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+        cands.extend(scored.iter().take(ncand / 3).map(|s| centroid(s.2)));
+        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.2.cmp(&b.2)));
+        cands.extend(scored.iter().take(ncand / 3).map(|s| centroid(s.2)));
+        let mut rng = SampleRng::new(st.settings.seed ^ 0x504c_4143, round as u64, 0);
+        while cands.len() < ncand {
+            let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            cands.push(bbox.min + u * size);
+        }
+        cands.dedup_by(|a, b| a.distance_squared(*b) < 1e-8);
+        let cands = st.filter_free(cands);
+        let got = st.capture(&cands)?;
+        if got.is_empty() {
+            break;
+        }
+        // Predict by barycentric interpolation and score.
+        let mut ws = WalkState::new();
+        let mut errs: Vec<(f32, usize)> = Vec::with_capacity(got.len());
+        let mut mean_abs = 0.0f32;
+        for s in &st.sh {
+            mean_abs += s.irradiance(Vec3::Y).length() / st.sh.len() as f32;
+        }
+        let floor = 0.01 * mean_abs;
+        for (ci, (p, truth)) in got.iter().enumerate() {
+            let (idx, w) = mesh.weights_at(*p, &mut ws);
+            let mut pred = ShRgb::zeros(truth.order());
+            for k in 0..4 {
+                if w[k] != 0.0 {
+                    pred.add_scaled(&st.sh[idx[k] as usize], w[k]);
+                }
+            }
+            errs.push((relative_disagreement(&pred, truth, floor), ci));
+        }
+        let mean_err = errs.iter().map(|e| e.0).sum::<f32>() / errs.len() as f32;
+        st.stats.last_mean_error = Some(mean_err);
+        errs.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        // Greedy pick with spacing.
+        let spacing = 0.3 * (size.x * size.y * size.z / st.positions.len() as f32).cbrt();
+        let mut chosen: Vec<(Vec3, ShRgb)> = Vec::new();
+        for &(_, ci) in &errs {
+            if chosen.len() >= batch {
+                break;
+            }
+            let p = got[ci].0;
+            if chosen.iter().all(|c| c.0.distance(p) > spacing) {
+                chosen.push(got[ci].clone());
+            }
+        }
+        st.add(chosen);
+        progress("adaptive", st.positions.len(), budget);
+        if mean_err < tolerance {
+            break;
+        }
+        if round > 200 {
+            break;
+        }
+    }
+    st.stats.rounds = round;
+    // Final leak pass (may add a few percent over the budget).
+    st.fix_leaks(ls, (budget / 10).max(4))?;
+    let (_, after) = crossing_extent(st.baker.tracer(), &st.positions)?;
+    st.stats.crossing_after = after;
+    progress("leaks", st.positions.len(), budget);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,210 @@
+use super::eval::*;
+use super::*;
+use crate::bake::ReferenceSettings;
+use crate::scene::Scene;
+
+fn fast_settings() -> CaptureSettings {
+    CaptureSettings {
+        samples: 64,
+        bounces: 1,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn inside_test_matches_demo_boxes() {
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    // Inside the dividing wall and a pillar; free in the rooms.
+    assert!(inside_geometry(&tracer, Vec3::new(4.0, 1.0, 1.0)));
+    assert!(inside_geometry(&tracer, Vec3::new(2.7, 1.0, 2.9)));
+    assert!(!inside_geometry(&tracer, Vec3::new(2.0, 1.0, 2.0)));
+    assert!(!inside_geometry(&tracer, Vec3::new(6.0, 1.5, 2.5)));
+}
+
+#[test]
+fn grid_points_cover_box_at_cell_centres() {
+    let b = Aabb::new(Vec3::ZERO, Vec3::new(8.0, 3.0, 4.0));
+    let p = grid_points(&b, Some(1.0), None).unwrap();
+    assert_eq!(p.len(), 8 * 3 * 4);
+    assert!(p.contains(&Vec3::new(0.5, 0.5, 0.5)));
+    assert!(grid_points(&b, None, Some(3)).is_err());
+    assert!(grid_points(&b, Some(-1.0), None).is_err());
+}
+
+#[test]
+fn unimplemented_methods_say_so() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let m = PlacementMethod::SpawnMerge {
+        contrast: 0.1,
+        min_distance: 0.5,
+    };
+    let r = place(
+        &baker,
+        scene.bake_box(),
+        &m,
+        &fast_settings(),
+        &|_, _, _| {},
+    );
+    assert!(matches!(
+        r,
+        Err(PlacementError::NotImplemented("spawn-merge"))
+    ));
+}
+
+#[test]
+fn adaptive_places_no_probe_inside_and_is_deterministic() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let m = PlacementMethod::Adaptive {
+        budget: 48,
+        tolerance: 0.0,
+    };
+    let a = place(
+        &baker,
+        scene.bake_box(),
+        &m,
+        &fast_settings(),
+        &|_, _, _| {},
+    )
+    .unwrap();
+    let b = place(
+        &baker,
+        scene.bake_box(),
+        &m,
+        &fast_settings(),
+        &|_, _, _| {},
+    )
+    .unwrap();
+    assert_eq!(a, b);
+    assert!(
+        a.positions.len() >= 48 && a.positions.len() <= 60,
+        "{}",
+        a.positions.len()
+    );
+    assert_eq!(a.captured.as_ref().unwrap().len(), a.positions.len());
+    let tracer = baker.tracer();
+    for p in &a.positions {
+        assert!(!inside_geometry(tracer, *p), "{p}");
+        assert!(a.positions.iter().filter(|q| *q == p).count() == 1);
+    }
+    // Grid drops the points inside the walls and pillars.
+    let g = PlacementMethod::Grid {
+        cell: Some(0.3),
+        budget: None,
+    };
+    let g = place(
+        &baker,
+        scene.bake_box(),
+        &g,
+        &fast_settings(),
+        &|_, _, _| {},
+    )
+    .unwrap();
+    assert!(g.stats.rejected_inside > 0);
+    assert!(g.positions.iter().all(|p| !inside_geometry(tracer, *p)));
+}
+
+#[test]
+fn leak_fix_puts_probes_on_both_sides_of_the_wall() {
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    // Two layers of probes 1.2 m either side of the divider (x 3.85..4.15), z < 2.8.
+    let mut pts = Vec::new();
+    for x in [2.8f32, 5.2] {
+        for y in [0.6f32, 2.2] {
+            for z in [0.5f32, 1.5, 2.4] {
+                pts.push(Vec3::new(x, y, z));
+            }
+        }
+    }
+    let ls = LeakSettings::default();
+    let (n0, e0) = crossing_extent(&tracer, &pts).unwrap();
+    assert!(n0 > 0);
+    let new = leak_points(&tracer, &pts, &ls).unwrap();
+    let west = new.iter().filter(|p| p.x < 3.85 && p.x > 3.3).count();
+    let east = new.iter().filter(|p| p.x > 4.15 && p.x < 4.7).count();
+    assert!(west > 0 && east > 0, "{new:?}");
+    assert!(new.iter().all(|p| !inside_geometry(&tracer, *p)));
+    let mut all = pts.clone();
+    all.extend(new);
+    let (n1, e1) = crossing_extent(&tracer, &all).unwrap();
+    // Mean free extent per crossing edge shrinks: interpolation across the
+    // wall is confined to a band near it.
+    let (m0, m1) = (e0 / n0 as f32, e1 / n1 as f32);
+    assert!(m1 < 0.7 * m0, "mean crossing extent {m0} -> {m1}");
+}
+
+#[test]
+fn metrics_match_hand_computation() {
+    let truth = [Vec3::splat(1.0), Vec3::splat(2.0)];
+    let pred = [Vec3::splat(1.0), Vec3::splat(10.0)];
+    let m = metrics(&pred, &truth, mean_luminance(&truth));
+    // se = 3·8² = 192, st = 3 + 12 = 15.
+    assert!((m.rel_rmse - (192.0f32 / 15.0).sqrt()).abs() < 1e-5);
+    assert_eq!(m.leaks, 1);
+    assert_eq!(m.points, 2);
+}
+
+/// Error of a cloud at `positions` captured with `s`, on fixed eval points.
+fn cloud_error(
+    baker: &Baker,
+    positions: &[Vec3],
+    s: &CaptureSettings,
+    pts: &[EvalPoint],
+    truth: &[Vec3],
+) -> Metrics {
+    let sh: Vec<ShRgb> = baker
+        .capture_many(positions, 0, s, &|_, _| {})
+        .unwrap()
+        .into_iter()
+        .map(|r| r.sh)
+        .collect();
+    let mesh = tetrahedralize(positions)
+        .unwrap()
+        .to_tet_mesh(positions)
+        .unwrap();
+    let pred = interpolate_cloud(&mesh, &sh, pts);
+    metrics(&pred, truth, mean_luminance(truth))
+}
+
+#[test]
+#[ignore = "fails today: adaptive (105 probes) rel_rmse 2.68 vs grid (95) 0.73; see docs/bench/placement.md"]
+fn adaptive_beats_grid_at_equal_probe_count() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let s = CaptureSettings {
+        samples: 128,
+        bounces: 1,
+        ..Default::default()
+    };
+    let m = PlacementMethod::Adaptive {
+        budget: 96,
+        tolerance: 0.0,
+    };
+    let a = place(&baker, scene.bake_box(), &m, &s, &|_, _, _| {}).unwrap();
+    let g = grid_points(&scene.bake_box(), None, Some(a.positions.len())).unwrap();
+    let g: Vec<Vec3> = g
+        .into_iter()
+        .filter(|p| !inside_geometry(baker.tracer(), *p))
+        .collect();
+    let pts = sample_points(baker.tracer(), &scene.bake_box(), 150, 7);
+    let rs = ReferenceSettings {
+        relative_precision: 0.05,
+        min_samples: 256,
+        max_samples: 2048,
+        bounces: 1,
+        ..Default::default()
+    };
+    let truth = reference(&baker, &pts, &rs).unwrap();
+    let ea = cloud_error(&baker, &a.positions, &s, &pts, &truth);
+    let eg = cloud_error(&baker, &g, &s, &pts, &truth);
+    eprintln!(
+        "adaptive {} probes {ea:?}; grid {} probes {eg:?}",
+        a.positions.len(),
+        g.len()
+    );
+    assert!(g.len() >= a.positions.len() * 8 / 10);
+    assert!(ea.rel_rmse < eg.rel_rmse, "adaptive {ea:?} grid {eg:?}");
+}
