@@ -459,7 +459,10 @@ fn flat(v: &[Vec3]) -> Vec<f32> {
 #[test]
 fn wgsl_matches_rust_on_random_inputs() {
     let Some(adapter) = adapter() else {
-        println!(
+        use std::io::Write;
+        // Straight to stderr: the test harness captures print!, and a skip must show.
+        let _ = writeln!(
+            std::io::stderr(),
             "SKIPPED: no wgpu adapter (install Mesa lavapipe: apt-get install mesa-vulkan-drivers)"
         );
         return;

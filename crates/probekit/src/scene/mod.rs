@@ -1078,7 +1078,9 @@ pub(crate) mod tests_support {
         if p.is_dir() {
             Some(p)
         } else {
-            eprintln!("skipping: {} not found", p.display());
+            use std::io::Write;
+            // Straight to stderr: the test harness captures eprint!, and a skip must show.
+            let _ = writeln!(std::io::stderr(), "SKIPPED: {} not found", p.display());
             None
         }
     }
