@@ -1068,10 +1068,10 @@ impl Fnv1a {
 pub(crate) mod tests_support {
     use std::path::{Path, PathBuf};
 
-    /// `$PROBEKIT_SHARED_DATA` if set, else `<workspace root>/../shared/data`, or None when
+    /// `$PROBEKIT_DATA_DIR` if set, else `<workspace root>/../shared/data`, or None when
     /// absent (tests that need it skip with a message).
     pub(crate) fn shared_data() -> Option<PathBuf> {
-        let p = match std::env::var_os("PROBEKIT_SHARED_DATA") {
+        let p = match std::env::var_os("PROBEKIT_DATA_DIR") {
             Some(p) => PathBuf::from(p),
             None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
         };
