@@ -11,14 +11,8 @@ use glam::DVec3;
 /// `n` points of the spherical Fibonacci lattice (equal-area, golden-angle
 /// spiral; Swinbank & Purser 2006), each standing for `4π/n` steradians.
 pub(crate) fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
-    let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = ga * i as f64;
-            DVec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
+        .map(|i| crate::project::fibonacci_point_f64(i, n))
         .collect()
 }
 

@@ -288,9 +288,18 @@ impl ProbeFile {
     /// A cloud of `positions` with lossless `f32` coefficients and nothing else.
     pub fn cloud(positions: Vec<Vec3>, order: u32, coeffs: &[Vec3]) -> Result<Self, FormatError> {
         Ok(Self {
-            kind: ProbeFileKind::Cloud,
             positions,
-            coefficients: Coefficients::from_f32(order, coeffs)?,
+            ..Self::new(ProbeFileKind::Cloud, Coefficients::from_f32(order, coeffs)?)
+        })
+    }
+
+    /// A file of `kind` holding `coefficients` and nothing else: no positions,
+    /// no optional sections, empty metadata. Fill the fields that apply.
+    pub fn new(kind: ProbeFileKind, coefficients: Coefficients) -> Self {
+        Self {
+            kind,
+            positions: Vec::new(),
+            coefficients,
             validity: None,
             tetrahedra: None,
             outer: None,
@@ -299,7 +308,7 @@ impl ProbeFile {
             gradients: None,
             rigs: Vec::new(),
             metadata: String::new(),
-        })
+        }
     }
 
     /// Number of probes (volume samples).

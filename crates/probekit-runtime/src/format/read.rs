@@ -543,19 +543,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     let kind = ProbeFileKind::from_id(head.kind)?;
     let mut positions = None;
     let mut coefficients = None;
-    let mut file = ProbeFile {
-        kind,
-        positions: Vec::new(),
-        coefficients: Coefficients::empty(1),
-        validity: None,
-        tetrahedra: None,
-        outer: None,
-        octree: None,
-        grid: None,
-        gradients: None,
-        rigs: Vec::new(),
-        metadata: String::new(),
-    };
+    let mut file = ProbeFile::new(kind, Coefficients::empty(1));
     for raw in &sections {
         let s = Sec {
             id: raw.id,

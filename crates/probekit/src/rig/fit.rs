@@ -154,17 +154,8 @@ impl FittedRig {
 pub fn rig_file(rigs: &[FittedRig]) -> ProbeFile {
     let order = rigs.first().map_or(3, |r| r.rig.order);
     ProbeFile {
-        kind: ProbeFileKind::Rig,
-        positions: Vec::new(),
-        coefficients: Coefficients::empty(order),
-        validity: None,
-        tetrahedra: None,
-        outer: None,
-        octree: None,
-        grid: None,
-        gradients: None,
         rigs: rigs.iter().map(|r| r.rig.clone()).collect(),
-        metadata: String::new(),
+        ..ProbeFile::new(ProbeFileKind::Rig, Coefficients::empty(order))
     }
 }
 

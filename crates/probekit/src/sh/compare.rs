@@ -153,15 +153,7 @@ impl BasisComparison {
 /// `n` unit vectors spread uniformly over the sphere (spherical Fibonacci
 /// lattice: `z_i = 1 − (2i+1)/n`, `φ_i = i·π(3 − √5)`; Swinbank & Purser 2006).
 pub fn spherical_fibonacci(n: usize) -> Vec<Vec3> {
-    let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = ga * i as f64;
-            glam::DVec3::new(r * phi.cos(), r * phi.sin(), z).as_vec3()
-        })
-        .collect()
+    probekit_sh::fibonacci_sphere(n)
 }
 
 /// `sqrt(mean |a − r|²) / sqrt(mean |r|²)` over all entries and channels
