@@ -1,23 +1,23 @@
 //! `probekit eval PROBES --scene SCENE [--points N] [--seed S] [--json]`:
 //! error of a probe cloud against path-traced ground truth at random
 //! free-space points of the bake box (`probekit::placement::eval`).
-//! Not done yet: `--box`, `--compare grid`, `--plot`, volume files.
+//! Works on clouds and volumes alike (`Predictor`).
 
+use super::util::{load_probes, parse_interp};
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use glam::Vec3;
 use probekit::bake::{Baker, ReferenceSettings};
-use probekit::format::ProbeFile;
 use probekit::placement::eval::{
-    interpolate_cloud, mean_luminance, metrics, reference, sample_points, Metrics,
+    mean_luminance, metrics, reference, sample_points, Metrics, Predictor,
 };
-use probekit::scene::Scene;
-use probekit_sh::ShRgb;
+use probekit::scene::{Aabb, Scene};
 use std::path::PathBuf;
 
 /// Arguments of `probekit eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
-    /// A cloud `.probes` file.
+    /// A cloud or volume `.probes` file.
     pub probes: PathBuf,
     /// Scene file or `builtin:demo`.
     #[arg(long)]
@@ -28,6 +28,13 @@ pub struct EvalArgs {
     /// Seed of the evaluation points.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres) to sample points in;
+    /// default the scene's `[bake] box`.
+    #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
+    pub bbox: Option<Vec<f32>>,
+    /// Volumes: trilinear (default), taylor or tricubic.
+    #[arg(long, default_value = "trilinear")]
+    pub interp: String,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -40,34 +47,37 @@ fn to_json(m: &Metrics) -> serde_json::Value {
 /// Runs `probekit eval`.
 pub fn run(a: &EvalArgs) -> Result<()> {
     let name = a.probes.display().to_string();
-    let file = ProbeFile::load(&a.probes).with_context(|| name.clone())?;
-    let Some(tets) = file.tetrahedra.as_ref() else {
-        bail!("{name}: not a probe cloud (no tetrahedra)");
-    };
-    let tri = probekit::cloud::Tetrahedralization {
-        tets: tets.vertices.clone(),
-        neighbors: tets.neighbours.clone(),
-        merged_duplicates: Vec::new(),
-    };
-    let mesh = tri
-        .to_tet_mesh(&file.positions)
-        .with_context(|| name.clone())?;
-    let coeffs = file.coefficients.to_f32().with_context(|| name.clone())?;
-    let per = file.coefficients.coeffs_per_probe();
-    let sh: Vec<ShRgb> = coeffs
-        .chunks(per)
-        .map(|c| ShRgb::from_coeffs(c.to_vec()).context("coefficients are not a whole SH order"))
-        .collect::<Result<_>>()
-        .with_context(|| name.clone())?;
+    let file = load_probes(&a.probes)?;
+    let predictor =
+        Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
     let scene = Scene::load(&a.scene).with_context(|| a.scene.display().to_string())?;
     let baker = Baker::new(&scene).with_context(|| a.scene.display().to_string())?;
-    let pts = sample_points(baker.tracer(), &scene.bake_box(), a.points, a.seed);
+    let bbox = match &a.bbox {
+        None => scene.bake_box(),
+        Some(b)
+            if b.len() == 6
+                && b.iter().all(|x| x.is_finite())
+                && b[0] < b[3]
+                && b[1] < b[4]
+                && b[2] < b[5] =>
+        {
+            Aabb {
+                min: Vec3::new(b[0], b[1], b[2]),
+                max: Vec3::new(b[3], b[4], b[5]),
+            }
+        }
+        Some(_) => bail!("--box: expected MINX,MINY,MINZ,MAXX,MAXY,MAXZ with min < max"),
+    };
+    let pts = sample_points(baker.tracer(), &bbox, a.points, a.seed);
+    if pts.is_empty() {
+        bail!("{}: no free-space points in the box", a.scene.display());
+    }
     let rs = ReferenceSettings {
         relative_precision: 0.03,
         ..Default::default()
     };
     let truth = reference(&baker, &pts, &rs).with_context(|| a.scene.display().to_string())?;
-    let pred = interpolate_cloud(&mesh, &sh, &pts);
+    let pred = predictor.predict(&pts).with_context(|| name.clone())?;
     let mean = mean_luminance(&truth);
     let all = metrics(&pred, &truth, mean);
     let mut out = to_json(&all);

@@ -1,13 +1,13 @@
 //! `probekit capture`, `reference`, `query` and `inspect`: one probe, ground
 //! truth, and questions to a baked file.
 
-use super::util::{load_probes, load_scene, parse_vec3, read_csv, rgb};
+use super::util::{load_probes, load_scene, parse_interp, parse_vec3, read_csv, rgb};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::placement::eval::Predictor;
 use probekit_runtime::cloud::WalkState;
-use probekit_runtime::{Interp, ProbeCloud, Volume};
 use std::path::PathBuf;
 
 /// Arguments of `probekit capture`.
@@ -129,43 +129,14 @@ pub struct QueryArgs {
     pub json: bool,
 }
 
-/// Either kind of baked file, ready to query.
-enum Probes {
-    Cloud(ProbeCloud, WalkState),
-    Volume(Volume, Interp),
-}
-
-impl Probes {
-    fn irradiance(&mut self, p: Vec3, n: Vec3) -> Result<Vec3> {
-        match self {
-            Probes::Cloud(c, st) => Ok(c.irradiance(p, n, st)),
-            Probes::Volume(v, i) => Ok(v.irradiance(p, n, *i)?),
-        }
-    }
-}
-
 /// Runs `probekit query`: `{"irradiance":[r,g,b]}` for `--at`, or
 /// `{"irradiance":[[r,g,b],...]}` for `--points`.
 pub fn query(a: &QueryArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let file = load_probes(&a.probes)?;
-    let mut probes = if file.tetrahedra.is_some() {
-        Probes::Cloud(
-            ProbeCloud::from_file(&file).with_context(|| name.clone())?,
-            WalkState::new(),
-        )
-    } else {
-        let interp = match a.interp.as_str() {
-            "trilinear" => Interp::Trilinear,
-            "taylor" => Interp::Taylor,
-            "tricubic" => Interp::Tricubic,
-            o => bail!("--interp {o}: expected trilinear, taylor or tricubic"),
-        };
-        Probes::Volume(
-            Volume::from_file(&file).with_context(|| name.clone())?,
-            interp,
-        )
-    };
+    let probes =
+        Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
+    let mut st = WalkState::new();
     match (&a.at, &a.points) {
         (Some(at), None) => {
             let p = parse_vec3(at, "--at")?;
@@ -174,7 +145,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
                 bail!("--normal: zero vector");
             }
             let e = probes
-                .irradiance(p, n.normalize())
+                .irradiance(p, n.normalize(), &mut st)
                 .with_context(|| name.clone())?;
             println!("{}", serde_json::json!({ "irradiance": rgb(e) }));
         }
@@ -187,7 +158,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
                     bail!("{}: row {}: zero normal", csv.display(), i + 1);
                 }
                 let e = probes
-                    .irradiance(Vec3::new(r[0], r[1], r[2]), n.normalize())
+                    .irradiance(Vec3::new(r[0], r[1], r[2]), n.normalize(), &mut st)
                     .with_context(|| name.clone())?;
                 out.push(rgb(e));
             }

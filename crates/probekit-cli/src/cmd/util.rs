@@ -70,3 +70,14 @@ pub fn load_probes(path: &Path) -> Result<ProbeFile> {
 pub fn rgb(v: Vec3) -> [f32; 3] {
     v.to_array()
 }
+
+/// `--interp` of volume files: `trilinear`, `taylor` or `tricubic`.
+pub fn parse_interp(s: &str) -> Result<probekit_runtime::Interp> {
+    use probekit_runtime::Interp;
+    Ok(match s {
+        "trilinear" => Interp::Trilinear,
+        "taylor" => Interp::Taylor,
+        "tricubic" => Interp::Tricubic,
+        o => bail!("--interp {o}: expected trilinear, taylor or tricubic"),
+    })
+}

@@ -17,7 +17,9 @@ use crate::scene::Aabb;
 use crate::trace::{Ray, Tracer};
 use glam::{Vec2, Vec3};
 use probekit_runtime::cloud::{TetMesh, WalkState};
+use probekit_runtime::{Interp, ProbeCloud, ProbeCloudError, ProbeFile, Volume, VolumeError};
 use probekit_sh::ShRgb;
+use thiserror::Error;
 
 /// Minimum distance of an evaluation point from any surface, metres.
 pub const SURFACE_CLEARANCE: f32 = 0.01;
@@ -173,4 +175,64 @@ pub fn interpolate_cloud(mesh: &TetMesh, sh: &[ShRgb], points: &[EvalPoint]) -> 
             acc.irradiance(p.normal)
         })
         .collect()
+}
+
+/// Why a baked file cannot be evaluated.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum PredictError {
+    /// The file is a cloud whose tetrahedra or coefficients are unusable.
+    #[error(transparent)]
+    Cloud(#[from] ProbeCloudError),
+    /// The file is a volume that cannot be sampled.
+    #[error(transparent)]
+    Volume(#[from] VolumeError),
+}
+
+/// A baked file ready to answer irradiance queries, whatever its kind: a
+/// probe cloud (tetrahedral blend, outer cells outside the hull) or an
+/// irradiance volume (uniform or octree, with the chosen interpolation).
+/// `probekit query`, `probekit eval` and the renderer all go through it, so
+/// clouds and volumes are measured the same way.
+#[derive(Debug)]
+pub enum Predictor {
+    /// A probe cloud.
+    Cloud(ProbeCloud),
+    /// An irradiance volume and how to interpolate it.
+    Volume(Volume, Interp),
+}
+
+impl Predictor {
+    /// A cloud when the file has tetrahedra, otherwise a volume sampled with
+    /// `interp` (ignored for clouds).
+    pub fn from_file(file: &ProbeFile, interp: Interp) -> Result<Self, PredictError> {
+        Ok(if file.tetrahedra.is_some() {
+            Predictor::Cloud(ProbeCloud::from_file(file)?)
+        } else {
+            Predictor::Volume(Volume::from_file(file)?, interp)
+        })
+    }
+
+    /// Irradiance `E(n)` (not divided by π) at `p` for unit normal `n`;
+    /// `state` caches the cloud walk between coherent queries.
+    pub fn irradiance(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        state: &mut WalkState,
+    ) -> Result<Vec3, PredictError> {
+        Ok(match self {
+            Predictor::Cloud(c) => c.irradiance(p, n, state),
+            Predictor::Volume(v, i) => v.irradiance(p, n, *i)?,
+        })
+    }
+
+    /// Irradiance at every point, in order.
+    pub fn predict(&self, points: &[EvalPoint]) -> Result<Vec<Vec3>, PredictError> {
+        let mut st = WalkState::new();
+        points
+            .iter()
+            .map(|p| self.irradiance(p.position, p.normal, &mut st))
+            .collect()
+    }
 }
