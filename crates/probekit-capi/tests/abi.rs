@@ -330,3 +330,119 @@ fn hostile_input_never_panics() {
         &last_error().as_bytes()[..4]
     );
 }
+
+/// One handle queried from several threads at once (the header allows it),
+/// while another thread flips the volume's interpolation mode: every
+/// thread's answers equal the single-threaded ones for the mode it was in,
+/// and each thread's last error stays its own.
+#[test]
+fn one_handle_many_threads() {
+    let cloud = load(&cloud_file().to_bytes().unwrap());
+    let pts = points();
+    let expect: Vec<[f32; 3]> = pts
+        .iter()
+        .map(|(p, n)| {
+            let mut e = [0.0f32; 3];
+            let s = unsafe {
+                pk_irradiance(
+                    cloud,
+                    null_mut(),
+                    p.as_ref().as_ptr(),
+                    n.as_ref().as_ptr(),
+                    e.as_mut_ptr(),
+                )
+            };
+            assert_eq!(s, PkStatus::Ok);
+            e
+        })
+        .collect();
+    let handle = cloud as usize;
+    let volume = load(&volume_file().to_bytes().unwrap()) as usize;
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let stop = &stop;
+        // Trilinear and tricubic both reproduce the linear field exactly, so
+        // the answer must not depend on when the mode flips.
+        scope.spawn(move || {
+            let mut mode = 0;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                mode = 2 - mode;
+                let s = unsafe { pk_volume_set_interp(volume as *const PkProbes, mode) };
+                assert_eq!(s, PkStatus::Ok);
+            }
+        });
+        let mut workers = Vec::new();
+        for t in 0..4 {
+            let (pts, expect) = (&pts, &expect);
+            workers.push(scope.spawn(move || {
+                let h = handle as *const PkProbes;
+                let ws = pk_walk_state_new();
+                // A thread-specific error first.
+                let bad = [f32::NAN; 3];
+                let mut e = [0.0f32; 3];
+                let s = unsafe { pk_irradiance(h, ws, bad.as_ptr(), bad.as_ptr(), e.as_mut_ptr()) };
+                assert_eq!(s, PkStatus::InvalidArgument);
+                let msg = if t % 2 == 0 {
+                    last_error()
+                } else {
+                    let s = unsafe { pk_rig_new(h, 7 + t, null_mut()) };
+                    assert!(s.is_null());
+                    last_error()
+                };
+                for round in 0..50 {
+                    for (i, (p, n)) in pts.iter().enumerate().skip(round % 3) {
+                        let s = unsafe {
+                            pk_irradiance(
+                                h,
+                                ws,
+                                p.as_ref().as_ptr(),
+                                n.as_ref().as_ptr(),
+                                e.as_mut_ptr(),
+                            )
+                        };
+                        assert_eq!(s, PkStatus::Ok);
+                        for c in 0..3 {
+                            let tol = 1e-6 * (1.0 + expect[i][c].abs());
+                            assert!((e[c] - expect[i][c]).abs() <= tol, "thread {t}");
+                        }
+                    }
+                    let mut sh = [0.0f32; 3 * N];
+                    for (i, (p, _)) in pts.iter().enumerate() {
+                        let v = volume as *const PkProbes;
+                        let s = unsafe {
+                            pk_sh(
+                                v,
+                                null_mut(),
+                                p.as_ref().as_ptr(),
+                                sh.as_mut_ptr(),
+                                sh.len(),
+                            )
+                        };
+                        assert_eq!(s, PkStatus::Ok);
+                        let q = p.clamp(Vec3::ZERO, Vec3::splat(2.0));
+                        for k in 0..N {
+                            let f = field(q, k).to_array();
+                            for c in 0..3 {
+                                assert!((sh[3 * k + c] - f[c]).abs() < 1e-5, "point {i}");
+                            }
+                        }
+                    }
+                }
+                assert_eq!(last_error(), msg, "another thread's error leaked in");
+                unsafe { pk_walk_state_free(ws) };
+            }));
+        }
+        let results: Vec<_> = workers.into_iter().map(|w| w.join()).collect();
+        // Stop the mode flipper before any panic propagates, or the scope hangs.
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        for r in results {
+            if let Err(e) = r {
+                std::panic::resume_unwind(e);
+            }
+        }
+    });
+    unsafe {
+        pk_free(cloud);
+        pk_free(volume as *mut PkProbes);
+    }
+}

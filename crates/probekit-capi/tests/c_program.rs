@@ -11,6 +11,9 @@
 //!   position, short buffers and wrong kinds give the documented status and
 //!   a non-empty message, and the program does not crash.
 //!
+//! The program is compiled as C99 (`-Wall -Wextra -Werror -pedantic`) and,
+//! when a C++ compiler exists, also checked as C++11.
+//!
 //! Without a C compiler the test prints `SKIPPED: ...` to stderr and passes.
 
 use glam::Vec3;
@@ -30,6 +33,20 @@ fn c_compiler() -> Option<String> {
         .ok()
         .into_iter()
         .chain(["cc", "gcc", "clang"].map(String::from))
+        .collect();
+    candidates.into_iter().find(|c| {
+        Command::new(c)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
+}
+
+fn cxx_compiler() -> Option<String> {
+    let candidates: Vec<String> = std::env::var("CXX")
+        .ok()
+        .into_iter()
+        .chain(["c++", "g++", "clang++"].map(String::from))
         .collect();
     candidates.into_iter().find(|c| {
         Command::new(c)
@@ -183,7 +200,15 @@ fn c_program_matches_the_rust_runtime() {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
     let exe = dir.join(if cfg!(windows) { "smoke.exe" } else { "smoke" });
     let out = Command::new(&cc)
-        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-O1", "-I"])
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-O1",
+            "-I",
+        ])
         .arg(manifest.join("include"))
         .arg(manifest.join("tests/c/smoke.c"))
         .arg(&lib)
@@ -197,6 +222,32 @@ fn c_program_matches_the_rust_runtime() {
         "{cc} failed:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
+
+    // The header and the program also compile as C++ (engines are C++),
+    // when a C++ compiler is around.
+    if let Some(cxx) = cxx_compiler() {
+        let out = Command::new(&cxx)
+            .args([
+                "-x",
+                "c++",
+                "-std=c++11",
+                "-Wall",
+                "-Wextra",
+                "-Werror",
+                "-pedantic",
+            ])
+            .arg("-fsyntax-only")
+            .arg("-I")
+            .arg(manifest.join("include"))
+            .arg(manifest.join("tests/c/smoke.c"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{cxx} (as C++) failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 
     // Run.
     let run = Command::new(&exe)
