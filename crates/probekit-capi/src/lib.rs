@@ -239,6 +239,13 @@ fn floats_in<'a>(p: *const f32, n: usize, what: &str) -> Result<&'a [f32], Error
     Ok(unsafe { std::slice::from_raw_parts(p, len) })
 }
 
+/// `3·count`, refused when it overflows.
+fn times3(count: usize) -> Result<usize, Error> {
+    count
+        .checked_mul(3)
+        .ok_or_else(|| Error::new(PkStatus::InvalidArgument, "count too large"))
+}
+
 /// `len` writable floats at `p` (null allowed only when `len == 0`).
 fn floats_out<'a>(p: *mut f32, len: usize, what: &str) -> Result<&'a mut [f32], Error> {
     if len > isize::MAX as usize / 4 {
@@ -558,7 +565,7 @@ pub unsafe extern "C" fn pk_irradiance_many(
         let h = handle(probes)?;
         let ps = floats_in(positions, count, "positions")?;
         let ns = floats_in(normals, count, "normals")?;
-        let out = floats_out(out_rgb, 3 * count, "out_rgb")?;
+        let out = floats_out(out_rgb, times3(count)?, "out_rgb")?;
         let mut cold = WalkState::new();
         let ws = walk_state(state).unwrap_or(&mut cold);
         for (i, ((p, n), o)) in ps
@@ -777,7 +784,10 @@ pub unsafe extern "C" fn pk_rig_new(
             )
         })?;
         let state = RigState::new(rig).map_err(|e| Error::new(PkStatus::Format, e.to_string()))?;
-        let scratch = vec![Vec3::ZERO; rig.samples.len() * state.order() * state.order()];
+        let len = (state.order() * state.order())
+            .checked_mul(rig.samples.len())
+            .ok_or_else(|| Error::new(PkStatus::Format, "rig too large"))?;
+        let scratch = vec![Vec3::ZERO; len];
         Ok(Box::into_raw(Box::new(PkRig {
             state,
             samples: rig.samples.clone(),
@@ -822,7 +832,7 @@ pub unsafe extern "C" fn pk_rig_sample_points(
 ) -> PkStatus {
     run(|| {
         let r = rig_ref(rig)?;
-        let need = 3 * r.samples.len();
+        let need = times3(r.samples.len())?;
         if out_len < need {
             return Err(Error::new(
                 PkStatus::BufferTooSmall,
@@ -851,7 +861,7 @@ pub unsafe extern "C" fn pk_rig_update(
     run(|| {
         // SAFETY: non-null rigs come from pk_rig_new.
         let r = unsafe { rig.as_mut() }.ok_or_else(|| Error::null("rig"))?;
-        let need = 3 * r.scratch.len();
+        let need = times3(r.scratch.len())?;
         if len != need {
             return Err(Error::new(
                 PkStatus::InvalidArgument,
@@ -936,7 +946,7 @@ pub unsafe extern "C" fn pk_rig_irradiance_many(
         let r = rig_ref(rig)?;
         let ps = floats_in(positions, count, "positions")?;
         let ns = floats_in(normals, count, "normals")?;
-        let out = floats_out(out_rgb, 3 * count, "out_rgb")?;
+        let out = floats_out(out_rgb, times3(count)?, "out_rgb")?;
         for (i, ((p, n), o)) in ps
             .chunks_exact(3)
             .zip(ns.chunks_exact(3))
