@@ -11,6 +11,8 @@
 //!   position, short buffers and wrong kinds give the documented status and
 //!   a non-empty message, and the program does not crash.
 //!
+//! The usage example in `docs/c-api.md` is compiled as well.
+//!
 //! The program is compiled as C99 (`-Wall -Wextra -Werror -pedantic`) and,
 //! when a C++ compiler exists, also checked as C++11.
 //!
@@ -248,6 +250,34 @@ fn c_program_matches_the_rust_runtime() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
+
+    // The usage example of docs/c-api.md compiles too.
+    let doc = std::fs::read_to_string(manifest.join("../../docs/c-api.md")).unwrap();
+    let example = doc
+        .split("```c\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("a ```c block in docs/c-api.md");
+    let example_path = dir.join("example.c");
+    std::fs::write(&example_path, example).unwrap();
+    let out = Command::new(&cc)
+        .args([
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-fsyntax-only",
+            "-I",
+        ])
+        .arg(manifest.join("include"))
+        .arg(&example_path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "docs/c-api.md example does not compile:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     // Run.
     let run = Command::new(&exe)
