@@ -93,8 +93,12 @@ fn staticlib() -> PathBuf {
         let mut cmd = Command::new(cargo);
         cmd.args(["build", "-p", "probekit-capi", "--lib"])
             .env("CARGO_TARGET_DIR", target_dir);
+        // The profile this test was built with, so the dependencies it
+        // already compiled are reused (the `test` profile lives in `debug/`).
         if dir.file_name().is_some_and(|n| n == "release") {
             cmd.arg("--release");
+        } else {
+            cmd.args(["--profile", "test"]);
         }
         let st = cmd.status().expect("run cargo build");
         assert!(st.success(), "cargo build -p probekit-capi failed");
