@@ -3,8 +3,25 @@
 //! What an engine links: load a `.probes` file and answer "irradiance at this
 //! point, for this normal" without allocating per query. Conventions are those
 //! of [`probekit_sh`].
+//!
+//! ## Features
+//! * `std` (default): [`ProbeFile::load`] from a path, `FormatError::Io`,
+//!   std's float math and hash maps.
+//! * Without `std` the crate is `#![no_std]` + `alloc`; enable `libm` for the
+//!   float functions `core` lacks (`cargo build -p probekit-runtime
+//!   --no-default-features --features libm`). Loading from bytes and every
+//!   query work the same. (The `probekit-sh` dependency itself still needs
+//!   std today, so a target without std is not reachable yet.)
 
 #![warn(missing_docs)]
+// Without the default `std` feature the crate is `no_std` + `alloc` (path
+// loading and `FormatError::Io` disappear; float math comes from `libm`).
+#![cfg_attr(not(feature = "std"), no_std)]
+
+extern crate alloc;
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("probekit-runtime needs the `std` feature or, without std, the `libm` feature");
 
 pub use probekit_sh as sh;
 
@@ -12,6 +29,57 @@ pub mod cloud;
 pub mod format;
 pub mod rig;
 pub mod volume;
+
+/// What `std`'s prelude would give, from `alloc` (works with and without std).
+mod prelude {
+    pub(crate) use alloc::string::{String, ToString};
+    pub(crate) use alloc::vec;
+    pub(crate) use alloc::vec::Vec;
+}
+
+/// Float functions that `core` lacks: std's methods, or `libm` without std.
+mod math {
+    /// `x.floor()`.
+    #[inline]
+    pub(crate) fn floor(x: f32) -> f32 {
+        #[cfg(feature = "std")]
+        return x.floor();
+        #[cfg(not(feature = "std"))]
+        return libm::floorf(x);
+    }
+
+    /// `x.cbrt()`.
+    #[inline]
+    pub(crate) fn cbrt(x: f32) -> f32 {
+        #[cfg(feature = "std")]
+        return x.cbrt();
+        #[cfg(not(feature = "std"))]
+        return libm::cbrtf(x);
+    }
+}
+
+/// Hash maps with std; ordered maps (same lookups, no hasher) without.
+mod collections {
+    #[cfg(feature = "std")]
+    pub(crate) type Map<K, V> = std::collections::HashMap<K, V>;
+    #[cfg(not(feature = "std"))]
+    pub(crate) type Map<K, V> = alloc::collections::BTreeMap<K, V>;
+    #[cfg(feature = "std")]
+    pub(crate) type Set<T> = std::collections::HashSet<T>;
+    #[cfg(not(feature = "std"))]
+    pub(crate) type Set<T> = alloc::collections::BTreeSet<T>;
+
+    /// An empty map with room for `n` entries where the map type supports it.
+    pub(crate) fn map_with_capacity<K, V>(n: usize) -> Map<K, V> {
+        #[cfg(feature = "std")]
+        return Map::with_capacity(n);
+        #[cfg(not(feature = "std"))]
+        {
+            let _ = n;
+            Map::new()
+        }
+    }
+}
 
 pub use cloud::{ProbeCloud, ProbeCloudError};
 pub use format::{FormatError, ProbeFile, ProbeFileKind};

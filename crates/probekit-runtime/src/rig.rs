@@ -31,6 +31,8 @@
 //! fitting and evaluation cannot disagree.
 
 use crate::format::{AxisModel, Rig, RigModel};
+use crate::math;
+use crate::prelude::*;
 use glam::Vec3;
 use probekit_sh::{basis::num_coeffs, convolve, MAX_COEFFS, MAX_ORDER};
 
@@ -101,7 +103,7 @@ pub fn axis_weights(model: AxisModel, u: f32, out: &mut [(u32, f32); 2]) -> usiz
         }
         AxisModel::Lattice(n) => {
             let s = if u.is_nan() { 0.0 } else { u.clamp(0.0, 1.0) } * (n - 1) as f32;
-            let i = (s.floor() as u32).min(n - 2);
+            let i = (math::floor(s) as u32).min(n - 2);
             let f = s - i as f32;
             out[0] = (i, 1.0 - f);
             out[1] = (i + 1, f);

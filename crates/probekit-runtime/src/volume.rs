@@ -41,6 +41,8 @@
 //! [`Volume::irradiance`] applies the clamped-cosine convolution.
 
 use crate::format::{layout::NONE, FormatError, ProbeFile, ProbeFileKind};
+use crate::prelude::*;
+use crate::{collections::Set, math};
 use glam::Vec3;
 
 /// Largest supported SH coefficient count per sample (order 8).
@@ -297,7 +299,7 @@ impl Volume {
                     } else {
                         0.0
                     };
-                    let i = (x.floor().max(0.0) as usize).min(r - 2);
+                    let i = (math::floor(x).max(0.0) as usize).min(r - 2);
                     i0[a] = i;
                     f[a] = (x - i as f32).clamp(0.0, 1.0);
                 }
@@ -523,7 +525,7 @@ fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, V
     }
     // Kernels: distinct (sample, leaf size) pairs, in leaf order (deterministic).
     let mut kernels: Vec<Kernel> = Vec::new();
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = Set::new();
     for (k, on) in o.nodes.iter().enumerate() {
         if on.first_child != NONE {
             continue;

@@ -40,6 +40,9 @@
 //! Queries never allocate. `TetMesh::new` builds the hull adjacency and the
 //! start grid once (`O(n)`).
 
+use crate::collections::map_with_capacity;
+use crate::math;
+use crate::prelude::*;
 use glam::{DVec3, Vec3};
 use thiserror::Error;
 
@@ -267,7 +270,7 @@ struct WalkRecord {
     links: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<WalkRecord>() == 64);
+const _: () = assert!(core::mem::size_of::<WalkRecord>() == 64);
 
 /// Probe positions with their tetrahedralization, ready for queries.
 #[derive(Clone, Debug, PartialEq)]
@@ -285,17 +288,17 @@ pub struct TetMesh {
 /// opposite vertex `i` of `tets[t]`, or [`HULL`]. Error if a face is shared by
 /// more than two tetrahedra.
 pub fn face_neighbors(tets: &[[u32; 4]]) -> Result<Vec<[u32; 4]>, CloudError> {
-    let mut faces = std::collections::HashMap::with_capacity(tets.len() * 2);
+    let mut faces = map_with_capacity(tets.len() * 2);
     let mut n = vec![[HULL; 4]; tets.len()];
     for (t, v) in tets.iter().enumerate() {
         for i in 0..4 {
             let mut f = [v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]];
             f.sort_unstable();
-            match faces.entry(f) {
-                std::collections::hash_map::Entry::Vacant(e) => {
-                    e.insert(Some((t, i)));
+            match faces.get_mut(&f) {
+                None => {
+                    faces.insert(f, Some((t, i)));
                 }
-                std::collections::hash_map::Entry::Occupied(mut e) => match e.get_mut().take() {
+                Some(slot) => match slot.take() {
                     Some((u, j)) => {
                         n[t][i] = u as u32;
                         n[u][j] = t as u32;
@@ -411,7 +414,7 @@ impl TetMesh {
             }
         }
         // Hull adjacency by matching each directed edge with its reverse.
-        let mut edges = std::collections::HashMap::with_capacity(hull.len() * 3);
+        let mut edges = map_with_capacity(hull.len() * 3);
         for (h, f) in hull.iter().enumerate() {
             for k in 0..3 {
                 let e = (f.probes[(k + 1) % 3], f.probes[(k + 2) % 3]);
@@ -462,7 +465,7 @@ impl TetMesh {
         }
         let ext = (hi - lo).max(Vec3::splat(1e-6));
         let target = (self.positions.len() as f32 / 4.0).clamp(1.0, 64.0 * 64.0 * 64.0);
-        let cell = (ext.x * ext.y * ext.z / target).cbrt();
+        let cell = math::cbrt(ext.x * ext.y * ext.z / target);
         let dims = (ext / cell).ceil().clamp(Vec3::ONE, Vec3::splat(64.0));
         let dims = [dims.x as u32, dims.y as u32, dims.z as u32];
         let cells_per_metre = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) / ext;

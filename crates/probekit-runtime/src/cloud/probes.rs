@@ -5,6 +5,7 @@
 
 use super::{CloudError, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
+use crate::prelude::*;
 use glam::Vec3;
 use thiserror::Error;
 

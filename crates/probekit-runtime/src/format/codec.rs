@@ -13,6 +13,7 @@
 //! other coefficient stored as a normalised ratio to DC.
 
 use super::error::FormatError;
+use crate::prelude::*;
 use glam::Vec3;
 use probekit_sh::MAX_ORDER;
 

@@ -1,6 +1,8 @@
 //! [`FormatError`]: every reason a `.probes` file is refused.
 
 use super::layout::SectionId;
+use crate::prelude::*;
+#[cfg(feature = "std")]
 use std::path::PathBuf;
 
 /// Why a `.probes` file (or a [`ProbeFile`](super::ProbeFile) about to be
@@ -9,7 +11,8 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum FormatError {
-    /// The file could not be read.
+    /// The file could not be read (only with the `std` feature).
+    #[cfg(feature = "std")]
     #[error("cannot read {path}: {source}")]
     Io {
         /// The file.

@@ -2,7 +2,8 @@
 //! writer (`probekit::format`). The byte-by-byte specification is
 //! `docs/file-format.md`; field offsets below are pinned by tests.
 
-use std::fmt;
+use crate::prelude::*;
+use core::fmt;
 
 /// The first 8 bytes of every `.probes` file.
 pub const MAGIC: [u8; 8] = *b"PROBEKIT";

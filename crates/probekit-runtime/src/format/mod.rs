@@ -32,7 +32,9 @@ pub use layout::SectionId;
 pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use write::{assemble_file, SectionBuilder};
 
+use crate::prelude::*;
 use glam::Vec3;
+#[cfg(feature = "std")]
 use std::path::Path;
 
 /// What a file holds; decides which sections are required.
@@ -322,7 +324,8 @@ impl ProbeFile {
         read::parse(bytes)
     }
 
-    /// Reads and parses the file at `path`.
+    /// Reads and parses the file at `path` (needs the `std` feature).
+    #[cfg(feature = "std")]
     pub fn load(path: impl AsRef<Path>) -> Result<Self, FormatError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|source| FormatError::Io {

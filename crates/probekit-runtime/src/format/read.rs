@@ -14,9 +14,10 @@ use super::{
     AxisModel, Gradients, Octree, OctreeNode, OuterCells, ProbeFile, ProbeFileKind, Rig, RigModel,
     TetSection, Transition, Validity, VolumeGrid,
 };
+use crate::prelude::*;
+use alloc::collections::BTreeMap;
 use bytemuck::Pod;
 use glam::Vec3;
-use std::collections::BTreeMap;
 
 /// The decoded fixed header of a `.probes` file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -277,7 +278,7 @@ fn bytes_for(count: u32, size: usize) -> Option<usize> {
 /// when `bytes` happens to be aligned for `T`, element by element otherwise.
 /// `T` must consist of 4-byte words only (`u32`, `f32` and arrays of them).
 fn pod_vec<T: Pod>(bytes: &[u8]) -> Vec<T> {
-    let size = std::mem::size_of::<T>();
+    let size = core::mem::size_of::<T>();
     #[allow(unused_mut)]
     let mut v: Vec<T> = match bytemuck::try_cast_slice::<u8, T>(bytes) {
         Ok(s) => s.to_vec(),
@@ -505,7 +506,7 @@ fn parse_rigs(s: &Sec<'_>) -> Result<Vec<Rig>, FormatError> {
             .iter()
             .try_fold(start, |p, a| pad16(a.len()).and_then(|l| p.checked_add(l)))
             .ok_or(FormatError::CountOverflow(s.id))?;
-        let name = std::str::from_utf8(name)
+        let name = core::str::from_utf8(name)
             .map_err(|_| FormatError::InvalidUtf8(s.id))?
             .to_string();
         rigs.push(Rig {
@@ -532,7 +533,7 @@ fn parse_rigs(s: &Sec<'_>) -> Result<Vec<Rig>, FormatError> {
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
-    std::str::from_utf8(text)
+    core::str::from_utf8(text)
         .map(str::to_string)
         .map_err(|_| FormatError::InvalidUtf8(s.id))
 }

@@ -8,6 +8,7 @@ use super::codec::check_finite;
 use super::error::FormatError;
 use super::layout::{SectionId, NONE};
 use super::{ProbeFile, ProbeFileKind};
+use crate::prelude::*;
 use glam::Vec3;
 
 fn non_finite(id: SectionId, element: usize) -> FormatError {

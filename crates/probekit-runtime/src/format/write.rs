@@ -13,8 +13,9 @@ use super::layout::{
     VERSION_MAJOR, VERSION_MINOR,
 };
 use super::{crc32, AxisModel, ProbeFile, RigModel};
+use crate::prelude::*;
+use alloc::collections::BTreeMap;
 use glam::Vec3;
-use std::collections::BTreeMap;
 
 /// Builds one section: a 16-byte header of four `u32`, then arrays each
 /// zero-padded to a multiple of 16 bytes.

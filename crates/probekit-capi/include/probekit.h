@@ -1,0 +1,230 @@
+/*
+ * probekit.h — C ABI of probekit-runtime: load a baked .probes file (probe
+ * cloud, irradiance volume or irradiance rigs) and query diffuse lighting.
+ *
+ * Hand-written; crates/probekit-capi/tests/header.rs checks that every
+ * exported pk_ function of src/lib.rs is declared here with the same number
+ * of parameters, and that the enum values match. Build and link:
+ * docs/c-api.md.
+ *
+ * Conventions (those of probekit_sh):
+ *   - right-handed, +Y up, metres; linear RGB;
+ *   - real spherical harmonics, coefficient index k = l(l+1)+m, Sloan's
+ *     Condon–Shortley phase (Y1,-1 = -0.4886 y, Y1,0 = 0.4886 z,
+ *     Y1,1 = -0.4886 x); "order" = number of bands (L1 = 2, L2 = 3), order²
+ *     coefficients per probe;
+ *   - every SH read or written here is RADIANCE SH, RGB interleaved:
+ *     coefficient k, channel c at out[3k + c];
+ *   - irradiance E(n) = ∫ L(ω) max(0, n·ω) dω, NOT divided by π (divide by π
+ *     and multiply by albedo for Lambertian exit radiance), from the
+ *     clamped-cosine convolution of the radiance SH;
+ *   - points and normals are 3 floats (x, y, z); normals must be unit length
+ *     (they are not renormalised); batched arrays are xyz interleaved.
+ *
+ * Rules:
+ *   - Every pointer is checked for null; bad input returns a PkStatus error
+ *     (constructors return NULL, getters 0 / -1) and sets the calling
+ *     thread's message, pk_last_error(). Nothing panics or aborts.
+ *   - Queries (pk_irradiance*, pk_sh*, pk_rig_irradiance*, pk_rig_update*)
+ *     never allocate.
+ *   - A PkProbes is read-only after loading (its volume interpolation mode is
+ *     atomic), so many threads may query one handle. A PkWalkState or PkRig
+ *     belongs to one object and one thread at a time.
+ */
+#ifndef PROBEKIT_H
+#define PROBEKIT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Version of this ABI; compare with pk_abi_version() at start-up. */
+#define PK_ABI_VERSION 1
+
+/* Result of every fallible call. */
+typedef enum PkStatus {
+    PK_OK = 0,
+    PK_ERR_NULL_ARGUMENT = 1,    /* a required pointer was NULL */
+    PK_ERR_IO = 2,               /* the file could not be read */
+    PK_ERR_FORMAT = 3,           /* not a valid .probes file, or unusable content */
+    PK_ERR_INVALID_ARGUMENT = 4, /* NaN/infinite input, unknown mode, size overflow */
+    PK_ERR_WRONG_KIND = 5,       /* call does not apply to this handle's kind */
+    PK_ERR_BUFFER_TOO_SMALL = 6, /* output buffer too short; nothing written */
+    PK_ERR_NO_GRADIENTS = 7,     /* interpolation mode needs gradients the volume lacks */
+    PK_ERR_OUT_OF_RANGE = 8,     /* index (rig number) out of range */
+    PK_ERR_PANIC = 9             /* internal error caught at the boundary (a bug) */
+} PkStatus;
+
+/* What a loaded file holds (the file header's kind id). */
+typedef enum PkKind {
+    PK_KIND_INVALID = -1, /* NULL handle */
+    PK_KIND_CLOUD = 0,    /* probe cloud: tetrahedral (barycentric) interpolation */
+    PK_KIND_VOLUME = 1,   /* irradiance volume: uniform grid or adaptive octree */
+    PK_KIND_RIG = 2       /* irradiance rigs only, no probes to query */
+} PkKind;
+
+/* Volume interpolation modes for pk_volume_set_interp (Tatarchuk,
+ * "Irradiance Volumes for Games"; formulas in probekit_runtime::volume). */
+#define PK_INTERP_TRILINEAR 0        /* tent kernels; trilinear on a grid (default) */
+#define PK_INTERP_TAYLOR 1           /* first-order Taylor per sample; needs gradients */
+#define PK_INTERP_TRICUBIC 2         /* Hermite from values and gradients; needs gradients */
+#define PK_INTERP_INVERSE_DISTANCE 3 /* 1/distance over the leaf's 8 corners */
+#define PK_INTERP_LEAF_TRILINEAR 4   /* trilinear over the leaf only (pops; for comparison) */
+
+/* A loaded .probes file. */
+typedef struct PkProbes PkProbes;
+/* Per-object probe-cloud walk cache (last tetrahedron found). */
+typedef struct PkWalkState PkWalkState;
+/* Per-object irradiance rig state (its current SH parameters). */
+typedef struct PkRig PkRig;
+
+/* ---- errors ---------------------------------------------------------- */
+
+/* The calling thread's last error message: UTF-8, NUL-terminated, never
+ * NULL, "" before any error. Valid until the next failing call on the same
+ * thread; successful calls leave it unchanged. */
+const char *pk_last_error(void);
+
+/* Copies the last error message into buf (len bytes, always NUL-terminated,
+ * truncated if needed; buf may be NULL when len is 0). Returns the message
+ * length without the NUL. */
+size_t pk_last_error_copy(char *buf, size_t len);
+
+/* PK_ABI_VERSION of the linked library. */
+uint32_t pk_abi_version(void);
+
+/* ---- loading --------------------------------------------------------- */
+
+/* Loads the .probes file at path (NUL-terminated; UTF-8 on Windows). Every
+ * byte is validated (checksums, sizes, indices, finiteness) before use.
+ * Returns a handle to free with pk_free, or NULL with the reason in *status
+ * (status may be NULL) and pk_last_error(). A cloud must have tetrahedra. */
+PkProbes *pk_load_file(const char *path, PkStatus *status);
+
+/* As pk_load_file, from len bytes at data (copied; caller keeps them). */
+PkProbes *pk_load_bytes(const uint8_t *data, size_t len, PkStatus *status);
+
+/* Frees a handle (NULL is a no-op). PkRig states made from it stay valid. */
+void pk_free(PkProbes *probes);
+
+/* The handle's kind; PK_KIND_INVALID for NULL. */
+PkKind pk_kind(const PkProbes *probes);
+
+/* Number of probes (volume samples); 0 for NULL. */
+size_t pk_probe_count(const PkProbes *probes);
+
+/* SH order (bands) of the stored radiance, 1..8; order² coefficients per
+ * probe; 0 for NULL. */
+uint32_t pk_sh_order(const PkProbes *probes);
+
+/* ---- walk state (probe clouds) ---------------------------------------- */
+
+/* A cold walk state for one moving object: queries start from the
+ * tetrahedron the last one found, so coherent queries cost a few steps.
+ * NULL only if allocation fails. */
+PkWalkState *pk_walk_state_new(void);
+
+/* Frees a walk state (NULL is a no-op). */
+void pk_walk_state_free(PkWalkState *state);
+
+/* Makes a walk state cold (object teleported / moved to another cloud). */
+void pk_walk_state_reset(PkWalkState *state);
+
+/* ---- queries (clouds and volumes) -------------------------------------- */
+
+/* Irradiance (not divided by π) at position[3] (metres, world) for unit
+ * normal[3] into out_rgb[3]. state may be NULL (cold walk every call) and is
+ * ignored for volumes. Outside a cloud's convex hull the closest hull point
+ * is used; outside a volume's box the point is clamped to it. */
+PkStatus pk_irradiance(const PkProbes *probes, PkWalkState *state,
+                       const float *position, const float *normal,
+                       float *out_rgb);
+
+/* pk_irradiance for count points: positions, normals and out_rgb hold
+ * 3·count floats each. Visited in order with one walk state. On error,
+ * nothing after the offending point is written. */
+PkStatus pk_irradiance_many(const PkProbes *probes, PkWalkState *state,
+                            size_t count, const float *positions,
+                            const float *normals, float *out_rgb);
+
+/* Interpolated radiance SH at position[3] into out (out_len floats, at least
+ * 3·order²): out[3k + c] for coefficient k = l(l+1)+m, channel c. */
+PkStatus pk_sh(const PkProbes *probes, PkWalkState *state,
+               const float *position, float *out, size_t out_len);
+
+/* pk_sh for count points; out (out_len >= count·3·order² floats) holds
+ * point after point. */
+PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
+                    const float *positions, float *out, size_t out_len);
+
+/* ---- volumes ----------------------------------------------------------- */
+
+/* Sets the interpolation mode (PK_INTERP_*). Taylor and tricubic need
+ * gradients (PK_ERR_NO_GRADIENTS otherwise, mode unchanged). Atomic. */
+PkStatus pk_volume_set_interp(const PkProbes *probes, uint32_t mode);
+
+/* Current PK_INTERP_* mode, or -1 if probes is NULL or not a volume. */
+int32_t pk_volume_interp(const PkProbes *probes);
+
+/* 1 if the volume stores SH gradients, else 0. */
+int32_t pk_volume_has_gradients(const PkProbes *probes);
+
+/* ---- irradiance rigs (Yuan, Nowrouzezahrai & Sloan, JGT 2011) ----------- */
+
+/* Number of rigs in the file (any kind may hold rigs); 0 for NULL. */
+size_t pk_rig_count(const PkProbes *probes);
+
+/* Mesh name of rig index into buf (buf_len bytes, NUL-terminated); *name_len
+ * (may be NULL) receives its length without the NUL. Too short: nothing
+ * written, PK_ERR_BUFFER_TOO_SMALL (ask with buf = NULL, buf_len = 0). */
+PkStatus pk_rig_name(const PkProbes *probes, size_t index, char *buf,
+                     size_t buf_len, size_t *name_len);
+
+/* Per-object state for rig index; parameters are zero until the first
+ * update. Owns its data (the handle may be freed first). NULL on error. */
+PkRig *pk_rig_new(const PkProbes *probes, size_t index, PkStatus *status);
+
+/* Frees a rig state (NULL is a no-op). */
+void pk_rig_free(PkRig *rig);
+
+/* SH order of the rig (and of the SH its update expects); 0 for NULL. */
+uint32_t pk_rig_order(const PkRig *rig);
+
+/* Number of sample points the update expects; 0 for NULL. */
+size_t pk_rig_sample_count(const PkRig *rig);
+
+/* Sample points in mesh coordinates (metres) into out (out_len >=
+ * 3·sample_count floats). */
+PkStatus pk_rig_sample_points(const PkRig *rig, float *out, size_t out_len);
+
+/* Per-frame update, parameters = L × samples: sample_sh holds exactly
+ * len = sample_count·order²·3 floats of radiance SH in the mesh's frame,
+ * sample-major, each sample laid out as pk_sh writes it. */
+PkStatus pk_rig_update(PkRig *rig, const float *sample_sh, size_t len);
+
+/* Update for a translated (not rotated) object: samples lighting (a cloud or
+ * volume) at each sample point + translation[3] (metres), truncating or
+ * zero-padding its SH to the rig's order. state: the object's walk state
+ * (may be NULL). */
+PkStatus pk_rig_update_from_probes(PkRig *rig, const PkProbes *lighting,
+                                   PkWalkState *state,
+                                   const float *translation);
+
+/* Rig irradiance (not divided by π) at mesh-space position[3] for unit
+ * mesh-space normal[3] into out_rgb[3]. */
+PkStatus pk_rig_irradiance(const PkRig *rig, const float *position,
+                           const float *normal, float *out_rgb);
+
+/* pk_rig_irradiance per vertex: 3·count floats in each array. */
+PkStatus pk_rig_irradiance_many(const PkRig *rig, size_t count,
+                                const float *positions, const float *normals,
+                                float *out_rgb);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PROBEKIT_H */

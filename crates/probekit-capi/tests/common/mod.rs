@@ -1,0 +1,165 @@
+//! Test files shared by the C program test and the Rust-side ABI tests: a
+//! probe cloud (27 probes, Kuhn tetrahedra, one rig) and a uniform volume
+//! (same probes, exact gradients) holding a radiance field linear in position.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use probekit_runtime::cloud::{face_neighbors, TetMesh};
+use probekit_runtime::format::{
+    AxisModel, Coefficients, Gradients, ProbeFile, ProbeFileKind, Rig, RigModel, TetSection,
+    VolumeGrid,
+};
+
+pub const ORDER: u32 = 3;
+pub const N: usize = (ORDER * ORDER) as usize;
+
+/// Radiance SH coefficient `k` of a field linear in position.
+pub fn field(p: Vec3, k: usize) -> Vec3 {
+    let k = k as f32;
+    Vec3::new(
+        0.6 + 0.05 * k + 0.2 * p.x - 0.1 * p.y,
+        0.9 - 0.04 * k + 0.15 * p.z,
+        0.3 + 0.02 * k + 0.1 * (p.x + p.y + p.z),
+    )
+}
+
+/// Gradient of [`field`] coefficient `k` along `axis`.
+pub fn field_gradient(axis: usize, _k: usize) -> Vec3 {
+    [
+        Vec3::new(0.2, 0.0, 0.1),
+        Vec3::new(-0.1, 0.0, 0.1),
+        Vec3::new(0.0, 0.15, 0.1),
+    ][axis]
+}
+
+/// 3×3×3 probes on a 2 m cube; `i + 3(j + 3k)`.
+pub fn grid_positions() -> Vec<Vec3> {
+    let mut p = Vec::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..3 {
+                p.push(Vec3::new(i as f32, j as f32, k as f32));
+            }
+        }
+    }
+    p
+}
+
+pub fn coeffs(positions: &[Vec3]) -> Vec<Vec3> {
+    positions
+        .iter()
+        .flat_map(|&p| (0..N).map(move |k| field(p, k)))
+        .collect()
+}
+
+/// The cloud file: the 27 grid probes, each cube split into the 6 Kuhn
+/// tetrahedra around its main diagonal (consistent across cubes), with
+/// neighbours and barycentric matrices, plus one rig.
+pub fn cloud_file() -> ProbeFile {
+    let pos = grid_positions();
+    let idx = |i: usize, j: usize, k: usize| (i + 3 * (j + 3 * k)) as u32;
+    let mut tets = Vec::new();
+    for k in 0..2 {
+        for j in 0..2 {
+            for i in 0..2 {
+                let c = [i, j, k];
+                for perm in [
+                    [0, 1, 2],
+                    [0, 2, 1],
+                    [1, 0, 2],
+                    [1, 2, 0],
+                    [2, 0, 1],
+                    [2, 1, 0],
+                ] {
+                    let mut v = c;
+                    let mut t = [idx(v[0], v[1], v[2]); 4];
+                    for (s, &a) in perm.iter().enumerate() {
+                        v[a] += 1;
+                        t[s + 1] = idx(v[0], v[1], v[2]);
+                    }
+                    tets.push(t);
+                }
+            }
+        }
+    }
+    let neighbours = face_neighbors(&tets).unwrap();
+    let mesh = TetMesh::new(pos.clone(), tets.clone(), neighbours.clone()).unwrap();
+    let barycentric = (0..tets.len() as u32)
+        .map(|t| {
+            let b = mesh.bary(t);
+            b.rows.map(|r| [r.x, r.y, r.z, -r.dot(b.origin)])
+        })
+        .collect();
+    let mut f = ProbeFile::cloud(pos.clone(), ORDER, &coeffs(&pos)).unwrap();
+    f.tetrahedra = Some(TetSection {
+        vertices: tets,
+        neighbours,
+        barycentric,
+    });
+    let samples: Vec<Vec3> = (0..6)
+        .map(|s| Vec3::new(0.1 * s as f32, 0.5 - 0.08 * s as f32, 0.3 + 0.05 * s as f32))
+        .collect();
+    f.rigs = vec![Rig {
+        name: "crate ü".into(),
+        model: RigModel::Tensor([
+            AxisModel::Lattice(2),
+            AxisModel::Gradient,
+            AxisModel::Constant,
+        ]),
+        order: ORDER,
+        bbox_min: Vec3::ZERO,
+        bbox_max: Vec3::new(0.5, 0.5, 0.6),
+        fitting: (0..4 * samples.len())
+            .map(|i| ((i * 7 % 11) as f32 - 3.0) / 10.0)
+            .collect(),
+        samples,
+        transitions: Vec::new(),
+    }];
+    f.validate().unwrap();
+    f
+}
+
+/// The volume file: the same 27 probes as a uniform grid, with the field's
+/// exact gradients.
+pub fn volume_file() -> ProbeFile {
+    let pos = grid_positions();
+    let mut f = ProbeFile::new(
+        ProbeFileKind::Volume,
+        Coefficients::from_f32(ORDER, &coeffs(&pos)).unwrap(),
+    );
+    f.grid = Some(VolumeGrid {
+        min: Vec3::ZERO,
+        max: Vec3::splat(2.0),
+        resolution: [3, 3, 3],
+    });
+    f.gradients = Some(Gradients {
+        order: ORDER,
+        data: (0..pos.len())
+            .flat_map(|_| (0..3).flat_map(|a| (0..N).map(move |k| field_gradient(a, k))))
+            .collect(),
+    });
+    f.positions = pos;
+    f.validate().unwrap();
+    f
+}
+
+/// Query points (inside, on faces, outside the hull) and unit normals.
+pub fn points() -> Vec<(Vec3, Vec3)> {
+    let mut s = 0x2545_F491_u32;
+    let mut r = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s as f32 / u32::MAX as f32
+    };
+    let mut v: Vec<(Vec3, Vec3)> = (0..12)
+        .map(|_| {
+            let p = Vec3::new(r(), r(), r()) * 2.0;
+            let n = (Vec3::new(r(), r(), r()) - 0.5).normalize_or(Vec3::Y);
+            (p, n)
+        })
+        .collect();
+    v.push((Vec3::new(1.0, 1.0, 0.5), Vec3::Y)); // on shared faces
+    v.push((Vec3::new(3.0, 0.5, -1.0), Vec3::X)); // outside the hull / box
+    v
+}
