@@ -33,13 +33,15 @@ pub struct BakeArgs {
     /// Scene file (`.toml`, `.gltf`, `.glb`, `.obj`) or `builtin:demo`.
     #[arg(default_value = "builtin:demo")]
     pub scene: String,
-    /// `grid` (default), `manual` (= `--positions`) or `adaptive` (`--budget`, `--tolerance`).
+    /// `adaptive` (default: `--budget`, `--tolerance`), `grid` (default when
+    /// `--grid` or `--cell` is given) or `manual` (= `--positions`).
     #[arg(long)]
     pub placement: Option<String>,
     /// Adaptive placement: probe budget.
     #[arg(long, default_value_t = 256)]
     pub budget: usize,
-    /// Adaptive placement: stop when the mean relative disagreement is below this.
+    /// Adaptive placement: stop when the relative RMSE estimated on the
+    /// placement's own captured pool is below this.
     #[arg(long, default_value_t = 0.02)]
     pub tolerance: f32,
     /// CSV of probe positions `x,y,z` (header optional).
@@ -161,6 +163,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     let method = match (a.placement.as_deref(), &a.positions) {
         (Some("manual") | None, Some(_)) => "manual",
         (Some("manual"), None) => bail!("--placement manual needs --positions FILE.csv"),
+        (None, None) if a.grid.is_none() && a.cell.is_none() => "adaptive",
         (Some("grid") | None, None) => "grid",
         (Some("grid"), Some(_)) => bail!("--placement grid and --positions exclude each other"),
         (Some("adaptive"), None) => "adaptive",
@@ -173,6 +176,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
         let settings = CaptureSettings::from_scene(&scene);
         let pb = ProgressBar::new(a.budget as u64);
+        pb.set_style(
+            ProgressStyle::with_template(
+                "placing: {msg:9} {bar:40} {pos}/{len}  {elapsed} elapsed",
+            )
+            .expect("static template"),
+        );
         let placed = probekit::placement::place(
             &baker,
             scene.bake_box(),
@@ -181,7 +190,8 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 tolerance: a.tolerance,
             },
             &settings,
-            &|_, done, total| {
+            &|phase, done, total| {
+                pb.set_message(phase.to_string());
                 pb.set_length(total as u64);
                 pb.set_position(done as u64)
             },

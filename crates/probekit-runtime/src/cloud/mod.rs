@@ -122,7 +122,7 @@ pub enum CloudError {
         /// Local face (opposite vertex `face`).
         face: usize,
     },
-    /// A tetrahedron has (numerically) zero volume.
+    /// A tetrahedron has zero volume, or a barycentric matrix that overflows `f32`.
     #[error("tetrahedron {tet} is degenerate (zero volume)")]
     DegenerateTet {
         /// Tetrahedron index.
@@ -362,12 +362,16 @@ impl TetMesh {
             let q = v.map(|i| positions[i as usize].as_dvec3());
             let (e0, e1, e2) = (q[0] - q[3], q[1] - q[3], q[2] - q[3]);
             let det = e0.dot(e1.cross(e2));
-            let scale = e0.length() * e1.length() * e2.length();
-            if det.is_nan() || det.abs() <= 1e-12 * scale {
-                return Err(CloudError::DegenerateTet { tet: t });
-            }
+            // Only a flat tetrahedron is refused: an exact Delaunay
+            // tetrahedralization of near-co-planar probes (leak-prevention
+            // probes offset by the same distance from one wall) legitimately
+            // holds slivers whose volume is tiny but positive, and a query
+            // point rarely falls inside one.
             // Rows of the inverse of [e0 e1 e2] are the cross products / det.
             let rows = [e1.cross(e2) / det, e2.cross(e0) / det, e0.cross(e1) / det];
+            if det.is_nan() || det == 0.0 || !rows.iter().all(|r| r.as_vec3().is_finite()) {
+                return Err(CloudError::DegenerateTet { tet: t });
+            }
             bary.push(BaryMatrix {
                 rows: rows.map(|r| r.as_vec3()),
                 origin: q[3].as_vec3(),

@@ -10,11 +10,11 @@
 //! * `leaks`: points whose interpolated luminance exceeds 4× the true
 //!   luminance plus 1 % of the mean true luminance (issue 5).
 
-use super::inside_geometry;
+use super::is_free;
 use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
 use crate::bake::{BakeError, Baker, ReferenceSettings};
 use crate::scene::Aabb;
-use crate::trace::{Ray, Tracer};
+use crate::trace::Tracer;
 use glam::{Vec2, Vec3};
 use probekit_runtime::cloud::{TetMesh, WalkState};
 use probekit_runtime::{Interp, ProbeCloud, ProbeCloudError, ProbeFile, Volume, VolumeError};
@@ -34,19 +34,9 @@ pub struct EvalPoint {
 }
 
 /// `n` deterministic points (seeded) in free space of `b`: rejected when
-/// inside geometry ([`inside_geometry`]) or when any of 26 rays of length
-/// [`SURFACE_CLEARANCE`] hits a surface. Gives up after `200·n` tries.
+/// not in free space ([`is_free`]: inside geometry, or any of 26 rays of length
+/// [`SURFACE_CLEARANCE`] hits a surface). Gives up after `200·n` tries.
 pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<EvalPoint> {
-    let mut dirs = Vec::new();
-    for x in -1i32..=1 {
-        for y in -1i32..=1 {
-            for z in -1i32..=1 {
-                if (x, y, z) != (0, 0, 0) {
-                    dirs.push(Vec3::new(x as f32, y as f32, z as f32).normalize());
-                }
-            }
-        }
-    }
     let mut out = Vec::with_capacity(n);
     let size = b.size();
     let mut tries = 0u64;
@@ -55,20 +45,12 @@ pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<Eval
         tries += 1;
         let p = b.min + Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * size;
         let normal = sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32()));
-        if dirs.iter().any(|d| {
-            tracer
-                .closest_hit(&Ray::new(p, *d), SURFACE_CLEARANCE)
-                .is_some()
-        }) {
-            continue;
+        if is_free(tracer, p, SURFACE_CLEARANCE) {
+            out.push(EvalPoint {
+                position: p,
+                normal,
+            });
         }
-        if inside_geometry(tracer, p) {
-            continue;
-        }
-        out.push(EvalPoint {
-            position: p,
-            normal,
-        });
     }
     out
 }

@@ -20,15 +20,16 @@
 //! first-hit back-face vote ([`inside_geometry`]), and captures whose
 //! validity says invalid are dropped.
 
+mod adaptive;
 pub mod eval;
 
-use crate::bake::sampling::SampleRng;
+pub use adaptive::PROBE_CLEARANCE;
+
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
 use crate::scene::Aabb;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
-use probekit_runtime::cloud::{TetMesh, WalkState};
 use probekit_sh::ShRgb;
 use std::collections::BTreeSet;
 use thiserror::Error;
@@ -195,6 +196,26 @@ pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
         }
     }
     back * 2 > DIRS.len()
+}
+
+/// True when `p` is in free space: not [`inside_geometry`] and no surface
+/// within `clearance` metres along any of 26 directions (the axes, face
+/// diagonals and cube diagonals).
+pub fn is_free(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
+    for x in -1i32..=1 {
+        for y in -1i32..=1 {
+            for z in -1i32..=1 {
+                if (x, y, z) == (0, 0, 0) {
+                    continue;
+                }
+                let d = Vec3::new(x as f32, y as f32, z as f32).normalize();
+                if tracer.closest_hit(&Ray::new(p, d), clearance).is_some() {
+                    return false;
+                }
+            }
+        }
+    }
+    !inside_geometry(tracer, p)
 }
 
 /// Cell-centred uniform grid over `b`: cell size `cell`, or about `budget`
@@ -520,7 +541,7 @@ pub fn place(
                     "tolerance {tolerance} must be ≥ 0"
                 )));
             }
-            adaptive(&mut st, &bake_box, *budget, *tolerance, &ls, progress)?;
+            adaptive::adaptive(&mut st, &bake_box, *budget, *tolerance, &ls, progress)?;
         }
     }
     let captured = reusable.then(|| st.sh.clone());
@@ -529,132 +550,6 @@ pub fn place(
         captured,
         stats: st.stats,
     })
-}
-
-fn adaptive(
-    st: &mut State,
-    bbox: &Aabb,
-    budget: usize,
-    tolerance: f32,
-    ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
-) -> Result<(), PlacementError> {
-    let coarse = grid_points(bbox, None, Some((budget / 8).max(8)))?;
-    let coarse = st.filter_free(coarse);
-    let got = st.capture(&coarse)?;
-    st.add(got);
-    progress("coarse", st.positions.len(), budget);
-    let (_, before) = crossing_extent(st.baker.tracer(), &st.positions)?;
-    st.stats.crossing_before = before;
-    st.fix_leaks(ls, budget.saturating_sub(st.positions.len()) / 2)?;
-    let mut round = 0u32;
-    let size = bbox.size();
-    while st.positions.len() < budget {
-        round += 1;
-        let n = st.positions.len();
-        let batch = (budget - n).min((n / 4).max(4));
-        let tri = tetrahedralize(&st.positions)?;
-        // The f32 runtime mesh may reject a sliver the exact tetrahedralization
-        // keeps; then refinement stops with what it has.
-        let mesh: TetMesh = match tri.to_tet_mesh(&st.positions) {
-            Ok(m) => m,
-            Err(_) => break,
-        };
-        // Candidates: centroids of the largest tets and of the highest-contrast
-        // tets, plus jittered points.
-        let lum_e: Vec<f32> = st
-            .sh
-            .iter()
-            .map(|s| s.irradiance(Vec3::Y).length() + s.irradiance(Vec3::NEG_Y).length())
-            .collect();
-        let mut scored: Vec<(f32, f32, usize)> = tri
-            .tets
-            .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                let p: Vec<Vec3> = t.iter().map(|&k| st.positions[k as usize]).collect();
-                let vol = ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) / 6.0).abs();
-                let l: Vec<f32> = t.iter().map(|&k| lum_e[k as usize]).collect();
-                let (lo, hi) = l
-                    .iter()
-                    .fold((f32::MAX, f32::MIN), |a, &x| (a.0.min(x), a.1.max(x)));
-                let contrast = (hi - lo) / (hi + lo + 1e-6);
-                (vol, contrast * vol.cbrt(), i)
-            })
-            .collect();
-        let ncand = 3 * batch;
-        let centroid = |i: usize| -> Vec3 {
-            tri.tets[i]
-                .iter()
-                .map(|&k| st.positions[k as usize])
-                .sum::<Vec3>()
-                / 4.0
-        };
-        let mut cands = Vec::with_capacity(ncand);
-        scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
-        cands.extend(scored.iter().take(ncand / 3).map(|s| centroid(s.2)));
-        scored.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.2.cmp(&b.2)));
-        cands.extend(scored.iter().take(ncand / 3).map(|s| centroid(s.2)));
-        let mut rng = SampleRng::new(st.settings.seed ^ 0x504c_4143, round as u64, 0);
-        while cands.len() < ncand {
-            let u = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-            cands.push(bbox.min + u * size);
-        }
-        cands.dedup_by(|a, b| a.distance_squared(*b) < 1e-8);
-        let cands = st.filter_free(cands);
-        let got = st.capture(&cands)?;
-        if got.is_empty() {
-            break;
-        }
-        // Predict by barycentric interpolation and score.
-        let mut ws = WalkState::new();
-        let mut errs: Vec<(f32, usize)> = Vec::with_capacity(got.len());
-        let mut mean_abs = 0.0f32;
-        for s in &st.sh {
-            mean_abs += s.irradiance(Vec3::Y).length() / st.sh.len() as f32;
-        }
-        let floor = 0.01 * mean_abs;
-        for (ci, (p, truth)) in got.iter().enumerate() {
-            let (idx, w) = mesh.weights_at(*p, &mut ws);
-            let mut pred = ShRgb::zeros(truth.order());
-            for k in 0..4 {
-                if w[k] != 0.0 {
-                    pred.add_scaled(&st.sh[idx[k] as usize], w[k]);
-                }
-            }
-            errs.push((relative_disagreement(&pred, truth, floor), ci));
-        }
-        let mean_err = errs.iter().map(|e| e.0).sum::<f32>() / errs.len() as f32;
-        st.stats.last_mean_error = Some(mean_err);
-        errs.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        // Greedy pick with spacing.
-        let spacing = 0.3 * (size.x * size.y * size.z / st.positions.len() as f32).cbrt();
-        let mut chosen: Vec<(Vec3, ShRgb)> = Vec::new();
-        for &(_, ci) in &errs {
-            if chosen.len() >= batch {
-                break;
-            }
-            let p = got[ci].0;
-            if chosen.iter().all(|c| c.0.distance(p) > spacing) {
-                chosen.push(got[ci].clone());
-            }
-        }
-        st.add(chosen);
-        progress("adaptive", st.positions.len(), budget);
-        if mean_err < tolerance {
-            break;
-        }
-        if round > 200 {
-            break;
-        }
-    }
-    st.stats.rounds = round;
-    // Final leak pass (may add a few percent over the budget).
-    st.fix_leaks(ls, (budget / 10).max(4))?;
-    let (_, after) = crossing_extent(st.baker.tracer(), &st.positions)?;
-    st.stats.crossing_after = after;
-    progress("leaks", st.positions.len(), budget);
-    Ok(())
 }
 
 #[cfg(test)]

@@ -170,7 +170,6 @@ fn cloud_error(
 }
 
 #[test]
-#[ignore = "fails today: adaptive (105 probes) rel_rmse 2.68 vs grid (95) 0.73; see docs/bench/placement.md"]
 fn adaptive_beats_grid_at_equal_probe_count() {
     let scene = Scene::builtin_demo();
     let baker = Baker::new(&scene).unwrap();
