@@ -217,7 +217,7 @@ pub fn cluster_representatives(points: &[Vec3], k: usize) -> Vec<Vec3> {
     let mut best: Vec<Option<(f32, usize)>> = vec![None; km.centres.len()];
     for (i, (p, &c)) in points.iter().zip(&km.assignment).enumerate() {
         let d = p.distance_squared(km.centres[c]);
-        if best[c].is_none_or(|b| d < b.0) {
+        if !matches!(best[c], Some(b) if b.0 <= d) {
             best[c] = Some((d, i));
         }
     }
@@ -249,6 +249,9 @@ struct Walker {
     active: bool,
 }
 
+/// One valid capture: `(captured position, all-light SH, field SH)`.
+type Capture = (Vec3, ShRgb, ShRgb);
+
 /// Captures `pts` returning `(captured position, all-light SH, field SH)` for
 /// the valid ones (index into `pts`), the field being indirect light when
 /// `indirect_only`.
@@ -256,7 +259,7 @@ fn capture_field(
     st: &mut State,
     pts: &[Vec3],
     indirect_only: bool,
-) -> Result<Vec<Option<(Vec3, ShRgb, ShRgb)>>, PlacementError> {
+) -> Result<Vec<Option<Capture>>, PlacementError> {
     let mut cs = st.settings.clone();
     cs.split_direct = indirect_only;
     let res = st.baker.capture_many(pts, st.next_index, &cs, &|_, _| {})?;
@@ -552,6 +555,11 @@ mod tests {
             "{closer} of {}",
             moves.len()
         );
+        eprintln!(
+            "point light: {} accepted moves, {closer} closer; {} probes at the end",
+            moves.len(),
+            st.positions.len()
+        );
         for q in &st.positions {
             assert!(!in_pillar(*q), "{q}");
         }
@@ -656,9 +664,6 @@ mod tests {
         let lum: Vec<f32> = dirs.iter().map(|d| d.dot(Vec3::X).max(0.0)).collect();
         let g = sampled_gradient(&lum, &dirs);
         assert!(g.normalize().dot(Vec3::X) > 0.999, "{g}");
-        assert_eq!(
-            sampled_gradient(&vec![1.0; 26], &dirs).length() < 1e-6,
-            true
-        );
+        assert!(sampled_gradient(&[1.0; 26], &dirs).length() < 1e-6);
     }
 }
