@@ -518,6 +518,39 @@ mod tests {
     }
 
     #[test]
+    fn log_log_chart_draws_a_power_law_straight() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("loglog.png");
+        // y = x / 100: a straight line on log-log axes, not on a linear y axis.
+        let s = vec![(
+            "s".to_string(),
+            vec![(1.0, 0.01), (10.0, 0.1), (100.0, 1.0)],
+        )];
+        line_chart_log(&p, "t", &s, "x", "y", true, true).unwrap();
+        let img = decode(&p);
+        let right = W as i64 - RIGHT;
+        let mean_row = |f: f64| {
+            let x = (LEFT as f64 + f * (right - LEFT) as f64).round() as u32;
+            let rows: Vec<u32> = (0..H)
+                .filter(|&y| *img.get_pixel(x, y) == PALETTE[0])
+                .collect();
+            assert!(!rows.is_empty(), "no line at column {x}");
+            rows.iter().sum::<u32>() as f64 / rows.len() as f64
+        };
+        let (a, b, c) = (mean_row(0.25), mean_row(0.5), mean_row(0.75));
+        assert!((b - 0.5 * (a + c)).abs() < 2.0, "{a} {b} {c}");
+        // Two decades over the plot height: a quarter of the width is half a decade.
+        let bottom = H as i64 - 70;
+        let half_decade = (bottom - TOP) as f64 / 4.0;
+        assert!(((a - c) - half_decade * 2.0).abs() < 3.0, "{a} {c}");
+        let bad = vec![("x".to_string(), vec![(1.0, 0.0)])];
+        assert!(matches!(
+            line_chart_log(&p, "t", &bad, "x", "y", false, true),
+            Err(PlotError::BadData { .. })
+        ));
+    }
+
+    #[test]
     fn number_labels() {
         assert_eq!(fmt_num(0.25), "0.25");
         assert_eq!(fmt_num(12.0), "12");
