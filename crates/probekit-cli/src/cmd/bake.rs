@@ -34,7 +34,8 @@ pub struct BakeArgs {
     #[arg(default_value = "builtin:demo")]
     pub scene: String,
     /// `adaptive` (default: `--budget`, `--tolerance`), `grid` (default when
-    /// `--grid` or `--cell` is given) or `manual` (= `--positions`).
+    /// `--grid` or `--cell` is given), `manual` (= `--positions`),
+    /// `spawn-merge` or `gradient-ascent` (seed 003; `--budget` and the flags below).
     #[arg(long)]
     pub placement: Option<String>,
     /// Adaptive placement: probe budget.
@@ -80,6 +81,9 @@ pub struct BakeArgs {
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
+    /// Parameters of `--placement spawn-merge` and `gradient-ascent`.
+    #[command(flatten)]
+    pub seed003: Seed003Args,
 }
 
 /// Arguments of `probekit merge`.
@@ -170,9 +174,17 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         (Some("adaptive"), Some(_)) => {
             bail!("--placement adaptive and --positions exclude each other")
         }
-        (Some(o), _) => bail!("--placement {o}: expected grid, manual or adaptive"),
+        (Some(m @ ("spawn-merge" | "gradient-ascent")), None) => m,
+        (Some(m @ ("spawn-merge" | "gradient-ascent")), Some(_)) => {
+            bail!("--placement {m} and --positions exclude each other")
+        }
+        (Some(o), _) => bail!(
+            "--placement {o}: expected grid, manual, adaptive, spawn-merge or gradient-ascent"
+        ),
     };
-    let (points, parameters) = if method == "adaptive" {
+    let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
+        a.seed003.place(&scene, &a.scene, method, a.budget)?
+    } else if method == "adaptive" {
         let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
         let settings = CaptureSettings::from_scene(&scene);
         let pb = ProgressBar::new(a.budget as u64);
@@ -427,4 +439,115 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         parts.len()
     );
     Ok(())
+}
+
+/// Flags of seed 003's placements (`--placement spawn-merge|gradient-ascent`);
+/// `--budget` sets their size (see [`Seed003Args::method`]).
+#[derive(Debug, Args)]
+pub struct Seed003Args {
+    /// Spawn-merge / gradient-ascent: probes of the initial uniform grid
+    /// (default: budget/2 for spawn-merge, budget for gradient-ascent).
+    #[arg(long)]
+    pub initial: Option<usize>,
+    /// Spawn-merge: contrast threshold in (0, 1).
+    #[arg(long, default_value_t = 0.2)]
+    pub contrast: f32,
+    /// Spawn-merge: SH sampling directions for the contrast, 6 or 26.
+    #[arg(long, default_value_t = 26)]
+    pub directions: u32,
+    /// Spawn-merge: merge similar pairs shorter than this (metres; default 1.05 cells).
+    #[arg(long)]
+    pub merge_distance: Option<f32>,
+    /// Spawn-merge: spawn between contrasting pairs no longer than this (metres; default 2 cells).
+    #[arg(long)]
+    pub spawn_distance: Option<f32>,
+    /// Spawn-merge: spawned probes at least this far from both ends (metres; default cell/4).
+    #[arg(long)]
+    pub min_distance: Option<f32>,
+    /// Spawn-merge / gradient-ascent: most iterations.
+    #[arg(long, default_value_t = 8)]
+    pub max_iterations: u32,
+    /// Gradient-ascent: gradient field from indirect light only.
+    #[arg(long)]
+    pub gradient_indirect: bool,
+    /// Gradient-ascent: initial step as a fraction of the grid cell.
+    #[arg(long, default_value_t = 0.5)]
+    pub step: f32,
+    /// Gradient-ascent: stop a probe once its step is below this fraction of the cell.
+    #[arg(long, default_value_t = 0.05)]
+    pub min_step: f32,
+    /// Gradient-ascent: k-means clusters replacing dark probes (default n/8).
+    #[arg(long)]
+    pub dark_clusters: Option<usize>,
+}
+
+impl Seed003Args {
+    /// The placement method `name` (`spawn-merge` or `gradient-ascent`)
+    /// with these flags; spawn-merge's probe limit is `budget`.
+    pub fn method(
+        &self,
+        name: &str,
+        budget: usize,
+    ) -> Result<probekit::placement::PlacementMethod> {
+        use probekit::placement::gradient_ascent::GradientAscentParams;
+        use probekit::placement::spawn_merge::{Directions, SpawnMergeParams};
+        use probekit::placement::PlacementMethod;
+        Ok(match name {
+            "spawn-merge" => PlacementMethod::SpawnMerge(SpawnMergeParams {
+                initial: self.initial.unwrap_or(budget / 2),
+                contrast: self.contrast,
+                merge_distance: self.merge_distance,
+                spawn_distance: self.spawn_distance,
+                min_distance: self.min_distance,
+                directions: Directions::from_count(self.directions)?,
+                max_probes: budget,
+                max_iterations: self.max_iterations,
+            }),
+            _ => PlacementMethod::GradientAscent(GradientAscentParams {
+                initial: self.initial.unwrap_or(budget),
+                indirect_only: self.gradient_indirect,
+                step: self.step,
+                min_step: self.min_step,
+                max_iterations: self.max_iterations,
+                dark_clusters: self.dark_clusters,
+                ..Default::default()
+            }),
+        })
+    }
+
+    /// Places probes with `name` in the scene's bake box; returns the
+    /// positions and the placement parameters for the file's metadata
+    /// (the method's parameters plus the probe `count`).
+    pub fn place(
+        &self,
+        scene: &Scene,
+        scene_name: &str,
+        name: &str,
+        budget: usize,
+    ) -> Result<(Vec<Vec3>, serde_json::Value)> {
+        use probekit::placement::PlacementMethod;
+        let method = self.method(name, budget)?;
+        let baker = probekit::bake::Baker::new(scene).with_context(|| scene_name.to_string())?;
+        let settings = CaptureSettings::from_scene(scene);
+        let pb = ProgressBar::new(budget as u64);
+        let placed = probekit::placement::place(
+            &baker,
+            scene.bake_box(),
+            &method,
+            &settings,
+            &|_, done, total| {
+                pb.set_length(total as u64);
+                pb.set_position(done as u64)
+            },
+        )
+        .with_context(|| format!("{scene_name}: {name} placement"))?;
+        pb.finish_and_clear();
+        let mut params = match &method {
+            PlacementMethod::SpawnMerge(p) => p.to_json(&scene.bake_box()),
+            PlacementMethod::GradientAscent(p) => p.to_json(),
+            _ => serde_json::json!({}),
+        };
+        params["count"] = placed.positions.len().into();
+        Ok((placed.positions, params))
+    }
 }

@@ -2,15 +2,26 @@
 //! error of a probe cloud against path-traced ground truth at random
 //! free-space points of the bake box (`probekit::placement::eval`).
 //! Works on clouds and volumes alike (`Predictor`).
+//!
+//! `--compare grid` also bakes (in-process, with the capture settings the
+//! file's metadata records) a uniform grid with the file's probe count over
+//! the scene's bake box and reports its figures under `"compare":{"grid":..}`;
+//! `--plot FILE.png [--budgets 50,100,200,400]` runs a placement sweep
+//! (`probekit::placement::sweep`) on the same points and ground truth, draws
+//! rel. RMSE against probe count (log-log) and reports it under `"sweep"`.
 
 use super::util::{load_probes, parse_interp};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{Baker, ReferenceSettings};
+use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::placement::eval::{
-    mean_luminance, metrics, reference, sample_points, Metrics, Predictor,
+    mean_luminance, metrics, reference, sample_points, EvalPoint, Metrics, Predictor,
 };
+use probekit::placement::sweep::{
+    place_and_bake, plot_sweep, predict_file, settings_from_metadata, sweep, SWEEP_METHODS,
+};
+use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
 use std::path::PathBuf;
 
@@ -38,6 +49,22 @@ pub struct EvalArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Also evaluate a uniform `grid` with the same probe count.
+    #[arg(long)]
+    pub compare: Option<String>,
+    /// Run a placement sweep over `--budgets` and draw it to this PNG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Probe budgets of the sweep.
+    #[arg(long, value_delimiter = ',', default_value = "50,100,200,400")]
+    pub budgets: Vec<usize>,
+    /// Methods of the sweep (default grid, adaptive, spawn-merge, gradient-ascent).
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
+    /// Receiver samples per probe for the `--compare`/`--plot` bakes
+    /// (default: as the file's metadata records).
+    #[arg(long)]
+    pub samples: Option<u32>,
 }
 
 fn to_json(m: &Metrics) -> serde_json::Value {
@@ -78,10 +105,73 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     };
     let truth = reference(&baker, &pts, &rs).with_context(|| a.scene.display().to_string())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
-    let mean = mean_luminance(&truth);
-    let all = metrics(&pred, &truth, mean);
-    let mut out = to_json(&all);
-    out["probes"] = file.positions.len().into();
+    let mut out = figures(&scene, &pts, &pred, &truth, file.positions.len());
+    let scene_name = a.scene.display().to_string();
+    let mut fallback = CaptureSettings::from_scene(&scene);
+    fallback.samples = scene.bake.samples.unwrap_or(super::bake::DEFAULT_SAMPLES);
+    let (mut settings, codec) = settings_from_metadata(&file.metadata, &fallback);
+    if let Some(n) = a.samples {
+        settings.samples = n;
+    }
+    match a.compare.as_deref() {
+        None => {}
+        Some("grid") => {
+            let grid = PlacementMethod::Grid {
+                cell: None,
+                budget: Some(file.positions.len().max(8)),
+            };
+            let g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec)
+                .with_context(|| format!("{scene_name}: --compare grid"))?;
+            let gp =
+                predict_file(&g, &pts).with_context(|| format!("{scene_name}: --compare grid"))?;
+            out["compare"] = serde_json::json!({ "grid": figures(&scene, &pts, &gp, &truth, g.positions.len()) });
+        }
+        Some(o) => bail!("--compare {o}: expected grid"),
+    }
+    if let Some(plot) = &a.plot {
+        if a.budgets.is_empty() || a.budgets.iter().any(|&b| b < 8) {
+            bail!("--budgets: expected probe counts of at least 8");
+        }
+        let methods: Vec<&str> = match &a.methods {
+            Some(m) => m.iter().map(String::as_str).collect(),
+            None => SWEEP_METHODS.to_vec(),
+        };
+        let rows = sweep(
+            &baker,
+            scene.bake_box(),
+            &methods,
+            &a.budgets,
+            &settings,
+            &pts,
+            &truth,
+            &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),
+        );
+        if rows.is_empty() {
+            bail!("{scene_name}: every sweep configuration failed");
+        }
+        plot_sweep(plot, &format!("{scene_name}: error vs probes"), &rows)?;
+        out["sweep"] = rows.iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
+        out["plot"] = plot.display().to_string().into();
+    }
+    if a.json {
+        println!("{out}");
+    } else {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    }
+    Ok(())
+}
+
+/// Overall figures, `"probes"` and per-region figures of a prediction.
+fn figures(
+    scene: &Scene,
+    pts: &[EvalPoint],
+    pred: &[Vec3],
+    truth: &[Vec3],
+    probes: usize,
+) -> serde_json::Value {
+    let mean = mean_luminance(truth);
+    let mut out = to_json(&metrics(pred, truth, mean));
+    out["probes"] = probes.into();
     let mut regions = serde_json::Map::new();
     for r in &scene.regions {
         let bb = r.aabb();
@@ -93,10 +183,5 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         regions.insert(r.name.clone(), to_json(&metrics(&p, &t, mean)));
     }
     out["regions"] = regions.into();
-    if a.json {
-        println!("{out}");
-    } else {
-        println!("{}", serde_json::to_string_pretty(&out)?);
-    }
-    Ok(())
+    out
 }

@@ -22,6 +22,9 @@
 
 mod adaptive;
 pub mod eval;
+pub mod gradient_ascent;
+pub mod spawn_merge;
+pub mod sweep;
 
 pub use adaptive::PROBE_CLEARANCE;
 
@@ -61,20 +64,10 @@ pub enum PlacementMethod {
         /// round falls below this (e.g. 0.05).
         tolerance: f32,
     },
-    /// Seed 003's spawn-merge placement (not implemented yet).
-    SpawnMerge {
-        /// Contrast threshold.
-        contrast: f32,
-        /// Minimum probe distance, metres.
-        min_distance: f32,
-    },
-    /// Seed 003's gradient-ascent placement (not implemented yet).
-    GradientAscent {
-        /// Number of probes.
-        budget: usize,
-        /// Use indirect light only for the gradient field.
-        indirect_only: bool,
-    },
+    /// Seed 003's spawn-and-merge placement ([`spawn_merge`]).
+    SpawnMerge(spawn_merge::SpawnMergeParams),
+    /// Seed 003's gradient-ascent placement ([`gradient_ascent`]).
+    GradientAscent(gradient_ascent::GradientAscentParams),
 }
 
 impl PlacementMethod {
@@ -84,8 +77,8 @@ impl PlacementMethod {
             PlacementMethod::Grid { .. } => "grid",
             PlacementMethod::Manual(_) => "manual",
             PlacementMethod::Adaptive { .. } => "adaptive",
-            PlacementMethod::SpawnMerge { .. } => "spawn-merge",
-            PlacementMethod::GradientAscent { .. } => "gradient-ascent",
+            PlacementMethod::SpawnMerge(_) => "spawn-merge",
+            PlacementMethod::GradientAscent(_) => "gradient-ascent",
         }
     }
 }
@@ -500,11 +493,11 @@ pub fn place(
     };
     let ls = LeakSettings::default();
     match method {
-        PlacementMethod::SpawnMerge { .. } => {
-            return Err(PlacementError::NotImplemented("spawn-merge"))
+        PlacementMethod::SpawnMerge(p) => {
+            spawn_merge::spawn_merge(&mut st, &bake_box, p, &ls, progress)?
         }
-        PlacementMethod::GradientAscent { .. } => {
-            return Err(PlacementError::NotImplemented("gradient-ascent"))
+        PlacementMethod::GradientAscent(p) => {
+            gradient_ascent::gradient_ascent(&mut st, &bake_box, p, &ls, progress)?;
         }
         PlacementMethod::Grid { cell, budget } => {
             let pts = grid_points(&bake_box, *cell, *budget)?;

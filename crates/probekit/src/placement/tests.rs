@@ -33,27 +33,6 @@ fn grid_points_cover_box_at_cell_centres() {
 }
 
 #[test]
-fn unimplemented_methods_say_so() {
-    let scene = Scene::builtin_demo();
-    let baker = Baker::new(&scene).unwrap();
-    let m = PlacementMethod::SpawnMerge {
-        contrast: 0.1,
-        min_distance: 0.5,
-    };
-    let r = place(
-        &baker,
-        scene.bake_box(),
-        &m,
-        &fast_settings(),
-        &|_, _, _| {},
-    );
-    assert!(matches!(
-        r,
-        Err(PlacementError::NotImplemented("spawn-merge"))
-    ));
-}
-
-#[test]
 fn adaptive_places_no_probe_inside_and_is_deterministic() {
     let scene = Scene::builtin_demo();
     let baker = Baker::new(&scene).unwrap();

@@ -214,6 +214,27 @@ fn y_axis(c: &mut Canvas, ymin: f64, ymax: f64, bottom: i64) -> (f64, f64) {
     (lo, hi)
 }
 
+/// Draws y grid lines at the decades `10^lo ..= 10^hi` (`lo`, `hi` whole
+/// log10 values) between pixel rows `bottom` and `TOP`, with faint lines at
+/// 2× and 5× each decade.
+fn log_y_axis(c: &mut Canvas, lo: f64, hi: f64, bottom: i64) {
+    let to_px = |v: f64| bottom - ((v - lo) / (hi - lo) * (bottom - TOP) as f64).round() as i64;
+    let mut k = lo;
+    while k <= hi + 1e-9 {
+        let y = to_px(k);
+        c.line((LEFT, y), (W as i64 - RIGHT, y), 1, GRID);
+        let s = fmt_num(10f64.powf(k));
+        c.text(LEFT - 8 - text_width(&s, 2), y - 7, &s, 2, BLACK, false);
+        if k < hi {
+            for m in [2.0f64, 5.0] {
+                let y = to_px(k + m.log10());
+                c.line((LEFT, y), (LEFT + 8, y), 1, BLACK);
+            }
+        }
+        k += 1.0;
+    }
+}
+
 /// Writes a bar chart PNG (1000×600): one bar per `(label, value)`, the value
 /// printed above its bar, labels written vertically under the bars.
 /// Non-finite values are drawn as an empty slot marked `n/a`.
@@ -308,6 +329,22 @@ pub fn line_chart(
     y_label: &str,
     log_x: bool,
 ) -> Result<(), PlotError> {
+    line_chart_log(path, title, series, x_label, y_label, log_x, false)
+}
+
+/// [`line_chart`] with a choice of log scale per axis: `log_y` puts y on a
+/// base-10 log scale too (decade ticks, the range widened to whole decades).
+///
+/// Errors: as [`line_chart`], and `log_y` with a non-positive y.
+pub fn line_chart_log(
+    path: impl AsRef<Path>,
+    title: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    x_label: &str,
+    y_label: &str,
+    log_x: bool,
+    log_y: bool,
+) -> Result<(), PlotError> {
     let path = path.as_ref();
     let bad = |m: &str| PlotError::BadData {
         path: path.to_path_buf(),
@@ -324,20 +361,31 @@ pub fn line_chart(
     if log_x && pts.iter().any(|(x, _)| *x <= 0.0) {
         return Err(bad("log x axis needs positive x values"));
     }
+    if log_y && pts.iter().any(|(_, y)| *y <= 0.0) {
+        return Err(bad("log y axis needs positive y values"));
+    }
     let fx = |x: f64| if log_x { x.log10() } else { x };
+    let fy = |y: f64| if log_y { y.log10() } else { y };
     let bottom = H as i64 - 70;
     let mut c = Canvas::new();
     title_and_axes(&mut c, title, y_label, bottom);
     let (mut ymin, mut ymax) = pts
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.1), b.max(p.1))
+            (a.min(fy(p.1)), b.max(fy(p.1)))
         });
-    ymin = ymin.min(0.0);
-    if ymax <= ymin {
-        ymax = ymin + 1.0;
-    }
-    let (lo, hi) = y_axis(&mut c, ymin, ymax, bottom);
+    let (lo, hi) = if log_y {
+        let lo = ymin.floor();
+        let hi = ymax.ceil().max(lo + 1.0);
+        log_y_axis(&mut c, lo, hi, bottom);
+        (lo, hi)
+    } else {
+        ymin = ymin.min(0.0);
+        if ymax <= ymin {
+            ymax = ymin + 1.0;
+        }
+        y_axis(&mut c, ymin, ymax, bottom)
+    };
     let (mut xmin, mut xmax) = pts
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
@@ -353,7 +401,7 @@ pub fn line_chart(
     let right = W as i64 - RIGHT;
     let to_x =
         |x: f64| LEFT + ((fx(x) - xmin) / (xmax - xmin) * (right - LEFT) as f64).round() as i64;
-    let to_y = |y: f64| bottom - ((y - lo) / (hi - lo) * (bottom - TOP) as f64).round() as i64;
+    let to_y = |y: f64| bottom - ((fy(y) - lo) / (hi - lo) * (bottom - TOP) as f64).round() as i64;
     // x ticks
     let ticks: Vec<f64> = if log_x {
         (xmin as i64..=xmax as i64)
@@ -466,6 +514,39 @@ mod tests {
         assert!(matches!(
             bar_chart(&missing, "t", &["a".to_string()], &[1.0], "y"),
             Err(PlotError::Write { .. })
+        ));
+    }
+
+    #[test]
+    fn log_log_chart_draws_a_power_law_straight() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("loglog.png");
+        // y = x / 100: a straight line on log-log axes, not on a linear y axis.
+        let s = vec![(
+            "s".to_string(),
+            vec![(1.0, 0.01), (10.0, 0.1), (100.0, 1.0)],
+        )];
+        line_chart_log(&p, "t", &s, "x", "y", true, true).unwrap();
+        let img = decode(&p);
+        let right = W as i64 - RIGHT;
+        let mean_row = |f: f64| {
+            let x = (LEFT as f64 + f * (right - LEFT) as f64).round() as u32;
+            let rows: Vec<u32> = (0..H)
+                .filter(|&y| *img.get_pixel(x, y) == PALETTE[0])
+                .collect();
+            assert!(!rows.is_empty(), "no line at column {x}");
+            rows.iter().sum::<u32>() as f64 / rows.len() as f64
+        };
+        let (a, b, c) = (mean_row(0.25), mean_row(0.5), mean_row(0.75));
+        assert!((b - 0.5 * (a + c)).abs() < 2.0, "{a} {b} {c}");
+        // Two decades over the plot height: a quarter of the width is half a decade.
+        let bottom = H as i64 - 70;
+        let half_decade = (bottom - TOP) as f64 / 4.0;
+        assert!(((a - c) - half_decade * 2.0).abs() < 3.0, "{a} {c}");
+        let bad = vec![("x".to_string(), vec![(1.0, 0.0)])];
+        assert!(matches!(
+            line_chart_log(&p, "t", &bad, "x", "y", false, true),
+            Err(PlotError::BadData { .. })
         ));
     }
 

@@ -1,0 +1,209 @@
+//! End-to-end tests of seed 003's placements (`bake --placement
+//! spawn-merge|gradient-ascent`) and of `eval --compare grid` / `--plot`.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn probekit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_probekit"))
+        .args(args)
+        .output()
+        .expect("run probekit")
+}
+
+/// A floor slab and a wall (OBJ, outward CCW) under a low sun and a grey sky.
+fn write_scene(dir: &Path) -> String {
+    let cube = |lo: [f32; 3], hi: [f32; 3], base: usize| {
+        let mut s = String::new();
+        for (x, y, z) in [
+            (lo[0], lo[1], lo[2]),
+            (hi[0], lo[1], lo[2]),
+            (hi[0], hi[1], lo[2]),
+            (lo[0], hi[1], lo[2]),
+            (lo[0], lo[1], hi[2]),
+            (hi[0], lo[1], hi[2]),
+            (hi[0], hi[1], hi[2]),
+            (lo[0], hi[1], hi[2]),
+        ] {
+            s += &format!("v {x} {y} {z}\n");
+        }
+        for q in [
+            [1, 2, 6, 5],
+            [4, 8, 7, 3],
+            [1, 4, 3, 2],
+            [5, 6, 7, 8],
+            [1, 5, 8, 4],
+            [2, 3, 7, 6],
+        ] {
+            let q = q.map(|i| i + base);
+            s += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                q[0], q[1], q[2], q[0], q[2], q[3]
+            );
+        }
+        s
+    };
+    let mut obj = String::from("o floor\n");
+    obj += &cube([-1.0, -0.2, -1.0], [5.0, 0.0, 4.0], 0);
+    obj += "o wall\n";
+    obj += &cube([2.0, 0.0, -1.0], [2.2, 1.5, 2.0], 8);
+    std::fs::write(dir.join("corner.obj"), obj).unwrap();
+    let toml = r#"
+[[mesh]]
+path = "corner.obj"
+
+[[light]]
+kind = "directional"
+direction = [1, -1, 0.3]
+intensity = 3
+
+[environment]
+color = [0.2, 0.2, 0.2]
+
+[bake]
+box = [[0, 0.05, 0], [4, 2, 3]]
+samples = 16
+bounces = 1
+"#;
+    let p = dir.join("corner.toml");
+    std::fs::write(&p, toml).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn seed_placements_bake_and_record_their_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    for (method, key) in [("spawn-merge", "contrast"), ("gradient-ascent", "step")] {
+        let out = dir.path().join(format!("{method}.probes"));
+        let v = json(&probekit(&[
+            "bake",
+            &scene,
+            "--placement",
+            method,
+            "--budget",
+            "24",
+            "--directions",
+            "6",
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ]));
+        let n = v["probes"].as_u64().unwrap();
+        assert!(n >= 4, "{method}: {v}");
+        let i = json(&probekit(&["inspect", out.to_str().unwrap(), "--json"]));
+        let pl = &i["placement"];
+        assert_eq!(pl["method"], method, "{i}");
+        assert!(pl["parameters"][key].is_number(), "{i}");
+        assert_eq!(pl["parameters"]["count"].as_u64(), Some(n), "{i}");
+    }
+    let sm = dir.path().join("spawn-merge.probes");
+    let i = json(&probekit(&["inspect", sm.to_str().unwrap(), "--json"]));
+    assert_eq!(i["placement"]["parameters"]["directions"], 6);
+    // Bad input: one line naming the problem, exit code 1.
+    for args in [
+        vec!["bake", scene.as_str(), "--placement", "nope"],
+        vec![
+            "bake",
+            scene.as_str(),
+            "--placement",
+            "spawn-merge",
+            "--directions",
+            "7",
+        ],
+        vec![
+            "bake",
+            scene.as_str(),
+            "--placement",
+            "spawn-merge",
+            "--contrast",
+            "2",
+        ],
+    ] {
+        let o = probekit(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(!String::from_utf8_lossy(&o.stderr).trim().is_empty());
+    }
+}
+
+#[test]
+fn eval_compare_and_sweep_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let probes = dir.path().join("g.probes");
+    json(&probekit(&[
+        "bake",
+        &scene,
+        "--grid",
+        "20",
+        "-o",
+        probes.to_str().unwrap(),
+        "--json",
+    ]));
+    let p = probes.to_str().unwrap();
+    let v = json(&probekit(&[
+        "eval",
+        p,
+        "--scene",
+        &scene,
+        "--points",
+        "25",
+        "--compare",
+        "grid",
+        "--json",
+    ]));
+    let g = &v["compare"]["grid"];
+    assert!(v["rel_rmse"].as_f64().unwrap() >= 0.0, "{v}");
+    assert!(g["rel_rmse"].as_f64().unwrap() >= 0.0, "{v}");
+    assert!(
+        g["p95_rel_error"].is_number() && g["leaks"].is_number(),
+        "{v}"
+    );
+    assert_eq!(g["points"], v["points"]);
+    // A grid of the file's probe count, less cells inside the wall.
+    let (gn, n) = (g["probes"].as_u64().unwrap(), v["probes"].as_u64().unwrap());
+    assert!(gn >= 4 && gn <= n, "{v}");
+    let o = probekit(&[
+        "eval",
+        p,
+        "--scene",
+        &scene,
+        "--points",
+        "5",
+        "--compare",
+        "octree",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+
+    let png = dir.path().join("sweep.png");
+    let v = json(&probekit(&[
+        "eval",
+        p,
+        "--scene",
+        &scene,
+        "--points",
+        "20",
+        "--plot",
+        png.to_str().unwrap(),
+        "--budgets",
+        "12,24",
+        "--methods",
+        "grid,spawn-merge,gradient-ascent",
+        "--json",
+    ]));
+    let rows = v["sweep"].as_array().unwrap();
+    assert!(!rows.is_empty() && rows.len() <= 6, "{v}");
+    for r in rows {
+        assert!(r["probes"].as_u64().unwrap() >= 4, "{r}");
+        assert!(r["rel_rmse"].as_f64().unwrap().is_finite(), "{r}");
+        assert!(r["p95_rel_error"].is_number() && r["leaks"].is_number());
+        assert!(["grid", "spawn-merge", "gradient-ascent"].contains(&r["method"].as_str().unwrap()));
+    }
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+}

@@ -1,0 +1,376 @@
+//! # Placement comparisons and budget sweeps (`probekit eval --compare`, `--plot`)
+//!
+//! Each measured configuration goes the way a user's file goes: place probes
+//! ([`place`]), bake the placed positions with the full capture settings
+//! (fresh captures, probe indices from 0, as `probekit bake` does), build the
+//! cloud file in memory ([`cloud_file`]) and evaluate it through the same
+//! [`Predictor`] as `probekit eval` on the same points and ground truth
+//! ([`metrics`]).
+//!
+//! A sweep maps a probe budget `B` to each method's own knob
+//! ([`method_for_budget`]) and reports the probe count each actually
+//! produced: `grid` ≈ `B` cells (minus those inside geometry), `adaptive`
+//! budget `B`, `spawn-merge` an initial grid of `B/2` growing to at most `B`,
+//! `gradient-ascent` an initial grid of `B` (merging, dark clustering and
+//! leak prevention change the count).
+
+use super::eval::{mean_luminance, metrics, EvalPoint, Metrics, PredictError, Predictor};
+use super::gradient_ascent::GradientAscentParams;
+use super::spawn_merge::SpawnMergeParams;
+use super::{place, PlacementError, PlacementMethod};
+use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::cloud::file::{cloud_file, file_validity, settings_json, CloudFileError};
+use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
+use crate::plot::{line_chart_log, PlotError};
+use crate::scene::Aabb;
+use glam::Vec3;
+use probekit_runtime::Interp;
+use std::path::Path;
+use thiserror::Error;
+
+/// The methods a sweep runs, in plot order.
+pub const SWEEP_METHODS: [&str; 4] = ["grid", "adaptive", "spawn-merge", "gradient-ascent"];
+
+/// Why one placement + bake + evaluation failed.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum SweepError {
+    /// An unknown method name.
+    #[error(
+        "unknown placement method `{0}` (expected grid, adaptive, spawn-merge or gradient-ascent)"
+    )]
+    UnknownMethod(String),
+    /// Placement failed.
+    #[error(transparent)]
+    Placement(#[from] PlacementError),
+    /// Capturing the placed probes failed.
+    #[error(transparent)]
+    Bake(#[from] BakeError),
+    /// The cloud file could not be built.
+    #[error(transparent)]
+    Cloud(#[from] CloudFileError),
+    /// The cloud could not be evaluated.
+    #[error(transparent)]
+    Predict(#[from] PredictError),
+}
+
+/// The placement method `name` configured for about `budget` probes (see the
+/// module docs).
+pub fn method_for_budget(name: &str, budget: usize) -> Result<PlacementMethod, SweepError> {
+    Ok(match name {
+        "grid" => PlacementMethod::Grid {
+            cell: None,
+            budget: Some(budget),
+        },
+        "adaptive" => PlacementMethod::Adaptive {
+            budget,
+            tolerance: 0.0,
+        },
+        "spawn-merge" => PlacementMethod::SpawnMerge(SpawnMergeParams {
+            initial: (budget / 2).max(8),
+            max_probes: budget.max(8),
+            ..Default::default()
+        }),
+        "gradient-ascent" => PlacementMethod::GradientAscent(GradientAscentParams {
+            initial: budget.max(8),
+            ..Default::default()
+        }),
+        o => return Err(SweepError::UnknownMethod(o.into())),
+    })
+}
+
+/// Places probes with `method` in `bake_box`, bakes them with `settings`
+/// and returns the cloud file (coefficients in `codec`; placement metadata
+/// names the method).
+pub fn place_and_bake(
+    baker: &Baker,
+    bake_box: Aabb,
+    method: &PlacementMethod,
+    settings: &CaptureSettings,
+    codec: Codec,
+) -> Result<ProbeFile, SweepError> {
+    let placed = place(baker, bake_box, method, settings, &|_, _, _| {})?;
+    bake_cloud(baker, &placed.positions, settings, codec, method.name())
+}
+
+/// Bakes `positions` with `settings` (probe indices from 0) into an
+/// in-memory cloud file, as `probekit bake` would write it.
+pub fn bake_cloud(
+    baker: &Baker,
+    positions: &[Vec3],
+    settings: &CaptureSettings,
+    codec: Codec,
+    method: &str,
+) -> Result<ProbeFile, SweepError> {
+    let res = baker.capture_many(positions, 0, settings, &|_, _| {})?;
+    let pos: Vec<Vec3> = res.iter().map(|r| r.position).collect();
+    let sh: Vec<_> = res
+        .iter()
+        .map(|r| match (&r.indirect, settings.split_direct) {
+            (Some(i), true) => i.clone(),
+            _ => r.sh.clone(),
+        })
+        .collect();
+    let validity: Vec<_> = res.iter().map(|r| file_validity(&r.validity)).collect();
+    let meta = BakeMetadata::new(
+        format!("{:016x}", baker.scene().content_hash()),
+        PlacementMeta {
+            method: method.into(),
+            parameters: serde_json::json!({ "count": pos.len() }),
+        },
+        settings_json(settings, codec),
+    );
+    Ok(cloud_file(&pos, &sh, &validity, codec, &meta)?)
+}
+
+/// Irradiance predicted by `file` at `points` (clouds and volumes alike).
+pub fn predict_file(file: &ProbeFile, points: &[EvalPoint]) -> Result<Vec<Vec3>, SweepError> {
+    let p = Predictor::from_file(file, Interp::Trilinear)?;
+    Ok(p.predict(points)?)
+}
+
+/// Capture settings recorded in a probe file's metadata (`samples`,
+/// `bounces`, `order`, `seed`, `russian_roulette_depth`, `split_direct` of
+/// [`settings_json`]), each falling back to `fallback`'s value when absent
+/// or the metadata is not JSON; and the recorded codec (default f32).
+pub fn settings_from_metadata(
+    metadata: &str,
+    fallback: &CaptureSettings,
+) -> (CaptureSettings, Codec) {
+    let mut s = fallback.clone();
+    let v: serde_json::Value = serde_json::from_str(metadata).unwrap_or_default();
+    let set = &v["settings"];
+    let u = |k: &str| set[k].as_u64();
+    if let Some(x) = u("samples").filter(|&x| x > 0 && x <= u32::MAX as u64) {
+        s.samples = x as u32;
+    }
+    if let Some(x) = u("bounces").filter(|&x| x <= u32::MAX as u64) {
+        s.bounces = x as u32;
+    }
+    if let Some(x) = u("order").filter(|&x| (1..=8).contains(&x)) {
+        s.order = x as usize;
+    }
+    if let Some(x) = u("seed") {
+        s.seed = x;
+    }
+    if let Some(x) = u("russian_roulette_depth").filter(|&x| x <= u32::MAX as u64) {
+        s.russian_roulette_depth = x as u32;
+    }
+    if let Some(b) = set["split_direct"].as_bool() {
+        s.split_direct = b && set["indirect_only"].as_bool().unwrap_or(false);
+    }
+    let codec = set["codec"]
+        .as_str()
+        .and_then(Codec::from_name)
+        .unwrap_or(Codec::F32);
+    (s, codec)
+}
+
+/// One measured point of a sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepRow {
+    /// Placement method name.
+    pub method: String,
+    /// The budget asked for.
+    pub budget: usize,
+    /// Probes the method actually produced.
+    pub probes: usize,
+    /// Error figures on the sweep's points.
+    pub metrics: Metrics,
+}
+
+impl SweepRow {
+    /// `{"method","budget","probes","rel_rmse","p95_rel_error","leaks"}`.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "method": self.method,
+            "budget": self.budget,
+            "probes": self.probes,
+            "rel_rmse": self.metrics.rel_rmse,
+            "p95_rel_error": self.metrics.p95_rel_error,
+            "leaks": self.metrics.leaks,
+        })
+    }
+}
+
+/// Runs every method of `methods` at every budget of `budgets`: place, bake
+/// with `settings` (f32 coefficients), evaluate on `points` against `truth`.
+/// A configuration that fails is reported to `on_error(method, budget,
+/// error)` and left out; the rest go on. Rows are in method-then-budget order.
+#[allow(clippy::too_many_arguments)]
+pub fn sweep(
+    baker: &Baker,
+    bake_box: Aabb,
+    methods: &[&str],
+    budgets: &[usize],
+    settings: &CaptureSettings,
+    points: &[EvalPoint],
+    truth: &[Vec3],
+    on_error: &mut dyn FnMut(&str, usize, &SweepError),
+) -> Vec<SweepRow> {
+    let mean = mean_luminance(truth);
+    let mut rows = Vec::new();
+    for &m in methods {
+        for &b in budgets {
+            let r = method_for_budget(m, b)
+                .and_then(|method| place_and_bake(baker, bake_box, &method, settings, Codec::F32))
+                .and_then(|file| {
+                    let pred = predict_file(&file, points)?;
+                    Ok((file.positions.len(), metrics(&pred, truth, mean)))
+                });
+            match r {
+                Ok((probes, metrics)) => rows.push(SweepRow {
+                    method: m.into(),
+                    budget: b,
+                    probes,
+                    metrics,
+                }),
+                Err(e) => on_error(m, b, &e),
+            }
+        }
+    }
+    rows
+}
+
+/// Draws `rel_rmse` against probe count, one line per method (in first-seen
+/// order), both axes log10, with [`crate::plot`]. Rows with a non-positive
+/// error are left out (a log axis cannot show them).
+pub fn plot_sweep(path: impl AsRef<Path>, title: &str, rows: &[SweepRow]) -> Result<(), PlotError> {
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for r in rows {
+        if !(r.metrics.rel_rmse > 0.0 && r.probes > 0) {
+            continue;
+        }
+        let pt = (r.probes as f64, r.metrics.rel_rmse as f64);
+        match series.iter_mut().find(|s| s.0 == r.method) {
+            Some(s) => s.1.push(pt),
+            None => series.push((r.method.clone(), vec![pt])),
+        }
+    }
+    for s in &mut series {
+        s.1.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    line_chart_log(path, title, &series, "probes", "rel. RMSE", true, true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::eval::{reference, sample_points};
+    use super::super::{grid_points, inside_geometry};
+    use super::*;
+    use crate::bake::ReferenceSettings;
+    use crate::scene::demo::box_triangles;
+    use crate::scene::{Light, LightKind, Material, Scene};
+
+    /// A sun-lit room corner: floor slab and one wall, sky light.
+    fn scene() -> Scene {
+        let floor = box_triangles(Vec3::new(-1.0, -0.2, -1.0), Vec3::new(5.0, 0.0, 4.0), 0);
+        let wall = box_triangles(Vec3::new(2.0, 0.0, -1.0), Vec3::new(2.2, 1.5, 2.0), 0);
+        let sun = Light {
+            kind: LightKind::Directional,
+            position: Vec3::ZERO,
+            direction: Vec3::new(1.0, -1.0, 0.3).normalize(),
+            color: Vec3::ONE,
+            intensity: 3.0,
+            radius: 0.0,
+            inner_angle: 0.0,
+            outer_angle: 0.0,
+            group: None,
+        };
+        let mut s = Scene::from_triangles(
+            "corner",
+            vec![("floor".into(), floor), ("wall".into(), wall)],
+            vec![Material::default()],
+            vec![sun],
+        )
+        .unwrap();
+        s.environment.color = Vec3::splat(0.2);
+        s.bake.r#box = Some(Aabb::new(
+            Vec3::new(0.0, 0.05, 0.0),
+            Vec3::new(4.0, 2.0, 3.0),
+        ));
+        s
+    }
+
+    #[test]
+    fn metadata_settings_fall_back_per_field() {
+        let fb = CaptureSettings::default();
+        let (s, c) = settings_from_metadata("not json", &fb);
+        assert_eq!((s, c), (fb.clone(), Codec::F32));
+        let m = r#"{"settings":{"samples":64,"bounces":1,"order":2,"seed":9,"codec":"f16"}}"#;
+        let (s, c) = settings_from_metadata(m, &fb);
+        assert_eq!((s.samples, s.bounces, s.order, s.seed), (64, 1, 2, 9));
+        assert_eq!(s.russian_roulette_depth, fb.russian_roulette_depth);
+        assert_eq!(c, Codec::F16);
+        assert!(method_for_budget("nope", 10).is_err());
+    }
+
+    #[test]
+    fn sweep_draws_a_png_and_reports_consistent_rows() {
+        let scene = scene();
+        let baker = Baker::new(&scene).unwrap();
+        let s = CaptureSettings {
+            samples: 16,
+            bounces: 1,
+            order: 3,
+            ..Default::default()
+        };
+        let pts = sample_points(baker.tracer(), &scene.bake_box(), 40, 3);
+        let rs = ReferenceSettings {
+            relative_precision: 0.2,
+            min_samples: 64,
+            max_samples: 256,
+            bounces: 1,
+            ..Default::default()
+        };
+        let truth = reference(&baker, &pts, &rs).unwrap();
+        let mut failures = Vec::new();
+        let budgets = [16usize, 32];
+        let rows = sweep(
+            &baker,
+            scene.bake_box(),
+            &SWEEP_METHODS,
+            &budgets,
+            &s,
+            &pts,
+            &truth,
+            &mut |m, b, e| failures.push(format!("{m} {b}: {e}")),
+        );
+        assert_eq!(rows.len() + failures.len(), 8, "{failures:?}");
+        assert!(rows.iter().any(|r| r.method == "grid"));
+        assert!(
+            rows.iter().any(|r| r.method == "spawn-merge"),
+            "{failures:?}"
+        );
+        assert!(
+            rows.iter().any(|r| r.method == "gradient-ascent"),
+            "{failures:?}"
+        );
+        for r in &rows {
+            assert!(r.probes >= 4, "{r:?}");
+            assert_eq!(r.metrics.points, pts.len());
+            assert!(r.metrics.rel_rmse.is_finite() && r.metrics.rel_rmse >= 0.0);
+            let j = r.to_json();
+            assert_eq!(j["method"], r.method.as_str());
+            assert_eq!(j["probes"], r.probes);
+            assert_eq!(j["budget"], r.budget);
+            assert_eq!(j["leaks"], r.metrics.leaks);
+            assert!((j["rel_rmse"].as_f64().unwrap() - r.metrics.rel_rmse as f64).abs() < 1e-6);
+        }
+        // The grid rows hold exactly the free grid cells (independent count).
+        for r in rows.iter().filter(|r| r.method == "grid") {
+            let free = grid_points(&scene.bake_box(), None, Some(r.budget))
+                .unwrap()
+                .into_iter()
+                .filter(|q| !inside_geometry(baker.tracer(), *q))
+                .count();
+            assert_eq!(r.probes, free);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("sweep.png");
+        plot_sweep(&png, "sweep", &rows).unwrap();
+        let bytes = std::fs::read(&png).unwrap();
+        assert!(bytes.len() > 1000);
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    }
+}
