@@ -89,8 +89,9 @@ fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
     }
 }
 
-/// The JSON line of the issue, plus `"baked"`: `"cloud"`, `"volume"` or null.
-fn json(spec: &RigSpec, r: &RunReport, baked: Option<&ProbeSource>) -> String {
+/// The JSON line of the issue (exactly its keys; whether a baked file was
+/// used is the caller's to know).
+fn json(spec: &RigSpec, r: &RunReport) -> String {
     let (a, t, g) = r.zone_counts();
     serde_json::json!({
         "rig": spec.to_string(),
@@ -100,7 +101,6 @@ fn json(spec: &RigSpec, r: &RunReport, baked: Option<&ProbeSource>) -> String {
         "max_error_grey_levels": r.stats.max_grey,
         "lights": {"analytic": a, "transition": t, "rig": g},
         "ns_per_frame": r.ns_per_frame.round() as u64,
-        "baked": baked.map(kind_name),
     })
     .to_string()
 }
@@ -160,7 +160,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
     let report = run_rig(&mesh, &a.mesh, &lights, probes.as_ref(), &cfg, true)
         .with_context(|| a.mesh.clone())?;
     if a.json {
-        println!("{}", json(&spec, &report, probes.as_ref()));
+        println!("{}", json(&spec, &report));
     } else {
         let (an, tr, rg) = report.zone_counts();
         println!(
