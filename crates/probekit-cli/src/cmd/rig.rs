@@ -10,7 +10,7 @@ use glam::Vec3;
 use probekit::rig::render::{comparison_figure, zones_figure, Column};
 use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
 use probekit::rig::source::ProbeSource;
-use probekit::rig::RigSpec;
+use probekit::rig::{RigSetupError, RigSpec};
 use probekit_runtime::Interp;
 use std::path::{Path, PathBuf};
 
@@ -116,7 +116,11 @@ fn kind_name(p: &ProbeSource) -> &'static str {
 pub fn run(a: RigArgs) -> anyhow::Result<()> {
     let spec: RigSpec = a.rig.parse().map_err(|e| anyhow!("--rig: {e}"))?;
     let at = parse_vec3(&a.at)?;
-    let mesh = load_mesh(&a.mesh).map_err(|e| anyhow!("{}: {e}", a.mesh))?;
+    // The loader's errors name the file already; validation errors do not.
+    let mesh = load_mesh(&a.mesh).map_err(|e| match e {
+        RigSetupError::Scene(_) | RigSetupError::UnknownBuiltin(_) => anyhow!("{e}"),
+        e => anyhow!("{}: {e}", a.mesh),
+    })?;
     let lights = match &a.scene {
         Some(s) => {
             let l = load_lights(s)?;
