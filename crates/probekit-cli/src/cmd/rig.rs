@@ -1,15 +1,17 @@
-//! `probekit rig MESH --scene SCENE --rig SPEC --at x,y,z [--json] ...`:
-//! fits an irradiance rig (seed 000) to a mesh placed at a point among the
-//! scene's lights, splits the lights into analytic / transition / rig zones,
-//! and reports the per-vertex error against the exact lighting and the cost
-//! of a frame.
+//! `probekit rig MESH --scene SCENE [--probes BAKED] --rig SPEC --at x,y,z
+//! [--json] ...`: fits an irradiance rig (seed 000) to a mesh placed at a
+//! point among the scene's lights and a baked probe file, splits the lights
+//! into analytic / transition / rig zones, and reports the per-vertex error
+//! against the exact lighting and the cost of a frame.
 
 use anyhow::{anyhow, Context};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
 use probekit::rig::render::{comparison_figure, zones_figure, Column};
 use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
-use probekit::rig::RigSpec;
+use probekit::rig::source::ProbeSource;
+use probekit::rig::{RigSetupError, RigSpec};
+use probekit_runtime::Interp;
 use std::path::{Path, PathBuf};
 
 /// On or off.
@@ -24,11 +26,22 @@ pub enum Switch {
 /// Arguments of `probekit rig`.
 #[derive(Args, Debug)]
 pub struct RigArgs {
-    /// The mesh: builtin:car or builtin:character.
+    /// The mesh: builtin:car, builtin:character, or an .obj/.gltf/.glb/.toml
+    /// file (all its meshes merged, in its own coordinates).
     pub mesh: String,
-    /// The lights: builtin:rig-demo, builtin:paper-cost, or a scene .toml ([[light]] tables).
+    /// The analytic lights: builtin:rig-demo, builtin:paper-cost, or any
+    /// scene (builtin:demo, .toml, .gltf, .glb, .obj; emissive triangles
+    /// and the environment are ignored with a warning). Optional with --probes.
     #[arg(long)]
-    pub scene: String,
+    pub scene: Option<String>,
+    /// A baked .probes cloud or volume: its SH at the rig's sample points is
+    /// added to the lights (use a `bake --indirect-only` file with the same
+    /// scene's lights, or a full bake alone, to avoid counting direct light twice).
+    #[arg(long)]
+    pub probes: Option<PathBuf>,
+    /// Volume interpolation for --probes: trilinear, taylor, tricubic, idw, leaf-trilinear.
+    #[arg(long, default_value = "trilinear")]
+    pub interp: String,
     /// Rig type: constant, gradient, lattice:NXxNYxNZ or mixed:X,Y,Z (c, g, lN per axis).
     #[arg(long)]
     pub rig: String,
@@ -76,7 +89,8 @@ fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
     }
 }
 
-/// The JSON line of the issue.
+/// The JSON line of the issue (exactly its keys; whether a baked file was
+/// used is the caller's to know).
 fn json(spec: &RigSpec, r: &RunReport) -> String {
     let (a, t, g) = r.zone_counts();
     serde_json::json!({
@@ -91,12 +105,47 @@ fn json(spec: &RigSpec, r: &RunReport) -> String {
     .to_string()
 }
 
+fn kind_name(p: &ProbeSource) -> &'static str {
+    match p {
+        ProbeSource::Cloud(_) => "cloud",
+        ProbeSource::Volume(..) => "volume",
+    }
+}
+
 /// Runs `probekit rig`.
 pub fn run(a: RigArgs) -> anyhow::Result<()> {
     let spec: RigSpec = a.rig.parse().map_err(|e| anyhow!("--rig: {e}"))?;
     let at = parse_vec3(&a.at)?;
-    let mesh = load_mesh(&a.mesh).with_context(|| a.mesh.clone())?;
-    let lights = load_lights(&a.scene)?;
+    // The loader's errors name the file already; validation errors do not.
+    let mesh = load_mesh(&a.mesh).map_err(|e| match e {
+        RigSetupError::Scene(_) | RigSetupError::UnknownBuiltin(_) => anyhow!("{e}"),
+        e => anyhow!("{}: {e}", a.mesh),
+    })?;
+    let lights = match &a.scene {
+        Some(s) => {
+            let l = load_lights(s)?;
+            for w in &l.warnings {
+                eprintln!("warning: {w}");
+            }
+            l.lights
+        }
+        None if a.probes.is_some() => Vec::new(),
+        None => return Err(anyhow!("rig needs --scene, --probes or both")),
+    };
+    let interp = Interp::from_name(&a.interp).ok_or_else(|| {
+        anyhow!(
+            "--interp {}: expected trilinear, taylor, tricubic, idw or leaf-trilinear",
+            a.interp
+        )
+    })?;
+    let probes = match &a.probes {
+        Some(p) => Some(
+            ProbeSource::load(p)?
+                .with_interp(interp)
+                .map_err(|e| anyhow!("{}: {e}", p.display()))?,
+        ),
+        None => None,
+    };
     if let Some(w) = a.white {
         if !(w > 0.0 && w.is_finite()) {
             return Err(anyhow!("--white {w}: must be a positive number"));
@@ -112,7 +161,8 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         target_grey: a.target,
         ..RunConfig::default()
     };
-    let report = run_rig(&mesh, &a.mesh, &lights, &cfg, true).with_context(|| a.mesh.clone())?;
+    let report = run_rig(&mesh, &a.mesh, &lights, probes.as_ref(), &cfg, true)
+        .with_context(|| a.mesh.clone())?;
     if a.json {
         println!("{}", json(&spec, &report));
     } else {
@@ -127,6 +177,14 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
             "  lights: {an} analytic, {tr} transition, {rg} rig (of {})",
             lights.len()
         );
+        if let (Some(p), Some(src)) = (&a.probes, &probes) {
+            println!(
+                "  baked {} {} (order {}) through the rig",
+                kind_name(src),
+                p.display(),
+                src.order()
+            );
+        }
         println!(
             "  per-vertex error vs exact: rel RMSE {:.4}, max {:.2} grey levels (white {:.4})",
             report.stats.rel_rmse, report.stats.max_grey, report.stats.l_white
@@ -149,7 +207,9 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
             );
             let (c, r) = mesh.bounding_sphere();
             for (i, (l, th)) in lights.iter().zip(&report.thresholds).enumerate() {
-                let x = l.position().distance(c + at) / r;
+                let x = l
+                    .position()
+                    .map_or(f32::INFINITY, |p| p.distance(c + at) / r);
                 println!(
                     "  light {i}: at {x:.2} R, transition at {th:.2} R, {:?}",
                     report.zones[i]
@@ -170,7 +230,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         std::fs::write(out, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", out.display()))?;
     }
     if let Some(out) = &a.render {
-        render(out, &mesh, &lights, &cfg, &report)?;
+        render(out, &mesh, &lights, probes.as_ref(), &cfg, &report)?;
     }
     Ok(())
 }
@@ -179,6 +239,7 @@ fn render(
     out: &Path,
     mesh: &probekit::rig::mesh::Mesh,
     lights: &[probekit::rig::lights::Light],
+    probes: Option<&ProbeSource>,
     cfg: &RunConfig,
     report: &RunReport,
 ) -> anyhow::Result<()> {
@@ -205,7 +266,7 @@ fn render(
             split: false,
             ..cfg.clone()
         };
-        runs.push((s, run_rig(mesh, "mesh", lights, &c, false)?));
+        runs.push((s, run_rig(mesh, "mesh", lights, probes, &c, false)?));
     }
     let grey = |r: &RunReport| -> Vec<f32> {
         r.approx
@@ -231,10 +292,11 @@ fn render(
     let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("rig");
     let zones_path = out.with_file_name(format!("{stem}_zones.png"));
     let world = mesh.translated(cfg.at);
+    // Directional lights have no position to draw.
     let lw: Vec<(Vec3, f32)> = lights
         .iter()
         .zip(&report.zones)
-        .map(|(l, z)| (l.position(), z.rig_weight()))
+        .filter_map(|(l, z)| Some((l.position()?, z.rig_weight())))
         .collect();
     zones_figure(&zones_path, &world, &report.approx, l_white, &lw)?;
     Ok(())

@@ -6,10 +6,11 @@
 //! radiometric (no 683 lm/W), a sphere or disk light of radius `r` has
 //! radiance `I/(π r²)`. Irradiance is `E = ∫ L max(0, n·ω) dω`, not divided by π.
 
-use super::RigSetupError;
+use crate::scene::{LightKind, Scene};
 use glam::Vec3;
 use probekit_sh::lights::{
-    point_sh, sphere_light_irradiance_horizon_clipped, sphere_light_sh, spot_attenuation, spot_sh,
+    directional_sh, point_sh, sphere_light_irradiance_horizon_clipped, sphere_light_sh,
+    spot_attenuation, spot_sh,
 };
 use probekit_sh::MAX_COEFFS;
 use std::f32::consts::PI;
@@ -64,26 +65,40 @@ pub enum Light {
         /// Intensity along the normal × colour (W/sr).
         intensity: Vec3,
     },
+    /// Light from infinitely far away (the sun). Spatially constant, so a rig
+    /// of any type represents its SH exactly and it always goes through the
+    /// rig (zone `rig`: infinite distance). Its exact irradiance is
+    /// `E·max(0, n·(−direction))` — **no shadowing**, like every light here
+    /// (the object does not occlude itself, the scene does not occlude it).
+    Directional {
+        /// Unit vector, the way light travels.
+        direction: Vec3,
+        /// Irradiance on a surface facing the light × colour (lux, radiometric).
+        irradiance: Vec3,
+    },
 }
 
 impl Light {
-    /// The light's position (centre).
-    pub fn position(&self) -> Vec3 {
+    /// The light's position (centre); `None` for a directional light
+    /// (infinitely far away).
+    pub fn position(&self) -> Option<Vec3> {
         match *self {
             Light::Sphere { position, .. }
             | Light::Point { position, .. }
             | Light::Spot { position, .. }
-            | Light::Disk { position, .. } => position,
+            | Light::Disk { position, .. } => Some(position),
+            Light::Directional { .. } => None,
         }
     }
 
-    /// The same light moved to `position`.
+    /// The same light moved to `position` (a directional light is unchanged).
     pub fn moved_to(mut self, p: Vec3) -> Light {
         match &mut self {
             Light::Sphere { position, .. }
             | Light::Point { position, .. }
             | Light::Spot { position, .. }
             | Light::Disk { position, .. } => *position = p,
+            Light::Directional { .. } => {}
         }
         self
     }
@@ -97,7 +112,9 @@ impl Light {
     }
 
     /// Adds `weight ×` the light's radiance SH at `p` (`order` bands) to
-    /// `out`. Sphere: *Irradiance Rigs* A1; point/spot: a delta (Sloan 2008).
+    /// `out`. Sphere: *Irradiance Rigs* A1; point/spot/directional: a delta
+    /// (Sloan, *Stupid SH Tricks*, 2008; directional: `c_lm = E·Y_lm(−dir)`,
+    /// the same at every `p`).
     /// A disk enters the SH as the sphere of equal projected area
     /// `π r_eq² = π r² cos θ_e` and equal radiance (exact far away, an
     /// approximation near the disk; the quadrature of
@@ -148,6 +165,10 @@ impl Light {
                 // Same radiance I/(π r²) on the smaller sphere: scale the intensity.
                 sphere_light_sh(order, p, position, req, intensity * ce, &mut tmp[..n2]);
             }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => directional_sh(order, -direction, irradiance, &mut tmp[..n2]),
         }
         for (o, t) in out[..n2].iter_mut().zip(&tmp[..n2]) {
             *o += *t * weight;
@@ -157,7 +178,8 @@ impl Light {
     /// Exact irradiance at surface point `p` with unit normal `n` (no
     /// occlusion by the object itself). Sphere: the horizon-clipped form
     /// factor ([`sphere_light_irradiance_horizon_clipped`], Snyder 1996);
-    /// point and spot: `I·max(0, n·ω)/d²`; disk: Lambert's polygon formula
+    /// point and spot: `I·max(0, n·ω)/d²`; directional: `E·max(0, n·(−dir))`
+    /// (no shadowing); disk: Lambert's polygon formula
     /// for a [`DISK_POLYGON_EDGES`]-gon clipped to the horizon. `table`, when
     /// given, replaces the sphere's closed form by its 128 × 128 tabulation
     /// (what a renderer's analytic path does, seed 000 §3.2), and the disk
@@ -237,6 +259,10 @@ impl Light {
                     None => l * disk_polygon_irradiance(p, n, position, direction, radius),
                 }
             }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => irradiance * n.dot(-direction).max(0.0),
         }
     }
 }
@@ -437,83 +463,83 @@ pub fn paper_cost_lights() -> Vec<Light> {
     v
 }
 
-/// One `[[light]]` table of the scene TOML subset (issue 4's keys).
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LightToml {
-    kind: String,
-    position: Option<[f32; 3]>,
-    radius: Option<f32>,
-    color: Option<[f32; 3]>,
-    intensity: Option<f32>,
-    direction: Option<[f32; 3]>,
-    inner_angle_degrees: Option<f32>,
-    outer_angle_degrees: Option<f32>,
-    #[allow(dead_code)]
-    group: Option<String>,
+/// The lights of a loaded scene as rig lights, with what was left out.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneLights {
+    /// The converted analytic lights, in scene order.
+    pub lights: Vec<Light>,
+    /// One line per thing the rig does not model (emissive triangles, the
+    /// environment, degenerate lights), for the caller to print.
+    pub warnings: Vec<String>,
 }
 
-#[derive(serde::Deserialize)]
-struct SceneToml {
-    #[serde(default)]
-    light: Vec<LightToml>,
+/// Converts one scene light ([`crate::scene::Light`], units of
+/// `docs/scene-format.md`) to a rig light: intensity × colour; spot angles
+/// from radians to degrees; a directional light's lux becomes its
+/// irradiance. `None` for a sphere or disk of radius ≤ 0 (no radiance
+/// defined), which [`lights_from_scene`] reports.
+pub fn from_scene_light(l: &crate::scene::Light) -> Option<Light> {
+    let intensity = l.color * l.intensity;
+    Some(match l.kind {
+        LightKind::Point => Light::Point {
+            position: l.position,
+            intensity,
+        },
+        LightKind::Spot => Light::Spot {
+            position: l.position,
+            direction: l.direction,
+            inner_deg: l.inner_angle.to_degrees(),
+            outer_deg: l.outer_angle.to_degrees(),
+            intensity,
+        },
+        LightKind::Directional => Light::Directional {
+            direction: l.direction,
+            irradiance: intensity,
+        },
+        LightKind::Sphere if l.radius > 0.0 => Light::Sphere {
+            position: l.position,
+            radius: l.radius,
+            intensity,
+        },
+        LightKind::Disk if l.radius > 0.0 => Light::Disk {
+            position: l.position,
+            direction: l.direction,
+            radius: l.radius,
+            intensity,
+        },
+        LightKind::Sphere | LightKind::Disk => return None,
+    })
 }
 
-/// Parses the `[[light]]` tables of a scene TOML (issue 4's keys:
-/// `kind` = `sphere` | `point` | `spot` | `disk`, `position`, `radius`,
-/// `color` (default white), `intensity` (candela), `direction`,
-/// `inner_angle_degrees` (default 0), `outer_angle_degrees` (default 45)).
-/// Other top-level tables (`[[mesh]]`, `[environment]`) are ignored here.
-pub fn parse_scene_lights(text: &str) -> Result<Vec<Light>, RigSetupError> {
-    let scene: SceneToml =
-        toml::from_str(text).map_err(|e| RigSetupError::Scene(e.message().to_string()))?;
-    let mut out = Vec::new();
-    for (i, l) in scene.light.iter().enumerate() {
-        let err = |what: &str| RigSetupError::Scene(format!("light {i} ({}): {what}", l.kind));
-        let position = Vec3::from(l.position.ok_or_else(|| err("missing position"))?);
-        let intensity = Vec3::from(l.color.unwrap_or([1.0; 3]))
-            * l.intensity.ok_or_else(|| err("missing intensity"))?;
-        if !position.is_finite() || !intensity.is_finite() || intensity.min_element() < 0.0 {
-            return Err(err("position and intensity must be finite, intensity ≥ 0"));
+/// All analytic lights of `scene` as rig lights ([`from_scene_light`]).
+/// Emissive triangles and the environment are not rig lights: they are
+/// left out with a warning each (bake them into a probe file and pass it
+/// as a [`super::source::ProbeSource`] instead).
+pub fn lights_from_scene(scene: &Scene) -> SceneLights {
+    let name = scene.source.display();
+    let mut out = SceneLights::default();
+    for (i, l) in scene.lights.iter().enumerate() {
+        match from_scene_light(l) {
+            Some(r) => out.lights.push(r),
+            None => out.warnings.push(format!(
+                "{name}: light {i} ({:?}) has radius ≤ 0; ignored",
+                l.kind
+            )),
         }
-        let radius = || match l.radius {
-            Some(r) if r > 0.0 && r.is_finite() => Ok(r),
-            _ => Err(err("radius must be given and > 0")),
-        };
-        let direction = || {
-            l.direction
-                .map(Vec3::from)
-                .and_then(|d| d.try_normalize())
-                .ok_or_else(|| err("direction must be given and non-zero"))
-        };
-        out.push(match l.kind.as_str() {
-            "sphere" => Light::Sphere {
-                position,
-                radius: radius()?,
-                intensity,
-            },
-            "point" => Light::Point {
-                position,
-                intensity,
-            },
-            "spot" => Light::Spot {
-                position,
-                direction: direction()?,
-                inner_deg: l.inner_angle_degrees.unwrap_or(0.0),
-                outer_deg: l.outer_angle_degrees.unwrap_or(45.0),
-                intensity,
-            },
-            "disk" => Light::Disk {
-                position,
-                direction: direction()?,
-                radius: radius()?,
-                intensity,
-            },
-            "directional" => return Err(err("directional lights are not supported by rigs yet")),
-            _ => return Err(err("unknown kind (sphere, point, spot or disk)")),
-        });
     }
-    Ok(out)
+    if !scene.emissive_triangles.is_empty() {
+        out.warnings.push(format!(
+            "{name}: {} emissive triangle(s) ignored (rigs take analytic lights and baked probes)",
+            scene.emissive_triangles.len()
+        ));
+    }
+    let env = &scene.environment;
+    if env.map.is_some() || (env.color * env.intensity).max_element() > 0.0 {
+        out.warnings.push(format!(
+            "{name}: environment ignored (rigs take analytic lights and baked probes)"
+        ));
+    }
+    out
 }
 
 #[cfg(test)]
@@ -644,48 +670,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn scene_toml_subset_parses_and_rejects() {
-        let l = parse_scene_lights(
-            r#"
-            [[light]]
-            kind = "sphere"
-            position = [0, 2.5, 0]
-            radius = 0.1
-            color = [1, 0.5, 0.25]
-            intensity = 50
-            [[light]]
-            kind = "disk"
-            position = [0, 0, 0]
-            radius = 0.2
-            intensity = 1
-            direction = [0, 2, 0]
-        "#,
-        )
-        .unwrap();
-        assert_eq!(l.len(), 2);
-        assert_eq!(
-            l[0],
-            Light::Sphere {
-                position: Vec3::new(0.0, 2.5, 0.0),
-                radius: 0.1,
-                intensity: Vec3::new(50.0, 25.0, 12.5)
-            }
-        );
-        assert!(matches!(l[1], Light::Disk { direction, .. } if direction == Vec3::Y));
-        for bad in [
-            "[[light]]\nkind='sphere'\nposition=[0,0,0]\nintensity=1",
-            "[[light]]\nkind='laser'\nposition=[0,0,0]\nintensity=1",
-            "[[light]]\nkind='point'\nintensity=1",
-            "[[light]\n",
-        ] {
-            assert!(
-                matches!(parse_scene_lights(bad), Err(RigSetupError::Scene(_))),
-                "{bad}"
-            );
-        }
-    }
-
     /// A sphere light's SH and its exact irradiance agree where the L2
     /// approximation is accurate (a small light far away, normal facing it):
     /// two independent routes to the same number.
@@ -703,5 +687,133 @@ mod tests {
         assert!((e - 1.0).abs() < 1e-3, "I/d² = 1, got {e}");
         // L2 of a delta facing the normal: 0.955·E-ish; within 10 %.
         assert!((e_sh / e - 1.0).abs() < 0.1, "{e_sh} vs {e}");
+    }
+
+    /// Legendre coefficients `a_l = (2l+1)/2 ∫₋₁¹ max(0,t) P_l(t) dt` of the
+    /// clamped cosine for l = 0, 1, 2, by a midpoint rule (independent of
+    /// the SH code): the L2 irradiance of a delta light of irradiance E is
+    /// `E·Σ a_l P_l(n·l)` (addition theorem).
+    fn clamped_cosine_legendre() -> [f64; 3] {
+        let m = 200_000;
+        let p = |l: usize, x: f64| match l {
+            0 => 1.0,
+            1 => x,
+            _ => 0.5 * (3.0 * x * x - 1.0),
+        };
+        std::array::from_fn(|l| {
+            let mut acc = 0.0;
+            for i in 0..m {
+                let x = -1.0 + 2.0 * (i as f64 + 0.5) / m as f64;
+                acc += x.max(0.0) * p(l, x);
+            }
+            (2 * l + 1) as f64 / 2.0 * acc * 2.0 / m as f64
+        })
+    }
+
+    /// Issue 7 check (b): a directional light through any rig gives, at
+    /// every vertex, the L2 irradiance of a delta, `E·Σ a_l P_l(n·l)` with
+    /// the clamped cosine's Legendre coefficients integrated numerically
+    /// here; its exact irradiance is `E·max(0, n·l)`; it is always in the
+    /// rig zone; and a directional-only scene's rig error is exactly the L2
+    /// truncation error (computed here from the two formulas).
+    #[test]
+    fn directional_light_rig_is_l2_truncation_only() {
+        let dir = Vec3::new(0.3, -1.0, 0.45).normalize();
+        let e = Vec3::new(2.0, 1.5, 1.0);
+        let sun = Light::Directional {
+            direction: dir,
+            irradiance: e,
+        };
+        assert_eq!(sun.position(), None);
+        let car = crate::rig::mesh::car();
+        let at = Vec3::new(3.0, 0.0, -1.0);
+        let a = clamped_cosine_legendre();
+        let l2 = |t: f64| a[0] + a[1] * t + a[2] * 0.5 * (3.0 * t * t - 1.0);
+        let mut want = Vec::new();
+        let mut exact = Vec::new();
+        for n in &car.normals {
+            let t = n.dot(-dir) as f64;
+            want.push(e * l2(t) as f32);
+            exact.push(e * t.max(0.0) as f32);
+            assert_eq!(
+                sun.irradiance(Vec3::ZERO, *n, None),
+                e * n.dot(-dir).max(0.0)
+            );
+        }
+        for spec in ["constant", "gradient", "mixed:l3,g,c"] {
+            let cfg = crate::rig::run::RunConfig {
+                spec: spec.parse().unwrap(),
+                at,
+                samples: 64,
+                ..Default::default()
+            };
+            let r = crate::rig::run::run(&car, "car", &[sun], None, &cfg, false).unwrap();
+            assert_eq!(r.zone_counts(), (0, 0, 1), "{spec}");
+            for (i, (got, w)) in r.approx.iter().zip(&want).enumerate() {
+                assert!(
+                    (*got - *w).abs().max_element() < 1e-4 * e.x,
+                    "{spec} vertex {i}: {got} vs {w}"
+                );
+            }
+            for (x, w) in r.exact.iter().zip(&exact) {
+                assert!((*x - *w).abs().max_element() < 1e-6);
+            }
+            let trunc = crate::rig::split::error_stats(&want, &exact, None);
+            assert!(
+                (r.stats.rel_rmse - trunc.rel_rmse).abs() < 1e-4,
+                "{spec}: {:?} vs truncation {:?}",
+                r.stats,
+                trunc
+            );
+            assert!(r.stats_vs_sh.rel_rmse < 1e-5, "{:?}", r.stats_vs_sh);
+        }
+    }
+
+    /// Scene lights convert kind by kind (intensity × colour, angles in
+    /// degrees); the demo's sun becomes a directional light and its sky a
+    /// warning.
+    #[test]
+    fn scene_lights_convert() {
+        let s = crate::scene::Scene::builtin_demo();
+        let l = lights_from_scene(&s);
+        assert_eq!(l.lights.len(), s.lights.len());
+        assert!(l
+            .lights
+            .iter()
+            .any(|x| matches!(x, Light::Directional { .. })));
+        assert!(l.lights.iter().any(|x| matches!(x, Light::Sphere { .. })));
+        assert!(
+            l.warnings.iter().any(|w| w.contains("environment")),
+            "{:?}",
+            l.warnings
+        );
+        let spot = crate::scene::Light {
+            kind: LightKind::Spot,
+            position: Vec3::ONE,
+            direction: Vec3::NEG_Y,
+            color: Vec3::new(1.0, 0.5, 0.25),
+            intensity: 8.0,
+            radius: 0.0,
+            inner_angle: 0.25,
+            outer_angle: 0.5,
+            group: None,
+        };
+        let Some(Light::Spot {
+            inner_deg,
+            outer_deg,
+            intensity,
+            ..
+        }) = from_scene_light(&spot)
+        else {
+            panic!("spot expected")
+        };
+        assert!((inner_deg - 0.25f32.to_degrees()).abs() < 1e-5);
+        assert!((outer_deg - 0.5f32.to_degrees()).abs() < 1e-5);
+        assert_eq!(intensity, Vec3::new(8.0, 4.0, 2.0));
+        let bad = crate::scene::Light {
+            kind: LightKind::Sphere,
+            ..spot
+        };
+        assert_eq!(from_scene_light(&bad), None);
     }
 }

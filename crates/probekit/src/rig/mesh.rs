@@ -1,9 +1,11 @@
-//! Triangle meshes for rigs: the simple input type (any OBJ/glTF loader can
-//! fill it) and the built-in meshes made in code (`builtin:car`,
-//! `builtin:character`).
+//! Triangle meshes for rigs: the simple input type, the built-in meshes made
+//! in code (`builtin:car`, `builtin:character`), and meshes from files
+//! through the scene loader ([`from_scene`], [`load`]).
 
 use super::RigSetupError;
+use crate::scene::Scene;
 use glam::Vec3;
+use std::collections::HashMap;
 
 /// An indexed triangle mesh in its own coordinates (metres, +Y up).
 #[derive(Clone, Debug, PartialEq)]
@@ -300,6 +302,49 @@ pub fn builtin(name: &str) -> Result<Mesh, RigSetupError> {
     }
 }
 
+/// All triangles of a loaded scene (every mesh of the file merged, world
+/// coordinates of the file = the mesh's own coordinates) as one indexed
+/// [`Mesh`]: corners with bit-identical position *and* shading normal are
+/// welded into one vertex (first appearance order), so smooth meshes share
+/// vertices and hard edges keep one vertex per normal. Triangle order is
+/// the scene's. The scene loader has already dropped degenerate triangles
+/// and filled missing normals with the geometric one.
+pub fn from_scene(scene: &Scene) -> Result<Mesh, RigSetupError> {
+    let mut m = Mesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        indices: Vec::with_capacity(scene.triangles.len()),
+    };
+    let mut seen: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    for t in &scene.triangles {
+        let mut idx = [0u32; 3];
+        for (k, i) in idx.iter_mut().enumerate() {
+            let (p, n) = (t.positions[k], t.normals[k]);
+            let n = n.try_normalize().unwrap_or_else(|| t.geometric_normal());
+            let key = (
+                p.to_array().map(f32::to_bits),
+                n.to_array().map(f32::to_bits),
+            );
+            *i = *seen.entry(key).or_insert_with(|| m.push(p, n));
+        }
+        m.indices.push(idx);
+    }
+    m.validate()?;
+    Ok(m)
+}
+
+/// Loads a mesh: `builtin:car`, `builtin:character`, or any file the scene
+/// loader reads (`.obj`, `.gltf`, `.glb`, `.toml`; lights in it are
+/// ignored) through [`Scene::load`] and [`from_scene`]. Load errors are the
+/// scene loader's, which name the file.
+pub fn load(name: &str) -> Result<Mesh, RigSetupError> {
+    if name.starts_with("builtin:") {
+        return builtin(name);
+    }
+    let scene = Scene::load(name).map_err(|e| RigSetupError::Scene(e.to_string()))?;
+    from_scene(&scene)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,5 +371,51 @@ mod tests {
         }
         let (lo, hi) = character().bbox();
         assert!((hi.y - lo.y - 1.81).abs() < 0.05);
+    }
+
+    /// Issue 7 check (c): the car written as an OBJ by the test and loaded
+    /// through the scene loader is the same mesh (same triangles, corner by
+    /// corner) and gives the same samples and fitting matrix.
+    #[test]
+    fn obj_file_mesh_equals_code_mesh() {
+        use std::fmt::Write;
+        let car = car();
+        let mut text = String::from("# car\n");
+        for p in &car.positions {
+            writeln!(text, "v {} {} {}", p.x, p.y, p.z).unwrap();
+        }
+        for n in &car.normals {
+            writeln!(text, "vn {} {} {}", n.x, n.y, n.z).unwrap();
+        }
+        for t in &car.indices {
+            let [a, b, c] = t.map(|i| i + 1);
+            writeln!(text, "f {a}//{a} {b}//{b} {c}//{c}").unwrap();
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("car.obj");
+        std::fs::write(&path, text).unwrap();
+        let loaded = load(path.to_str().unwrap()).unwrap();
+        assert_eq!(loaded.indices.len(), car.indices.len());
+        assert!(loaded.positions.len() <= car.positions.len());
+        for (ta, tb) in car.indices.iter().zip(&loaded.indices) {
+            for k in 0..3 {
+                let (a, b) = (ta[k] as usize, tb[k] as usize);
+                assert_eq!(car.positions[a], loaded.positions[b]);
+                assert!(car.normals[a].distance(loaded.normals[b]) < 1e-6);
+            }
+        }
+        let spec: crate::rig::RigSpec = "mixed:l3,g,c".parse().unwrap();
+        let fa = crate::rig::fit::FittedRig::fit(&car, spec, 3, 64, 9, "car").unwrap();
+        let fb = crate::rig::fit::FittedRig::fit(&loaded, spec, 3, 64, 9, "car").unwrap();
+        assert_eq!(fa.rig.samples, fb.rig.samples);
+        assert_eq!(fa.rig.fitting.len(), fb.rig.fitting.len());
+        for (x, y) in fa.rig.fitting.iter().zip(&fb.rig.fitting) {
+            assert!((x - y).abs() <= 1e-6 * x.abs().max(1.0), "{x} vs {y}");
+        }
+        // A bad file gives the scene loader's error, naming it.
+        let bad = dir.path().join("bad.obj");
+        std::fs::write(&bad, "v 0 0 0\nf 1 2 x\n").unwrap();
+        let e = load(bad.to_str().unwrap()).unwrap_err();
+        assert!(e.to_string().contains("bad.obj"), "{e}");
     }
 }

@@ -9,12 +9,15 @@
 //! - [`RigSpec`]: `constant`, `gradient`, `lattice:NXxNYxNZ`,
 //!   `mixed:X,Y,Z` (per axis `c`, `g` or `lN`); the model itself and its
 //!   evaluation live in [`probekit_runtime::rig`] (module docs there).
-//! - [`mesh`]: the [`mesh::Mesh`] input and the built-in car and character.
+//! - [`mesh`]: the [`mesh::Mesh`] input, the built-in car and character, and
+//!   meshes from OBJ/glTF/TOML files through the scene loader.
 //! - [`sample`]: evenly spread surface samples (farthest point + Lloyd).
 //! - [`fit`]: the design matrix and `L = M⁺` (SVD, rank-deficiency cut-off
 //!   documented there), giving a [`fit::FittedRig`] = the `.probes` record.
-//! - [`lights`]: sphere/point/spot/disk lights, their SH at a point and their
-//!   exact irradiance; the 128 × 128 horizon-clipped sphere table.
+//! - [`lights`]: sphere/point/spot/disk/directional lights, their SH at a
+//!   point and their exact irradiance; conversion from the scene loader's
+//!   lights; the 128 × 128 horizon-clipped sphere table.
+//! - [`source`]: a baked probe cloud or volume as a lighting source.
 //! - [`split`]: the error tables, per-light transition distances, the
 //!   analytic/transition/rig evaluation and the error metrics.
 //! - [`render`]: the comparison and zone pictures.
@@ -25,6 +28,7 @@ pub mod mesh;
 pub mod render;
 pub mod run;
 pub mod sample;
+pub mod source;
 pub mod split;
 
 use probekit_runtime::format::{AxisModel, RigModel};
@@ -60,9 +64,13 @@ pub enum RigSetupError {
     /// `builtin:` name that does not exist.
     #[error("unknown built-in {0:?} (builtin:car, builtin:character, builtin:rig-demo, builtin:paper-cost)")]
     UnknownBuiltin(String),
-    /// The scene's lights could not be read.
+    /// The scene (or mesh file) could not be loaded: the scene loader's
+    /// message, which names the file.
     #[error("bad scene: {0}")]
     Scene(String),
+    /// The baked probe file could not be loaded or queried (names the file).
+    #[error("bad probe file: {0}")]
+    Probes(String),
     /// SH order outside `1..=8`.
     #[error("SH order {0} outside 1..=8")]
     Order(usize),

@@ -4,11 +4,16 @@
 //! time a frame.
 
 use super::fit::FittedRig;
-use super::lights::{paper_cost_lights, parse_scene_lights, rig_demo_lights, Light, SphereTable};
+use super::lights::{
+    lights_from_scene, paper_cost_lights, rig_demo_lights, Light, SceneLights, SphereTable,
+};
 use super::mesh::{self, Mesh};
+use super::source::ProbeSource;
 use super::split::{self, Frame, Zone};
 use super::{RigSetupError, RigSpec};
+use crate::scene::Scene;
 use glam::Vec3;
+use probekit_runtime::cloud::WalkState;
 use std::time::Instant;
 
 /// Seed of the sample distribution unless told otherwise.
@@ -16,27 +21,32 @@ pub const DEFAULT_SEED: u64 = 0x5EED_0000;
 /// Table distances used by [`run`].
 pub const TABLE_DISTANCES: usize = 24;
 
-/// Loads a mesh: `builtin:car` or `builtin:character` (other formats come
-/// with the scene loader).
+/// Loads a mesh: `builtin:car`, `builtin:character`, or an OBJ/glTF/TOML
+/// file through the scene loader ([`mesh::load`]).
 pub fn load_mesh(name: &str) -> Result<Mesh, RigSetupError> {
-    mesh::builtin(name)
+    mesh::load(name)
 }
 
-/// Loads the lights of a scene: `builtin:rig-demo`, `builtin:paper-cost`
-/// (seed 000's demo: 4 + 8 sphere lights and 192 disks), or a TOML file's
-/// `[[light]]` tables (I/O errors name the file).
-pub fn load_lights(scene: &str) -> Result<Vec<Light>, RigSetupError> {
+/// Loads the lights of a scene: the rig's own light sets
+/// `builtin:rig-demo` and `builtin:paper-cost` (seed 000's demo: 4 + 8
+/// sphere lights and 192 disks), or anything [`Scene::load`] reads
+/// (`builtin:demo`, `.toml`, `.gltf`, `.glb`, `.obj`), converted by
+/// [`lights_from_scene`] (its warnings say what was left out). Load errors
+/// are the scene loader's, which name the file.
+pub fn load_lights(scene: &str) -> Result<SceneLights, RigSetupError> {
+    let own = |lights| SceneLights {
+        lights,
+        warnings: Vec::new(),
+    };
     match scene {
-        "builtin:rig-demo" => Ok(rig_demo_lights()),
-        "builtin:paper-cost" => Ok(paper_cost_lights()),
-        s if s.starts_with("builtin:") => Err(RigSetupError::UnknownBuiltin(s.to_string())),
+        "builtin:rig-demo" => Ok(own(rig_demo_lights())),
+        "builtin:paper-cost" => Ok(own(paper_cost_lights())),
+        s if s.starts_with("builtin:") && s != crate::scene::BUILTIN_DEMO => {
+            Err(RigSetupError::UnknownBuiltin(s.to_string()))
+        }
         path => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| RigSetupError::Scene(format!("{path}: {e}")))?;
-            parse_scene_lights(&text).map_err(|e| match e {
-                RigSetupError::Scene(m) => RigSetupError::Scene(format!("{path}: {m}")),
-                other => other,
-            })
+            let s = Scene::load(path).map_err(|e| RigSetupError::Scene(e.to_string()))?;
+            Ok(lights_from_scene(&s))
         }
     }
 }
@@ -134,16 +144,23 @@ pub fn time_ns(mut f: impl FnMut()) -> f64 {
 }
 
 /// Runs the experiment for `mesh` (own coordinates; placed at `cfg.at`)
-/// among `lights`. `time` off skips the timing (tests).
+/// among `lights` and, when given, the baked lighting of `probes` (which
+/// goes through the rig; its exact reference is the file's irradiance at
+/// each vertex, see [`super::source`]). `time` off skips the timing (tests).
 pub fn run(
     mesh: &Mesh,
     name: &str,
     lights: &[Light],
+    probes: Option<&ProbeSource>,
     cfg: &RunConfig,
     time: bool,
 ) -> Result<RunReport, RigSetupError> {
     let mut fitted = FittedRig::fit(mesh, cfg.spec, cfg.order, cfg.samples, cfg.seed, name)?;
-    let exact = split::exact_irradiance(mesh, cfg.at, lights);
+    let mut walk = WalkState::new();
+    let mut exact = split::exact_irradiance(mesh, cfg.at, lights);
+    if let Some(src) = probes {
+        split::add_probe_irradiance(mesh, cfg.at, src, cfg.order, &mut walk, &mut exact);
+    }
     let l_white = cfg
         .white
         .unwrap_or_else(|| split::white_level(&exact))
@@ -173,7 +190,12 @@ pub fn run(
         let z = lights
             .iter()
             .zip(&th)
-            .map(|(l, &t)| split::zone(l.position().distance(center) / r, t))
+            .map(|(l, &t)| {
+                let x = l
+                    .position()
+                    .map_or(f32::INFINITY, |p| p.distance(center) / r);
+                split::zone(x, t)
+            })
             .collect();
         (z, th)
     } else {
@@ -183,22 +205,34 @@ pub fn run(
     let table = SphereTable::default();
     let mut frame = Frame::new(&fitted);
     let mut approx = vec![Vec3::ZERO; mesh.positions.len()];
-    split::update_from_lights(&mut frame, &fitted, cfg.at, lights, &weights);
+    split::update_from_sources(
+        &mut frame, &fitted, cfg.at, lights, &weights, probes, &mut walk,
+    );
     split::split_irradiance(&frame, mesh, cfg.at, lights, &weights, &table, &mut approx);
     let stats = split::error_stats(&approx, &exact, Some(l_white));
-    let sh_ref = split::sh_reference_irradiance(mesh, cfg.at, lights, &weights, cfg.order);
+    let mut sh_ref = split::sh_reference_irradiance(mesh, cfg.at, lights, &weights, cfg.order);
+    if let Some(src) = probes {
+        split::add_probe_irradiance(mesh, cfg.at, src, cfg.order, &mut walk, &mut sh_ref);
+    }
     let stats_vs_sh = split::error_stats(&approx, &sh_ref, Some(l_white));
     let (mut ns_per_frame, mut ns_brute_force) = (0.0, 0.0);
     if time {
         ns_per_frame = time_ns(|| {
-            split::update_from_lights(&mut frame, &fitted, cfg.at, lights, &weights);
+            split::update_from_sources(
+                &mut frame, &fitted, cfg.at, lights, &weights, probes, &mut walk,
+            );
             split::split_irradiance(&frame, mesh, cfg.at, lights, &weights, &table, &mut approx);
         });
         let zeros = vec![0.0f32; lights.len()];
         let empty = Frame::new(&fitted);
         let mut brute = vec![Vec3::ZERO; mesh.positions.len()];
+        // Brute force: every light analytically and the file queried at
+        // every vertex.
         ns_brute_force = time_ns(|| {
             split::split_irradiance(&empty, mesh, cfg.at, lights, &zeros, &table, &mut brute);
+            if let Some(src) = probes {
+                split::add_probe_irradiance(mesh, cfg.at, src, cfg.order, &mut walk, &mut brute);
+            }
         });
     }
     Ok(RunReport {
@@ -232,9 +266,9 @@ mod tests {
             ..RunConfig::default()
         };
         cfg.split = false;
-        let off = run(&car, "car", &lights, &cfg, false).unwrap();
+        let off = run(&car, "car", &lights, None, &cfg, false).unwrap();
         cfg.split = true;
-        let on = run(&car, "car", &lights, &cfg, false).unwrap();
+        let on = run(&car, "car", &lights, None, &cfg, false).unwrap();
         assert!(
             on.stats.max_grey <= off.stats.max_grey + 1e-3,
             "{:?} vs {:?}",
@@ -257,6 +291,8 @@ mod tests {
             Err(RigSetupError::UnknownBuiltin(_))
         ));
         let e = load_lights("/nonexistent/x.toml").unwrap_err();
-        assert!(e.to_string().contains("/nonexistent/x.toml"));
+        assert!(e.to_string().contains("/nonexistent/x.toml"), "{e}");
+        let e = load_mesh("/nonexistent/m.obj").unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/m.obj"), "{e}");
     }
 }

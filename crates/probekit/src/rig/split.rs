@@ -29,7 +29,9 @@
 use super::fit::FittedRig;
 use super::lights::{Light, SphereTable};
 use super::mesh::Mesh;
+use super::source::ProbeSource;
 use glam::Vec3;
+use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::Transition;
 use probekit_runtime::rig::RigState;
 
@@ -143,6 +145,49 @@ pub fn update_from_lights(
             }
         }
     });
+}
+
+/// Updates `frame` from `lights` (weighted as in [`update_from_lights`])
+/// plus, when given, the baked file `probes` sampled at each sample point
+/// (always fully in the rig). `walk` is the cloud's walk cache, kept
+/// between frames.
+#[allow(clippy::too_many_arguments)]
+pub fn update_from_sources(
+    frame: &mut Frame,
+    fitted: &FittedRig,
+    at: Vec3,
+    lights: &[Light],
+    weights: &[f32],
+    probes: Option<&ProbeSource>,
+    walk: &mut WalkState,
+) {
+    let order = frame.state.order();
+    frame.update_from(fitted, at, |p, out| {
+        for (l, &w) in lights.iter().zip(weights) {
+            if w > 0.0 {
+                l.add_sh(order, p, w, out);
+            }
+        }
+        if let Some(src) = probes {
+            src.add_sh(p, 1.0, walk, out);
+        }
+    });
+}
+
+/// Adds the baked file's irradiance (truncated to `order` bands),
+/// evaluated at each vertex of `mesh` placed at `at` with its normal, to
+/// `out`: the baked part of the exact reference ([`super::source`]).
+pub fn add_probe_irradiance(
+    mesh: &Mesh,
+    at: Vec3,
+    probes: &ProbeSource,
+    order: usize,
+    walk: &mut WalkState,
+    out: &mut [Vec3],
+) {
+    for ((o, p), n) in out.iter_mut().zip(&mesh.positions).zip(&mesh.normals) {
+        *o += probes.irradiance(*p + at, *n, order, walk);
+    }
 }
 
 /// Exact per-vertex irradiance of all lights for `mesh` placed at `at`.
@@ -304,7 +349,7 @@ pub fn transition_table(
 /// bracket where `g` falls to `target`, then linear interpolation. If `g`
 /// is below the target at the table's first distance, that distance; if it
 /// is still above at the last, the last (the light is analytic within the
-/// table's range).
+/// table's range). A directional light gives 0 (never analytic).
 pub fn transition_distance(
     table: &[Transition],
     light: &Light,
@@ -313,12 +358,14 @@ pub fn transition_distance(
     l_white: f32,
     target: f32,
 ) -> f32 {
+    // A directional light is infinitely far: always through the rig.
+    let Some(position) = light.position() else {
+        return 0.0;
+    };
     if table.is_empty() {
         return 0.0;
     }
-    let dir = (light.position() - center)
-        .try_normalize()
-        .unwrap_or(Vec3::Y);
+    let dir = (position - center).try_normalize().unwrap_or(Vec3::Y);
     let g = |i: usize| {
         let t = table[i];
         t.error * nearest_point_irradiance(light, center, radius, dir, t.distance)
@@ -347,7 +394,8 @@ pub fn transition_distance(
     xlo + (glo - target) / (glo - ghi) * (xhi - xlo)
 }
 
-/// The zone of a light at distance `x` (bounding radii) with threshold `x*`.
+/// The zone of a light at distance `x` (bounding radii; `f32::INFINITY` for
+/// a directional light) with threshold `x*`.
 pub fn zone(x: f32, x_star: f32) -> Zone {
     if x < x_star {
         Zone::Analytic
