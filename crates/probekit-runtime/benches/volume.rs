@@ -40,6 +40,7 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
             data: grads,
         }),
         rigs: Vec::new(),
+        groups: Vec::new(),
         metadata: String::new(),
     }
 }

@@ -1,6 +1,7 @@
 //! The corpus of broken files in `tests/corpus/`: each file is named for
 //! what is wrong with it and must give its error variant (and never panic).
-//! `valid_full.probes` is a good file from format 1.0 that must keep loading.
+//! `valid_full.probes` is a good file from format 1.0 that must keep loading;
+//! `valid_groups.probes` is a good 1.1 file with light groups (`LGRP`).
 //!
 //! Regenerate after a deliberate format change with
 //! `PROBEKIT_REGEN_CORPUS=1 cargo test -p probekit-runtime --test corpus`.
@@ -35,11 +36,16 @@ fn every_corpus_file_gives_its_error() {
             .unwrap_or_else(|| panic!("corpus file {name} has no expected error"));
         let bytes = std::fs::read(&path).unwrap();
         let result = ProbeFile::from_bytes(&bytes);
-        if name == "valid_full" {
+        if name == "valid_full" || name == "valid_groups" {
+            let want = if name == "valid_full" {
+                full_file()
+            } else {
+                groups_file()
+            };
             assert_eq!(
                 result.unwrap(),
-                full_file(),
-                "the 1.0 reference file no longer loads"
+                want,
+                "the reference file {name} no longer loads"
             );
             assert_eq!(
                 &bytes, generated,
@@ -62,7 +68,11 @@ fn generated_cases_match_expectations() {
     // before its file is committed.
     for (name, bytes, expect) in corpus_cases() {
         match ProbeFile::from_bytes(&bytes) {
-            Ok(f) => assert_eq!(name, "valid_full", "{name} loaded: {:?}", f.kind),
+            Ok(f) => assert!(
+                name == "valid_full" || name == "valid_groups",
+                "{name} loaded: {:?}",
+                f.kind
+            ),
             Err(e) => assert!(expect(&e), "{name}: unexpected error {e:?}"),
         }
     }

@@ -29,6 +29,7 @@ fn seeds() -> Vec<Vec<u8>> {
         full_file().to_bytes().unwrap(),
         small.to_bytes().unwrap(),
         rig.to_bytes().unwrap(),
+        groups_file().to_bytes().unwrap(),
     ]
 }
 

@@ -1,13 +1,23 @@
 //! `probekit bake [SCENE] [--positions FILE.csv | --grid N | --cell SIZE]
 //! [-o OUT.probes] [--samples N] [--bounces B] [--order N] [--seed S]
-//! [--codec C] [--indirect-only] [--shard I/N] [--json]` and
+//! [--codec C] [--indirect-only] [--groups] [--shard I/N] [--json]` and
 //! `probekit merge PART... -o OUT.probes`.
 //!
 //! A sharded bake writes a *part*: a cloud file without tetrahedra holding
 //! the shard's captured positions, f32 SH and validity, whose `META` JSON is
 //! `{"part":{"shard","shards","first_index","count","total"},"bake":<the
 //! BakeMetadata of the whole bake>}`. `merge` checks the parts and builds the
-//! same file as the unsharded bake, byte for byte.
+//! same file as the unsharded bake, byte for byte. With `--groups` the part
+//! also carries the light groups (`LGRP`, f32), which `merge` encodes in the
+//! bake's codec like the main coefficients.
+//!
+//! `--groups` stores one radiance SH per light group next to the total, so an
+//! engine can rescale groups at run time (`ProbeFile::relit`, `query
+//! --group-scale`). With `--indirect-only` the groups are indirect-only too:
+//! the stored total is the indirect light, and it equals the sum of the
+//! stored groups (every emitter is in exactly one group, including
+//! `"default"`, `"emissive"` and `"environment"`), so scaling a group rescales
+//! its indirect light while the engine scales its direct light itself.
 
 use super::util::{load_probes, load_scene, read_csv};
 use anyhow::{anyhow, bail, Context, Result};
@@ -15,7 +25,9 @@ use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
-use probekit::cloud::file::{cloud_file, file_validity, settings_json};
+use probekit::cloud::file::{
+    cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
+};
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
@@ -75,6 +87,10 @@ pub struct BakeArgs {
     /// Store only indirect light (direct light is added at run time).
     #[arg(long)]
     pub indirect_only: bool,
+    /// Also store one SH per light group (`group` key on lights) for
+    /// run-time relighting; indirect-only with `--indirect-only`.
+    #[arg(long)]
+    pub groups: bool,
     /// Bake only shard I of N (`I/N`, I from 0) into a part file for `merge`.
     #[arg(long)]
     pub shard: Option<String>,
@@ -156,6 +172,16 @@ fn stored_sh(out: &BakeOutput, indirect_only: bool) -> Vec<ShRgb> {
     match (&out.indirect, indirect_only) {
         (Some(ind), true) => ind.clone(),
         _ => out.sh.clone(),
+    }
+}
+
+/// The light groups that a bake stores (all light, or indirect only), in
+/// the order of the names (sorted).
+fn stored_groups(out: &BakeOutput, indirect_only: bool) -> Vec<(String, Vec<ShRgb>)> {
+    if indirect_only {
+        out.groups_indirect.clone()
+    } else {
+        out.groups.clone()
     }
 }
 
@@ -242,6 +268,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         settings.seed = s;
     }
     settings.split_direct = a.indirect_only;
+    settings.groups = a.groups;
     let mut sj = settings_json(&settings, codec);
     sj["indirect_only"] = serde_json::json!(a.indirect_only);
     let meta = BakeMetadata::new(
@@ -268,16 +295,24 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     .with_context(|| a.scene.clone())?;
     pb.finish_and_clear();
     let sh = stored_sh(&out, a.indirect_only);
+    let groups = stored_groups(&out, a.indirect_only);
     let validity: Vec<Validity> = out.validity.iter().map(file_validity).collect();
     let invalid = out.validity.iter().filter(|v| !v.valid).count();
     let outname = a.output.display().to_string();
     let file = if a.shard.is_some() {
-        part_file(&out, &sh, validity, &meta, shard, shards, points.len())
-            .with_context(|| outname.clone())?
+        let mut f = part_file(&out, &sh, validity, &meta, shard, shards, points.len())
+            .with_context(|| outname.clone())?;
+        f.groups = light_groups(&groups, out.settings.order, Codec::F32)
+            .with_context(|| outname.clone())?;
+        f
     } else {
-        cloud_file(&out.captured_positions, &sh, &validity, codec, &meta)
-            .with_context(|| outname.clone())?
+        let mut f = cloud_file(&out.captured_positions, &sh, &validity, codec, &meta)
+            .with_context(|| outname.clone())?;
+        f.groups =
+            light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
+        f
     };
+    file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
     let bytes: u64 = file.bytes_by_section()?.values().sum();
     if a.json {
@@ -289,6 +324,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 "tetrahedra": file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
                 "invalid": invalid,
                 "bytes": bytes,
+                "groups": file.group_names().collect::<Vec<_>>(),
                 "shard": a.shard.as_ref().map(|_| serde_json::json!([shard, shards])),
             })
         );
@@ -415,7 +451,18 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let mut positions = Vec::new();
     let mut sh = Vec::new();
     let mut validity = Vec::new();
-    for p in &parts {
+    let mut groups: Vec<(String, Vec<ShRgb>)> = Vec::new();
+    for (k, p) in parts.iter().enumerate() {
+        let g = decode_light_groups(&p.file).with_context(|| p.name.clone())?;
+        if k == 0 {
+            groups = g;
+        } else if g.iter().map(|x| &x.0).ne(groups.iter().map(|x| &x.0)) {
+            bail!("{} and {}: different light groups", head.name, p.name);
+        } else {
+            for ((_, dst), (_, src)) in groups.iter_mut().zip(g) {
+                dst.extend(src);
+            }
+        }
         let c = p
             .file
             .coefficients
@@ -430,8 +477,11 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         validity.extend(p.file.validity.clone().unwrap_or_default());
     }
     let out = a.output.display().to_string();
-    let file =
+    let mut file =
         cloud_file(&positions, &sh, &validity, codec, &head.meta).with_context(|| out.clone())?;
+    let order = head.file.coefficients.order as usize;
+    file.groups = light_groups(&groups, order, codec).with_context(|| out.clone())?;
+    file.validate().with_context(|| out.clone())?;
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;
     println!(
         "{out}: {} probes from {} parts",

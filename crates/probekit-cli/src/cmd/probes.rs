@@ -124,16 +124,57 @@ pub struct QueryArgs {
     /// Volumes: trilinear (default), taylor or tricubic.
     #[arg(long, default_value = "trilinear")]
     pub interp: String,
+    /// Relight before querying: `NAME=s[,NAME=s...]` scales light group
+    /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
+    #[arg(long)]
+    pub group_scale: Vec<String>,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
 }
 
+/// Parses `--group-scale` values: `NAME=s` or `NAME=r:g:b`, comma-separated.
+fn parse_group_scales(args: &[String]) -> Result<Vec<(String, Vec3)>> {
+    let mut out = Vec::new();
+    for item in args.iter().flat_map(|a| a.split(',')) {
+        let bad = || anyhow!("--group-scale {item}: expected NAME=s or NAME=r:g:b");
+        let (name, value) = item.split_once('=').ok_or_else(bad)?;
+        let parts: Vec<f32> = value
+            .split(':')
+            .map(|v| v.trim().parse::<f32>().map_err(|_| bad()))
+            .collect::<Result<_>>()?;
+        let rgb = match parts[..] {
+            [s] => Vec3::splat(s),
+            [r, g, b] => Vec3::new(r, g, b),
+            _ => return Err(bad()),
+        };
+        if name.trim().is_empty() || !rgb.is_finite() {
+            return Err(bad());
+        }
+        out.push((name.trim().to_string(), rgb));
+    }
+    Ok(out)
+}
+
 /// Runs `probekit query`: `{"irradiance":[r,g,b]}` for `--at`, or
-/// `{"irradiance":[[r,g,b],...]}` for `--points`.
+/// `{"irradiance":[[r,g,b],...]}` for `--points`. With `--group-scale` the
+/// file's coefficients are first relit (`ProbeFile::relit`).
 pub fn query(a: &QueryArgs) -> Result<()> {
     let name = a.probes.display().to_string();
-    let file = load_probes(&a.probes)?;
+    let mut file = load_probes(&a.probes)?;
+    let scales = parse_group_scales(&a.group_scale)?;
+    if !scales.is_empty() {
+        if file.groups.is_empty() {
+            bail!(
+                "{name}: --group-scale needs a file baked with --groups (it has no light groups)"
+            );
+        }
+        let named: Vec<(&str, Vec3)> = scales.iter().map(|(n, s)| (n.as_str(), *s)).collect();
+        file.coefficients = file.relit(&named).with_context(|| {
+            let names: Vec<&str> = file.group_names().collect();
+            format!("{name}: --group-scale (groups: {})", names.join(", "))
+        })?;
+    }
     let probes =
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
     let mut st = WalkState::new();
@@ -208,6 +249,7 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             "invalid": invalid,
             "bytes": bytes,
             "bytes_by_section": by,
+            "groups": file.group_names().collect::<Vec<_>>(),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
             "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),
             "part": part,

@@ -86,6 +86,13 @@ impl ProbeCloud {
         self.mesh.positions().len()
     }
 
+    /// Every probe's radiance SH (`order²` per probe, probe after probe),
+    /// writable: an engine relights a loaded cloud in place with
+    /// [`crate::format::Relighter::relight_into`], no allocation.
+    pub fn coefficients_mut(&mut self) -> &mut [Vec3] {
+        &mut self.coeffs
+    }
+
     /// The radiance SH of probe `i` (`order²` coefficients).
     pub fn probe_sh(&self, i: usize) -> &[Vec3] {
         let n = self.coeffs_per_probe();

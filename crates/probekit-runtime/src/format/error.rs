@@ -184,6 +184,9 @@ pub enum FormatError {
     /// Text that is not UTF-8.
     #[error("section {0} holds text that is not UTF-8")]
     InvalidUtf8(SectionId),
+    /// A light group name that the file does not hold (relighting).
+    #[error("no light group named {0:?} in the file")]
+    UnknownGroup(String),
     /// A value the writer cannot represent (e.g. more than `u32::MAX`
     /// elements, or a float outside the codec's range).
     #[error("cannot encode: {0}")]

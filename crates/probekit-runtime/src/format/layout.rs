@@ -9,9 +9,22 @@ use core::fmt;
 pub const MAGIC: [u8; 8] = *b"PROBEKIT";
 /// Major version written and read. A file with a larger major is refused.
 pub const VERSION_MAJOR: u16 = 1;
-/// Minor version written. Files with a larger minor load; their unknown
-/// sections are skipped.
-pub const VERSION_MINOR: u16 = 0;
+/// Newest minor version this reader knows (1.1 added `LGRP`, light
+/// groups). Files with a larger minor load; their unknown sections are
+/// skipped. The writer writes the lowest minor that holds the file's
+/// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
+/// reads every file that does not use 1.1 additions, byte for byte as before.
+pub const VERSION_MINOR: u16 = 1;
+
+/// The lowest minor version whose section set includes every id in `ids`:
+/// 1 if `LGRP` ([`SectionId::LIGHT_GROUPS`]) is present, else 0.
+pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
+    if ids.into_iter().any(|id| id == SectionId::LIGHT_GROUPS) {
+        1
+    } else {
+        0
+    }
+}
 /// Bytes in the fixed file header.
 pub const HEADER_LEN: usize = 48;
 /// Bytes in one section-table entry.
@@ -27,6 +40,8 @@ pub const SECTION_HEADER_LEN: usize = 16;
 pub const OCTREE_NODE_LEN: usize = 40;
 /// Bytes in one rig record header.
 pub const RIG_HEADER_LEN: usize = 80;
+/// Bytes in one light-group record header (`LGRP`, format 1.1).
+pub const GROUP_HEADER_LEN: usize = 16;
 /// "No element": hull neighbour, leaf node's children, face without a tetrahedron.
 pub const NONE: u32 = u32::MAX;
 
@@ -69,11 +84,13 @@ impl SectionId {
     pub const RIGS: Self = Self::from_fourcc(*b"RIGS");
     /// Bake metadata (UTF-8 JSON).
     pub const METADATA: Self = Self::from_fourcc(*b"META");
+    /// Per-light-group radiance SH, for run-time relighting (format 1.1).
+    pub const LIGHT_GROUPS: Self = Self::from_fourcc(*b"LGRP");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 10] = [
+    pub const KNOWN: [Self; 11] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -83,6 +100,7 @@ impl SectionId {
         Self::GRID,
         Self::GRADIENTS,
         Self::RIGS,
+        Self::LIGHT_GROUPS,
         Self::METADATA,
     ];
 
@@ -110,6 +128,7 @@ impl SectionId {
             Self::GRADIENTS => "gradients",
             Self::RIGS => "rigs",
             Self::METADATA => "metadata",
+            Self::LIGHT_GROUPS => "light_groups",
             Self::HEADER => "header",
             _ => return None,
         })

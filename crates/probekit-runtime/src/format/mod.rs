@@ -20,6 +20,7 @@
 mod codec;
 mod crc;
 mod error;
+mod groups;
 pub mod layout;
 mod read;
 mod validate;
@@ -28,6 +29,7 @@ mod write;
 pub use codec::{f16_is_non_finite, f16_to_f32, Codec, Coefficients};
 pub use crc::{crc32, Crc32};
 pub use error::FormatError;
+pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
 pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use write::{assemble_file, SectionBuilder};
@@ -281,6 +283,11 @@ pub struct ProbeFile {
     pub gradients: Option<Gradients>,
     /// Irradiance rigs (empty: no `RIGS` section).
     pub rigs: Vec<Rig>,
+    /// Radiance SH per light group, for run-time relighting (empty: no
+    /// `LGRP` section; format 1.1). Each holds one entry per probe, in the
+    /// order of `positions`, at the order of `coefficients`; names unique.
+    /// See [`ProbeFile::relit`] and [`Relighter`].
+    pub groups: Vec<LightGroup>,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -309,6 +316,7 @@ impl ProbeFile {
             grid: None,
             gradients: None,
             rigs: Vec::new(),
+            groups: Vec::new(),
             metadata: String::new(),
         }
     }

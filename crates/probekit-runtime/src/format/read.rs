@@ -7,12 +7,12 @@ use super::codec::{Codec, Coefficients};
 use super::crc::{crc32, Crc32};
 use super::error::FormatError;
 use super::layout::{
-    self, entry, header, pad16, SectionId, ALIGN, ENTRY_LEN, HEADER_LEN, OCTREE_NODE_LEN,
-    RIG_HEADER_LEN, SECTION_HEADER_LEN, VERSION_MAJOR, VERSION_MINOR,
+    self, entry, header, pad16, SectionId, ALIGN, ENTRY_LEN, GROUP_HEADER_LEN, HEADER_LEN,
+    OCTREE_NODE_LEN, RIG_HEADER_LEN, SECTION_HEADER_LEN, VERSION_MAJOR, VERSION_MINOR,
 };
 use super::{
-    AxisModel, Gradients, Octree, OctreeNode, OuterCells, ProbeFile, ProbeFileKind, Rig, RigModel,
-    TetSection, Transition, Validity, VolumeGrid,
+    AxisModel, Gradients, LightGroup, Octree, OctreeNode, OuterCells, ProbeFile, ProbeFileKind,
+    Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -530,6 +530,62 @@ fn parse_rigs(s: &Sec<'_>) -> Result<Vec<Rig>, FormatError> {
     Ok(rigs)
 }
 
+/// Checks a codec id, order and stride read from a file against each other.
+fn codec_for(codec: u32, order: u32, stride: u32) -> Result<Codec, FormatError> {
+    let codec = Codec::from_id(codec)?;
+    match codec.stride(order) {
+        Some(expected) if expected == stride as usize => Ok(codec),
+        _ => Err(FormatError::CodecOrderMismatch {
+            codec: codec.name(),
+            order,
+            stride,
+        }),
+    }
+}
+
+fn parse_groups(s: &Sec<'_>) -> Result<Vec<LightGroup>, FormatError> {
+    let [count, probes, ..] = s.header()?;
+    // Every record takes at least GROUP_HEADER_LEN bytes: bound the capacity.
+    let mut groups = Vec::with_capacity((count as usize).min(s.bytes.len() / GROUP_HEADER_LEN));
+    let mut pos = SECTION_HEADER_LEN;
+    for _ in 0..count {
+        let w = |k: usize| {
+            pos.checked_add(4 * k)
+                .and_then(|o| u32_at(s.bytes, o))
+                .ok_or(FormatError::SectionSize {
+                    id: s.id,
+                    expected: (pos + GROUP_HEADER_LEN) as u64,
+                    actual: s.bytes.len() as u64,
+                })
+        };
+        let (codec, order, stride, name_len) = (w(0)?, w(1)?, w(2)?, w(3)?);
+        let codec = codec_for(codec, order, stride)?;
+        let start = pos + GROUP_HEADER_LEN;
+        let sizes = [Some(name_len as usize), bytes_for(probes, stride as usize)];
+        let [name, data] = s.arrays_at(start, sizes, false)?;
+        let end = [name, data]
+            .iter()
+            .try_fold(start, |p, a| pad16(a.len()).and_then(|l| p.checked_add(l)))
+            .ok_or(FormatError::CountOverflow(s.id))?;
+        let name = std::str::from_utf8(name)
+            .map_err(|_| FormatError::InvalidUtf8(s.id))?
+            .to_string();
+        groups.push(LightGroup {
+            name,
+            coefficients: Coefficients {
+                codec,
+                order,
+                data: data.to_vec(),
+            },
+        });
+        pos = end;
+    }
+    if pos != s.bytes.len() {
+        return Err(s.size_error(pos as u64));
+    }
+    Ok(groups)
+}
+
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
@@ -560,6 +616,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::GRID => file.grid = Some(parse_grid(&s)?),
             SectionId::GRADIENTS => file.gradients = Some(parse_gradients(&s)?),
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
+            SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.

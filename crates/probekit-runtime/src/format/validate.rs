@@ -328,6 +328,46 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
+    // Light groups (1.1): one SH per probe each, at the coefficients' order.
+    for (k, g) in f.groups.iter().enumerate() {
+        let id = SectionId::LIGHT_GROUPS;
+        let bad = |reason| FormatError::InvalidValue {
+            id,
+            element: k as u64,
+            reason,
+        };
+        if g.name.is_empty() {
+            return Err(bad("light group without a name"));
+        }
+        if u32::try_from(g.name.len()).is_err() {
+            return Err(FormatError::Unrepresentable(
+                "light group name longer than u32::MAX bytes",
+            ));
+        }
+        if f.groups[..k].iter().any(|h| h.name == g.name) {
+            return Err(bad("two light groups share a name"));
+        }
+        let gc = &g.coefficients;
+        let stride = gc
+            .codec
+            .stride(gc.order)
+            .ok_or(FormatError::CodecOrderMismatch {
+                codec: gc.codec.name(),
+                order: gc.order,
+                stride: 0,
+            })?;
+        if gc.order != c.order {
+            return Err(bad("light group SH order differs from the coefficients'"));
+        }
+        if gc.data.len() % stride != 0 || gc.len() != probes {
+            return Err(count_mismatch(id, probes, gc.data.len() / stride));
+        }
+        check_finite(gc).map_err(|e| match e {
+            FormatError::NonFinite { .. } => non_finite(id, k),
+            e => e,
+        })?;
+    }
+
     match f.kind {
         ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
             Err(FormatError::MissingSection(SectionId::GRID))

@@ -236,6 +236,22 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::RIGS, s.finish()));
     }
 
+    if !f.groups.is_empty() {
+        let mut s = SectionBuilder::new([count(f.groups.len(), "light groups")?, probes, 0, 0]);
+        for g in &f.groups {
+            let c = &g.coefficients;
+            s.u32s([
+                c.codec.id(),
+                c.order,
+                c.stride() as u32,
+                count(g.name.len(), "light group name")?,
+            ]);
+            s.bytes(g.name.as_bytes()).pad();
+            s.bytes(&c.data).pad();
+        }
+        out.push((SectionId::LIGHT_GROUPS, s.finish()));
+    }
+
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
     s.bytes(f.metadata.as_bytes());
     out.push((SectionId::METADATA, s.finish()));
@@ -248,11 +264,15 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
 
 impl ProbeFile {
     /// Serializes the file (after [`ProbeFile::validate`]). Deterministic:
-    /// equal contents give equal bytes.
+    /// equal contents give equal bytes. The header's minor version is the
+    /// lowest that holds the sections present
+    /// ([`layout::minor_for_sections`]): 0 unless the file has light groups.
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
-        Ok(assemble_file(self.kind.id(), VERSION_MINOR, 0, &sections))
+        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id));
+        debug_assert!(minor <= VERSION_MINOR);
+        Ok(assemble_file(self.kind.id(), minor, 0, &sections))
     }
 
     /// Bytes each section takes when written, keyed by section name, plus

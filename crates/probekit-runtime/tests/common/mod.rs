@@ -144,6 +144,57 @@ pub fn full_file() -> ProbeFile {
     f
 }
 
+/// [`full_file`] relit-ready: two light groups, `"lamp"` (f32) and `"sün"`
+/// (f16, a non-ASCII name), whose sum is the file's coefficients (format 1.1).
+pub fn groups_file() -> ProbeFile {
+    let mut f = full_file();
+    let mut rng = Rng(11);
+    let a: Vec<Vec3> = (0..5 * 9).map(|_| rng.vec3()).collect();
+    let b: Vec<Vec3> = (0..5 * 9).map(|_| rng.vec3()).collect();
+    // Round b through f16 first so the stored total is exactly a + b.
+    let b16: Vec<u16> = b
+        .iter()
+        .flat_map(|v| v.to_array())
+        .map(|x| half::f16::from_f32(x).to_bits())
+        .collect();
+    let b: Vec<Vec3> = b16
+        .chunks(3)
+        .map(|c| Vec3::from_array([0, 1, 2].map(|k| f16_to_f32(c[k]))))
+        .collect();
+    let total: Vec<Vec3> = a.iter().zip(&b).map(|(x, y)| *x + *y).collect();
+    f.coefficients = Coefficients::from_f32(3, &total).unwrap();
+    f.groups = vec![
+        LightGroup {
+            name: "lamp".into(),
+            coefficients: Coefficients::from_f32(3, &a).unwrap(),
+        },
+        LightGroup {
+            name: "sün".into(),
+            coefficients: Coefficients {
+                codec: Codec::F16,
+                order: 3,
+                data: b16.iter().flat_map(|h| h.to_le_bytes()).collect(),
+            },
+        },
+    ];
+    f
+}
+
+/// One raw `LGRP` record: `(codec, order, stride, name, data)`.
+pub type GroupRecord<'a> = (u32, u32, u32, &'a [u8], &'a [u8]);
+
+/// An `LGRP` section from raw records for `probes` probes, laid out as the
+/// format says (for broken-file cases).
+pub fn lgrp_section(probes: u32, records: &[GroupRecord<'_>]) -> Vec<u8> {
+    let mut s = SectionBuilder::new([records.len() as u32, probes, 0, 0]);
+    for &(codec, order, stride, name, data) in records {
+        s.u32s([codec, order, stride, name.len() as u32]);
+        s.bytes(name).pad();
+        s.bytes(data).pad();
+    }
+    s.finish()
+}
+
 /// Recomputes every section CRC (for entries whose range lies in the file)
 /// and the header CRC, so a mutated file gets past the checksums and
 /// exercises the parsers behind them.
@@ -213,7 +264,8 @@ fn with_sections(f: &ProbeFile, edit: impl FnOnce(&mut Vec<(SectionId, Vec<u8>)>
     let mut owned: Vec<(SectionId, Vec<u8>)> =
         sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect();
     edit(&mut owned);
-    assemble_file(f.kind.id(), layout::VERSION_MINOR, 0, &owned)
+    let minor = layout::minor_for_sections(owned.iter().map(|(id, _)| *id));
+    assemble_file(f.kind.id(), minor, 0, &owned)
 }
 
 /// Patches `edit` into section `id`'s bytes (offsets relative to the
@@ -575,5 +627,126 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
         }),
         |e| matches!(e, FormatError::CountMismatch { id, .. } if *id == SectionId::VALIDITY),
     ));
+    light_group_cases(&mut v);
     v
+}
+
+/// Broken `LGRP` sections (format 1.1), around [`groups_file`].
+fn light_group_cases(v: &mut Vec<(&'static str, Vec<u8>, Expect)>) {
+    const LGRP: SectionId = SectionId::LIGHT_GROUPS;
+    let g = groups_file();
+    let good = g.to_bytes().unwrap();
+    v.push(("valid_groups", good.clone(), |_| false));
+    let lamp = g.groups[0].coefficients.data.clone();
+    let replace = |sec: Vec<u8>| {
+        with_sections(&g, move |s| {
+            s.iter_mut().find(|(id, _)| *id == LGRP).unwrap().1 = sec;
+        })
+    };
+    // Record 1 ("sün") starts after the section header, record 0's header,
+    // its padded name and its padded data.
+    let rec1 = 16 + 16 + 16 + 544;
+    v.push((
+        "groups_nan_coefficient",
+        patch(&good, LGRP, |s| {
+            // f16 NaN in probe 3 of group 1.
+            let at = rec1 + 16 + 16 + 3 * 54 + 10;
+            s[at..at + 2].copy_from_slice(&0x7E00u16.to_le_bytes());
+        }),
+        |e| matches!(e, FormatError::NonFinite { id, element: 1 } if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_fewer_probes_than_positions",
+        replace(lgrp_section(4, &[(0, 3, 108, b"lamp", &lamp[..4 * 108])])),
+        |e| {
+            matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 4 }
+                if *id == SectionId::LIGHT_GROUPS)
+        },
+    ));
+    v.push((
+        "groups_count_absurd",
+        patch(&good, LGRP, |s| put_u32(s, 0, u32::MAX)),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_probe_count_absurd",
+        patch(&good, LGRP, |s| put_u32(s, 4, u32::MAX)),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_name_length_absurd",
+        patch(&good, LGRP, |s| put_u32(s, 16 + 12, u32::MAX)),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_name_not_utf8",
+        patch(&good, LGRP, |s| s[32] = 0xFF),
+        |e| matches!(e, FormatError::InvalidUtf8(id) if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_duplicate_name",
+        replace(lgrp_section(
+            5,
+            &[(0, 3, 108, b"lamp", &lamp), (0, 3, 108, b"lamp", &lamp)],
+        )),
+        |e| {
+            matches!(e, FormatError::InvalidValue { id, element: 1, .. }
+                if *id == SectionId::LIGHT_GROUPS)
+        },
+    ));
+    v.push((
+        "groups_empty_name",
+        replace(lgrp_section(5, &[(0, 3, 108, b"", &lamp)])),
+        |e| {
+            matches!(e, FormatError::InvalidValue { id, element: 0, .. }
+                if *id == SectionId::LIGHT_GROUPS)
+        },
+    ));
+    v.push((
+        "groups_unknown_codec",
+        patch(&good, LGRP, |s| put_u32(s, 16, 9)),
+        |e| matches!(e, FormatError::UnknownCodec(9)),
+    ));
+    v.push((
+        "groups_stride_mismatch",
+        patch(&good, LGRP, |s| put_u32(s, 16 + 8, 54)),
+        |e| {
+            matches!(
+                e,
+                FormatError::CodecOrderMismatch {
+                    codec: "f32",
+                    order: 3,
+                    stride: 54
+                }
+            )
+        },
+    ));
+    v.push((
+        "groups_order_differs_from_coefficients",
+        replace(lgrp_section(5, &[(0, 2, 48, b"lamp", &lamp[..5 * 48])])),
+        |e| {
+            matches!(e, FormatError::InvalidValue { id, element: 0, .. }
+                if *id == SectionId::LIGHT_GROUPS)
+        },
+    ));
+    v.push((
+        "groups_trailing_bytes",
+        with_sections(&g, |s| {
+            s.iter_mut()
+                .find(|(id, _)| *id == LGRP)
+                .unwrap()
+                .1
+                .extend([0; 16]);
+        }),
+        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
+    ));
+    v.push((
+        "groups_file_with_unknown_section",
+        // A 1.1 file (it has LGRP) is this reader's own minor: an unknown
+        // id is refused, not skipped.
+        with_sections(&g, |s| {
+            s.push((SectionId::from_fourcc(*b"XXXX"), vec![0; 16]));
+        }),
+        |e| matches!(e, FormatError::UnknownSection(_)),
+    ));
 }

@@ -153,6 +153,10 @@ pub struct CaptureResult {
     pub indirect: Option<ShRgb>,
     /// Per light group `(name, radiance SH)`, sorted by name, if requested.
     pub groups: Vec<(String, ShRgb)>,
+    /// Per light group indirect light only, same names and order as
+    /// `groups`, if both `groups` and `split_direct` were requested (what
+    /// `bake --groups --indirect-only` stores: it sums to `indirect`).
+    pub groups_indirect: Vec<(String, ShRgb)>,
     /// Validity measures.
     pub validity: Validity,
 }
@@ -779,16 +783,24 @@ impl<'s> Baker<'s> {
         } else {
             (None, None)
         };
-        let groups = if s.groups {
+        let per_group = |indirect_only: bool| -> Vec<(String, ShRgb)> {
             self.present_groups()
                 .into_iter()
                 .map(|g| {
                     (
                         self.emitters.groups[g].clone(),
-                        sum_slots(&|sl| sl / 2 == g),
+                        sum_slots(&|sl| sl / 2 == g && (!indirect_only || sl % 2 == 1)),
                     )
                 })
                 .collect()
+        };
+        let groups = if s.groups {
+            per_group(false)
+        } else {
+            Vec::new()
+        };
+        let groups_indirect = if s.groups && s.split_direct {
+            per_group(true)
         } else {
             Vec::new()
         };
@@ -798,6 +810,7 @@ impl<'s> Baker<'s> {
             direct,
             indirect,
             groups,
+            groups_indirect,
             validity,
         }
     }

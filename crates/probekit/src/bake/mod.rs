@@ -87,6 +87,9 @@ pub struct BakeOutput {
     pub indirect: Option<Vec<ShRgb>>,
     /// Per light group `(name, SH per probe)`, sorted by name (`settings.groups`).
     pub groups: Vec<(String, Vec<ShRgb>)>,
+    /// Per light group indirect light, same names and order as `groups`
+    /// (`settings.groups` and `settings.split_direct`).
+    pub groups_indirect: Vec<(String, Vec<ShRgb>)>,
     /// Validity per probe.
     pub validity: Vec<Validity>,
     /// The settings used.
@@ -109,6 +112,14 @@ impl BakeOutput {
             direct: settings.split_direct.then(Vec::new),
             indirect: settings.split_direct.then(Vec::new),
             groups: if settings.groups {
+                group_names
+                    .iter()
+                    .map(|n| (n.clone(), Vec::new()))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            groups_indirect: if settings.groups && settings.split_direct {
                 group_names.into_iter().map(|n| (n, Vec::new())).collect()
             } else {
                 Vec::new()
@@ -126,6 +137,9 @@ impl BakeOutput {
                 d.push(v);
             }
             for ((_, dst), (_, v)) in out.groups.iter_mut().zip(r.groups) {
+                dst.push(v);
+            }
+            for ((_, dst), (_, v)) in out.groups_indirect.iter_mut().zip(r.groups_indirect) {
                 dst.push(v);
             }
             out.validity.push(r.validity);
@@ -165,6 +179,9 @@ impl BakeOutput {
             a.extend(b);
         }
         for ((_, a), (_, b)) in self.groups.iter_mut().zip(next.groups) {
+            a.extend(b);
+        }
+        for ((_, a), (_, b)) in self.groups_indirect.iter_mut().zip(next.groups_indirect) {
             a.extend(b);
         }
         self.validity.extend(next.validity);

@@ -7,7 +7,7 @@ use crate::bake::{CaptureSettings, Validity};
 use crate::format::{encode_coefficients, BakeMetadata, FormatError, ProbeFile};
 use glam::{DMat3, DVec3, Vec3};
 use probekit_runtime::format::layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
-use probekit_runtime::format::{Codec, TetSection, Validity as FileValidity};
+use probekit_runtime::format::{Codec, LightGroup, TetSection, Validity as FileValidity};
 use probekit_sh::ShRgb;
 use thiserror::Error;
 
@@ -125,6 +125,53 @@ pub fn cloud_file(
     file.metadata = metadata.to_json();
     file.validate()?;
     Ok(file)
+}
+
+/// The `LGRP` light groups of a bake: each `(name, radiance SH per probe)`
+/// (e.g. [`crate::bake::BakeOutput::groups`]), every SH of `order` bands,
+/// encoded in `codec`, in the order given. Set them as [`ProbeFile::groups`]; the file's validation then
+/// checks probe counts, orders and names. Deterministic like [`cloud_file`].
+pub fn light_groups(
+    groups: &[(String, Vec<ShRgb>)],
+    order: usize,
+    codec: Codec,
+) -> Result<Vec<LightGroup>, CloudFileError> {
+    groups
+        .iter()
+        .map(|(name, sh)| {
+            if sh.iter().any(|s| s.order() != order) {
+                return Err(CloudFileError::Mismatch(format!(
+                    "light group {name}: SH of an order other than {order}"
+                )));
+            }
+            let flat: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().iter().copied()).collect();
+            Ok(LightGroup {
+                name: name.clone(),
+                coefficients: encode_coefficients(codec, order as u32, &flat)?,
+            })
+        })
+        .collect()
+}
+
+/// Decodes a file's light groups back to `(name, radiance SH per probe)`
+/// (the inverse of [`light_groups`] for `f32`; what `merge` reads from parts).
+pub fn decode_light_groups(file: &ProbeFile) -> Result<Vec<(String, Vec<ShRgb>)>, CloudFileError> {
+    file.groups
+        .iter()
+        .map(|g| {
+            let n = g.coefficients.coeffs_per_probe().max(1);
+            let flat = g.coefficients.to_f32()?;
+            let sh = flat
+                .chunks(n)
+                .map(|c| {
+                    ShRgb::from_coeffs(c.to_vec()).ok_or_else(|| {
+                        CloudFileError::Mismatch(format!("light group {}: bad SH order", g.name))
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok((g.name.clone(), sh))
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -595,6 +595,7 @@ fn finish(
             data,
         }),
         rigs: Vec::new(),
+        groups: Vec::new(),
         metadata: String::new(),
     };
     structure(&mut file);
