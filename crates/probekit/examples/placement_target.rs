@@ -1,0 +1,147 @@
+//! Issue 5's placement target, measured: for each budget N, a uniform grid of
+//! about `GF·N` probes against `adaptive` with budget N, on the same
+//! evaluation points and the same cached ground truth.
+//!
+//! ```text
+//! cargo run --release -p probekit --example placement_target -- [SCENE] \
+//!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
+//! ```
+//!
+//! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
+//! temporary directory, keyed by scene hash and point count. Prints one line
+//! per cloud with `rel_rmse`, `p95_rel_error`, leaks and per-region
+//! `rel_rmse/leaks` (the `probekit eval` figures).
+
+use glam::Vec3;
+use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::cloud::tetrahedralize;
+use probekit::placement::eval::{
+    interpolate_cloud, mean_luminance, metrics, reference, sample_points,
+};
+use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
+use probekit::scene::Scene;
+use probekit_sh::ShRgb;
+use std::error::Error;
+
+fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn main() -> Result<(), Box<dyn Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let scene_name = args
+        .first()
+        .filter(|a| !a.starts_with("--"))
+        .cloned()
+        .unwrap_or_else(|| "builtin:demo".into());
+    let scene = Scene::load(std::path::Path::new(&scene_name))?;
+    let npts: usize = arg(&args, "--points", 400);
+    let samples: u32 = arg(&args, "--samples", 512);
+    let gf: usize = arg(&args, "--grid-factor", 4);
+    let budgets: Vec<usize> = arg(&args, "--budgets", "125,500,2000".to_string())
+        .split(',')
+        .map(|s| s.trim().parse())
+        .collect::<Result<_, _>>()?;
+    let top = args.iter().any(|a| a == "--top");
+    let baker = Baker::new(&scene)?;
+    let bbox = scene.bake_box();
+    let pts = sample_points(baker.tracer(), &bbox, npts, 1);
+    let cache = std::env::temp_dir().join(format!(
+        "probekit_truth_{}_{npts}.bin",
+        scene.content_hash()
+    ));
+    let truth: Vec<Vec3> = match std::fs::read(&cache) {
+        Ok(b) if b.len() == 12 * pts.len() => b
+            .chunks(12)
+            .map(|c| {
+                let f = |k: usize| f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
+                Vec3::new(f(0), f(4), f(8))
+            })
+            .collect(),
+        _ => {
+            let rs = ReferenceSettings {
+                relative_precision: 0.03,
+                ..Default::default()
+            };
+            let t = reference(&baker, &pts, &rs)?;
+            let b: Vec<u8> = t
+                .iter()
+                .flat_map(|v| v.to_array())
+                .flat_map(f32::to_le_bytes)
+                .collect();
+            std::fs::write(&cache, b)?;
+            t
+        }
+    };
+    let mean = mean_luminance(&truth);
+    let mut s = CaptureSettings::from_scene(&scene);
+    s.samples = samples;
+    let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {
+        let sh: Vec<ShRgb> = baker
+            .capture_many(pos, 0, &s, &|_, _| {})?
+            .into_iter()
+            .map(|r| r.sh)
+            .collect();
+        let mesh = tetrahedralize(pos)?.to_tet_mesh(pos)?;
+        let pred = interpolate_cloud(&mesh, &sh, &pts);
+        let m = metrics(&pred, &truth, mean);
+        let mut reg = String::new();
+        for r in &scene.regions {
+            let bb = r.aabb();
+            let idx: Vec<usize> = (0..pts.len())
+                .filter(|&i| bb.contains(pts[i].position))
+                .collect();
+            let p: Vec<_> = idx.iter().map(|&i| pred[i]).collect();
+            let t: Vec<_> = idx.iter().map(|&i| truth[i]).collect();
+            let mm = metrics(&p, &t, mean);
+            reg += &format!(" {}:{:.2}/{}", r.name, mm.rel_rmse, mm.leaks);
+        }
+        if top {
+            let mut idx: Vec<usize> = (0..pts.len()).collect();
+            let e = |i: usize| (pred[i] - truth[i]).length_squared();
+            idx.sort_by(|&a, &b| e(b).total_cmp(&e(a)));
+            let tot: f32 = (0..pts.len()).map(e).sum();
+            for &i in idx.iter().take(8) {
+                println!(
+                    "   p={:.2?} truth={:.3?} pred={:.3?} share={:.3}",
+                    pts[i].position,
+                    truth[i],
+                    pred[i],
+                    e(i) / tot
+                );
+            }
+        }
+        println!(
+            "{name:>9} probes={:5} rel_rmse={:.3} p95={:.2} leaks={:3} |{reg}",
+            pos.len(),
+            m.rel_rmse,
+            m.p95_rel_error,
+            m.leaks
+        );
+        Ok(())
+    };
+    for &b in &budgets {
+        let g: Vec<Vec3> = grid_points(&bbox, None, Some(b * gf))?
+            .into_iter()
+            .filter(|p| !inside_geometry(baker.tracer(), *p))
+            .collect();
+        eval("grid", &g)?;
+        let t = std::time::Instant::now();
+        let m = PlacementMethod::Adaptive {
+            budget: b,
+            tolerance: 0.0,
+        };
+        let a = place(&baker, bbox, &m, &s, &|_, _, _| {})?;
+        eprintln!(
+            "adaptive budget {b}: placed in {:.1} s, {:?}",
+            t.elapsed().as_secs_f32(),
+            a.stats
+        );
+        eval("adaptive", &a.positions)?;
+    }
+    Ok(())
+}
