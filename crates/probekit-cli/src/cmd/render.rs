@@ -158,6 +158,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             100.0 * r.rel_rmse,
             100.0 * r.max_rel_error
         );
+        for s in &r.spheres {
+            println!(
+                "  test sphere at {:.3},{:.3},{:.3} radius {:.3}",
+                s.center.x, s.center.y, s.center.z, s.radius
+            );
+        }
     }
     Ok(())
 }
