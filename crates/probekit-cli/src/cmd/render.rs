@@ -107,9 +107,9 @@ pub fn render_to_png(
 /// The settings `bake` uses for its picture of the probes it just wrote.
 pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
     RenderSettings {
-        width: 320,
-        height: 240,
-        samples: 512,
+        width: 480,
+        height: 360,
+        samples: 1024,
         bounces: bake_bounces(file, scene),
         ..RenderSettings::default()
     }
