@@ -205,6 +205,33 @@ fn bad_input_is_a_typed_error() {
     assert!(Camera::new(Vec3::ZERO, Vec3::X, 0.0).is_err());
 }
 
+/// A camera inside the demo's floor slab, facing into it, still renders:
+/// no room for test spheres (a warning), no object pixels, finite numbers.
+#[test]
+fn camera_inside_geometry_just_renders() {
+    let scene = Scene::builtin_demo();
+    let pos: Vec<Vec3> = (0..5)
+        .map(|i| 4.0 * fibonacci_point(i, 5) + Vec3::new(4.0, 1.5, 2.0))
+        .collect();
+    let mut sh = ShRgb::zeros(2);
+    sh.coeffs_mut()[0] = Vec3::ONE;
+    let file = constant_cloud(&pos, &sh);
+    let settings = RenderSettings {
+        width: 16,
+        height: 12,
+        samples: 16,
+        camera: Some(
+            Camera::new(Vec3::new(4.0, -0.1, 2.0), Vec3::new(4.0, -0.1, 3.0), 60.0).unwrap(),
+        ),
+        ..RenderSettings::default()
+    };
+    let r = render(&scene, &file, &settings, &|_, _| {}).unwrap();
+    assert_eq!(r.object_pixels, 0);
+    assert!(r.spheres.is_empty() && !r.warnings.is_empty());
+    assert_eq!((r.rel_rmse, r.max_rel_error), (0.0, 0.0));
+    assert!(r.probes_panel.iter().all(|c| c.is_finite()));
+}
+
 /// The SH fit reproduces a polynomial of degree 4 (which lies in bands
 /// 0..=4) from 64 Fibonacci samples, checked at other directions against
 /// the polynomial itself.
