@@ -82,6 +82,57 @@ fn render_json_png_and_errors() {
     let be = |i: usize| u32::from_be_bytes(png[i..i + 4].try_into().unwrap()) as u64;
     assert_eq!((be(16), be(20)), (w, h));
 
+    // A mesh test object: a 0.5 m cube (OBJ) in room B, the camera aimed at it.
+    let mut obj = String::new();
+    for k in 0..8 {
+        let f = |b: usize| if k & b == 0 { -0.25 } else { 0.25 };
+        obj += &format!("v {} {} {}\n", 5.8 + f(4), 1.2 + f(2), 2.6 + f(1));
+    }
+    for q in [
+        [1, 2, 4, 3],
+        [5, 7, 8, 6],
+        [1, 5, 6, 2],
+        [3, 4, 8, 7],
+        [1, 3, 7, 5],
+        [2, 6, 8, 4],
+    ] {
+        obj += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            q[0], q[1], q[2], q[0], q[2], q[3]
+        );
+    }
+    std::fs::write(d.join("cube.obj"), obj).unwrap();
+    let m = json(
+        d,
+        &[
+            "render",
+            "--probes",
+            "t.probes",
+            "-o",
+            "m.png",
+            "--object",
+            "cube.obj",
+            "--camera",
+            "7.7,2.3,3.7,5.8,1.2,2.6",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--samples",
+            "16",
+            "--json",
+        ],
+    );
+    assert!(m["object_pixels"].as_u64().unwrap() > 20, "{m}");
+    assert!(m["rel_rmse"].as_f64().is_some_and(f64::is_finite));
+    fails_one_line(
+        d,
+        &[
+            "render", "--probes", "t.probes", "-o", "x.png", "--object", "nope.obj",
+        ],
+        "nope.obj",
+    );
+
     std::fs::write(d.join("bad.probes"), b"PKPRnot really a probe file").unwrap();
     fails_one_line(
         d,
