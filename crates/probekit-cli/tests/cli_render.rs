@@ -133,6 +133,42 @@ fn render_json_png_and_errors() {
         "nope.obj",
     );
 
+    // A volume file (of another scene: only the code path is checked) with
+    // its samples drawn.
+    json(
+        d,
+        &[
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "v.probes",
+            "--uniform",
+            "--resolution",
+            "4,3,3",
+            "--json",
+        ],
+    );
+    let v = json(
+        d,
+        &[
+            "render",
+            "--probes",
+            "v.probes",
+            "-o",
+            "v.png",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--samples",
+            "16",
+            "--show-probes",
+            "--json",
+        ],
+    );
+    assert_eq!(v["probes"], 36);
+    assert!(d.join("v.png").is_file());
+
     std::fs::write(d.join("bad.probes"), b"PKPRnot really a probe file").unwrap();
     fails_one_line(
         d,
