@@ -46,6 +46,8 @@ enum Command {
     Rig(cmd::rig::RigArgs),
     /// Error of a probe cloud against path-traced ground truth.
     Eval(cmd::eval::EvalArgs),
+    /// Picture: the scene lit by the probes beside path-traced truth, and the error.
+    Render(cmd::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +65,7 @@ fn main() -> ExitCode {
         Command::Export(args) => cmd::export::run(&args),
         Command::Rig(args) => cmd::rig::run(args),
         Command::Eval(args) => cmd::eval::run(&args),
+        Command::Render(args) => cmd::render::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,7 @@ pub mod env;
 pub mod format;
 pub mod placement;
 pub mod plot;
+pub mod render;
 pub mod rig;
 pub mod scene;
 pub mod sh;

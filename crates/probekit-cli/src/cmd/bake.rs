@@ -94,6 +94,11 @@ pub struct BakeArgs {
     /// Bake only shard I of N (`I/N`, I from 0) into a part file for `merge`.
     #[arg(long)]
     pub shard: Option<String>,
+    /// Also write a picture of the result (`probekit render` with the
+    /// automatic camera); the default demo bake writes `demo.png` beside
+    /// `demo.probes`.
+    #[arg(long)]
+    pub render: Option<PathBuf>,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -314,6 +319,17 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     };
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
+    let default_demo = a.scene == probekit::scene::BUILTIN_DEMO
+        && a.output == std::path::Path::new("demo.probes")
+        && a.shard.is_none();
+    let picture = a
+        .render
+        .clone()
+        .or_else(|| default_demo.then(|| a.output.with_extension("png")));
+    if let Some(png) = &picture {
+        let rs = super::render::bake_settings(&file, &scene);
+        super::render::render_to_png(&scene, &file, &rs, png, &outname)?;
+    }
     let bytes: u64 = file.bytes_by_section()?.values().sum();
     if a.json {
         println!(

@@ -273,3 +273,38 @@ pub fn glyph(c: char) -> [u8; 7] {
         ],
     }
 }
+
+/// Draws `text` into `img` with its top-left corner at `(x, y)`, each font
+/// pixel a `scale`×`scale` square of `color`; pixels outside the image are
+/// skipped. Glyphs advance by `(GLYPH_W + 1)·scale` pixels.
+pub fn draw_text(
+    img: &mut image::RgbImage,
+    x: i64,
+    y: i64,
+    text: &str,
+    scale: i64,
+    color: image::Rgb<u8>,
+) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let adv = (GLYPH_W as i64 + 1) * scale;
+    for (k, ch) in text.chars().enumerate() {
+        for (row, bits) in glyph(ch).iter().enumerate() {
+            for col in 0..GLYPH_W as i64 {
+                if bits >> (GLYPH_W as i64 - 1 - col) & 1 == 0 {
+                    continue;
+                }
+                let (px, py) = (x + k as i64 * adv + col * scale, y + row as i64 * scale);
+                for yy in py.max(0)..(py + scale).min(h) {
+                    for xx in px.max(0)..(px + scale).min(w) {
+                        img.put_pixel(xx as u32, yy as u32, color);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Width in pixels of `text` drawn by [`draw_text`] at `scale`.
+pub fn text_width(text: &str, scale: i64) -> i64 {
+    text.chars().count() as i64 * (GLYPH_W as i64 + 1) * scale
+}

@@ -5,7 +5,11 @@
 //! on every machine. Files are written to a temporary sibling and renamed, so
 //! a reader never sees a half-written PNG.
 
+pub mod colour;
 pub mod font;
+
+pub use colour::{heat, to_srgb};
+pub use font::draw_text;
 
 use image::{Rgb, RgbImage};
 use std::path::{Path, PathBuf};
@@ -102,6 +106,10 @@ impl Canvas {
     /// draws it rotated 90° counter-clockwise (reading bottom to top), with
     /// `(x, y)` then the bottom-left.
     fn text(&mut self, x: i64, y: i64, s: &str, scale: i64, c: Rgb<u8>, vertical: bool) {
+        if !vertical {
+            font::draw_text(&mut self.img, x, y, s, scale, c);
+            return;
+        }
         let adv = (font::GLYPH_W as i64 + 1) * scale;
         for (i, ch) in s.chars().enumerate() {
             let g = font::glyph(ch);
@@ -109,11 +117,7 @@ impl Canvas {
                 for col in 0..font::GLYPH_W as i64 {
                     if bits >> (font::GLYPH_W as i64 - 1 - col) & 1 == 1 {
                         let (px, py) = (i as i64 * adv + col * scale, row as i64 * scale);
-                        if vertical {
-                            self.rect(x + py, y - px - scale + 1, x + py + scale - 1, y - px, c);
-                        } else {
-                            self.rect(x + px, y + py, x + px + scale - 1, y + py + scale - 1, c);
-                        }
+                        self.rect(x + py, y - px - scale + 1, x + py + scale - 1, y - px, c);
                     }
                 }
             }
@@ -121,28 +125,34 @@ impl Canvas {
     }
 
     fn save(&self, path: &Path) -> Result<(), PlotError> {
-        let err = |m: String| PlotError::Write {
-            path: path.to_path_buf(),
-            message: m,
-        };
-        let name = path
-            .file_name()
-            .ok_or_else(|| err("not a file name".into()))?
-            .to_string_lossy()
-            .into_owned();
-        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        self.img
-            .save_with_format(&tmp, image::ImageFormat::Png)
-            .map_err(|e| err(e.to_string()))?;
-        std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            err(e.to_string())
-        })
+        save_png(&self.img, path)
     }
 }
 
+/// Writes `img` as a PNG to a temporary sibling of `path` and renames it into
+/// place, so a reader never sees a half-written file. The one PNG writer of
+/// the project's pictures (plots, rig figures, renders).
+pub fn save_png(img: &RgbImage, path: &Path) -> Result<(), PlotError> {
+    let err = |m: String| PlotError::Write {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| err("not a file name".into()))?
+        .to_string_lossy()
+        .into_owned();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    img.save_with_format(&tmp, image::ImageFormat::Png)
+        .map_err(|e| err(e.to_string()))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        err(e.to_string())
+    })
+}
+
 fn text_width(s: &str, scale: i64) -> i64 {
-    s.chars().count() as i64 * (font::GLYPH_W as i64 + 1) * scale
+    font::text_width(s, scale)
 }
 
 /// "Nice" tick step covering `range` in about `n` steps (1, 2 or 5 × 10^k).

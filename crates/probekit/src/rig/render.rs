@@ -3,7 +3,7 @@
 //! triangles) writing PNG through `image`.
 
 use super::mesh::Mesh;
-use crate::plot::font::{glyph, GLYPH_H, GLYPH_W};
+use crate::plot::{draw_text, heat, save_png, to_srgb};
 use glam::Vec3;
 use image::{Rgb, RgbImage};
 use std::path::Path;
@@ -81,56 +81,10 @@ pub fn draw_mesh(img: &mut RgbImage, ox: u32, oy: u32, mesh: &Mesh, colors: &[Ve
     }
 }
 
-/// Linear 0..1 colour to 8-bit sRGB.
-pub fn to_srgb(c: Vec3) -> Rgb<u8> {
-    let f = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        let s = if v <= 0.003_130_8 {
-            12.92 * v
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
-    Rgb([f(c.x), f(c.y), f(c.z)])
-}
-
-/// A heat-map colour (linear RGB) for `t ∈ [0, 1]`: black → blue → red → yellow → white.
-pub fn heat(t: f32) -> Vec3 {
-    let stops = [
-        Vec3::new(0.0, 0.0, 0.0),
-        Vec3::new(0.0, 0.05, 0.6),
-        Vec3::new(0.8, 0.0, 0.05),
-        Vec3::new(1.0, 0.8, 0.0),
-        Vec3::new(1.0, 1.0, 1.0),
-    ];
-    let s = t.clamp(0.0, 1.0) * (stops.len() - 1) as f32;
-    let i = (s as usize).min(stops.len() - 2);
-    stops[i].lerp(stops[i + 1], s - i as f32)
-}
-
-/// Writes `text` at `(x, y)` in `color`, 2× scaled 5×7 font.
-pub fn label(img: &mut RgbImage, x: u32, y: u32, text: &str, color: Rgb<u8>) {
-    let s = 2u32;
-    for (k, ch) in text.chars().enumerate() {
-        let g = glyph(ch);
-        for (row, bits) in g.iter().enumerate() {
-            for col in 0..GLYPH_W {
-                if bits & (1 << (GLYPH_W - 1 - col)) != 0 {
-                    for dy in 0..s {
-                        for dx in 0..s {
-                            let px = x + (k as u32 * (GLYPH_W + 1) + col) * s + dx;
-                            let py = y + row as u32 * s + dy;
-                            if px < img.width() && py < img.height() {
-                                img.put_pixel(px, py, color);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    let _ = GLYPH_H;
+/// Writes `text` at `(x, y)` in `color`, 2× scaled 5×7 font
+/// ([`crate::plot::draw_text`]).
+fn label(img: &mut RgbImage, x: u32, y: u32, text: &str, color: Rgb<u8>) {
+    draw_text(img, x as i64, y as i64, text, 2, color);
 }
 
 /// One column of the comparison figure: a name, per-vertex irradiance and
@@ -291,9 +245,12 @@ pub fn zones_figure(
 }
 
 fn save(img: &RgbImage, path: &Path) -> Result<(), RenderError> {
-    img.save(path).map_err(|e| RenderError {
+    save_png(img, path).map_err(|e| RenderError {
         path: path.display().to_string(),
-        message: e.to_string(),
+        message: match e {
+            crate::plot::PlotError::Write { message, .. } => message,
+            other => other.to_string(),
+        },
     })
 }
 

@@ -1,0 +1,169 @@
+//! `probekit render [SCENE] --probes PROBES -o OUT.png [--camera ...]
+//! [--width W --height H] [--object spheres|MESH] [--show-probes]
+//! [--samples N] [--json]`: the scene lit by the probes beside the same
+//! path-traced, and the error (library: [`probekit::render`]).
+
+use super::util::{load_probes, load_scene};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use probekit::bake::CaptureSettings;
+use probekit::format::ProbeFile;
+use probekit::render::{render, Camera, ObjectKind, RenderSettings, Rendered};
+use probekit::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `probekit render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene file or `builtin:demo`.
+    #[arg(default_value = "builtin:demo")]
+    pub scene: String,
+    /// The baked cloud or volume.
+    #[arg(long)]
+    pub probes: PathBuf,
+    /// Output PNG.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// `EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z[,FOV_DEG]` (default: automatic).
+    #[arg(long, allow_hyphen_values = true)]
+    pub camera: Option<String>,
+    /// Width of each of the three panels, pixels.
+    #[arg(long, default_value_t = 480)]
+    pub width: u32,
+    /// Height of each panel, pixels.
+    #[arg(long, default_value_t = 320)]
+    pub height: u32,
+    /// Test object: `spheres` (3×2 grid) or a mesh file (OBJ, glTF, GLB).
+    #[arg(long, default_value = "spheres")]
+    pub object: String,
+    /// Draw the probes as small spheres and a cloud's tetrahedra as lines.
+    #[arg(long)]
+    pub show_probes: bool,
+    /// Most path samples per ground-truth point.
+    #[arg(long, default_value_t = 1024)]
+    pub samples: u32,
+    /// Print a JSON summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `--camera`.
+fn parse_camera(s: &str) -> Result<Camera> {
+    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
+    let v = match v {
+        Ok(v) if (v.len() == 6 || v.len() == 7) && v.iter().all(|x| x.is_finite()) => v,
+        _ => bail!("--camera {s}: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z[,FOV_DEG]"),
+    };
+    let fov = v
+        .get(6)
+        .copied()
+        .unwrap_or(probekit::render::camera::DEFAULT_FOV_DEGREES);
+    Camera::new(
+        Vec3::new(v[0], v[1], v[2]),
+        Vec3::new(v[3], v[4], v[5]),
+        fov,
+    )
+    .with_context(|| format!("--camera {s}"))
+}
+
+/// Bounces of the bake that wrote `file` (its metadata), else the scene's default.
+fn bake_bounces(file: &ProbeFile, scene: &Scene) -> u32 {
+    serde_json::from_str::<serde_json::Value>(&file.metadata)
+        .ok()
+        .and_then(|v| v["settings"]["bounces"].as_u64())
+        .map(|b| b as u32)
+        .unwrap_or_else(|| CaptureSettings::from_scene(scene).bounces)
+}
+
+/// Renders with a progress bar and writes the PNG; shared with `bake --render`.
+pub fn render_to_png(
+    scene: &Scene,
+    file: &ProbeFile,
+    settings: &RenderSettings,
+    output: &Path,
+    what: &str,
+) -> Result<Rendered> {
+    let pb = ProgressBar::new(1);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} render  {elapsed} elapsed, ETA {eta}")
+            .expect("static template"),
+    );
+    let r = render(scene, file, settings, &|done, total| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64)
+    })
+    .with_context(|| what.to_string())?;
+    pb.finish_and_clear();
+    for w in &r.warnings {
+        eprintln!("warning: {what}: {w}");
+    }
+    r.save_png(output)
+        .with_context(|| output.display().to_string())?;
+    Ok(r)
+}
+
+/// The settings `bake` uses for its picture of the probes it just wrote.
+pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
+    RenderSettings {
+        width: 480,
+        height: 360,
+        samples: 1024,
+        bounces: bake_bounces(file, scene),
+        ..RenderSettings::default()
+    }
+}
+
+/// Runs `probekit render`.
+pub fn run(a: &RenderArgs) -> Result<()> {
+    let file = load_probes(&a.probes)?;
+    let scene = load_scene(&a.scene)?;
+    let object = match a.object.as_str() {
+        "spheres" => ObjectKind::default(),
+        path => ObjectKind::Mesh(PathBuf::from(path)),
+    };
+    let settings = RenderSettings {
+        width: a.width,
+        height: a.height,
+        camera: a.camera.as_deref().map(parse_camera).transpose()?,
+        object,
+        show_probes: a.show_probes,
+        samples: a.samples,
+        bounces: bake_bounces(&file, &scene),
+        ..RenderSettings::default()
+    };
+    let what = format!("{} with {}", a.scene, a.probes.display());
+    let r = render_to_png(&scene, &file, &settings, &a.output, &what)?;
+    let out = a.output.display().to_string();
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "output": out,
+                "width": r.image.width(),
+                "height": r.image.height(),
+                "object_pixels": r.object_pixels,
+                "rel_rmse": r.rel_rmse,
+                "max_rel_error": r.max_rel_error,
+                "probes": r.probes,
+            })
+        );
+    } else {
+        println!(
+            "{out}: {}x{} px, {} object pixels, rel. RMSE {:.1} %, max {:.0} %",
+            r.image.width(),
+            r.image.height(),
+            r.object_pixels,
+            100.0 * r.rel_rmse,
+            100.0 * r.max_rel_error
+        );
+        for s in &r.spheres {
+            println!(
+                "  test sphere at {:.3},{:.3},{:.3} radius {:.3}",
+                s.center.x, s.center.y, s.center.z, s.radius
+            );
+        }
+    }
+    Ok(())
+}

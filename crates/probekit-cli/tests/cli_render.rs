@@ -1,0 +1,198 @@
+//! End-to-end `probekit render` and `bake --render` on `builtin:demo` with
+//! tiny sizes: the JSON shape, the PNG on disk, one-line errors with exit
+//! code 1 for missing/corrupt probe files and a zero-size image.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_probekit"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run probekit")
+}
+
+fn json(dir: &Path, args: &[&str]) -> Value {
+    let o = run(dir, args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = String::from_utf8(o.stdout).unwrap();
+    serde_json::from_str(text.lines().last().unwrap()).unwrap()
+}
+
+fn fails_one_line(dir: &Path, args: &[&str], needle: &str) {
+    let o = run(dir, args);
+    assert_eq!(o.status.code(), Some(1), "{args:?}");
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(needle), "{err} lacks {needle}");
+}
+
+#[test]
+fn render_json_png_and_errors() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let baked = json(
+        d,
+        &[
+            "bake",
+            "--grid",
+            "12",
+            "--samples",
+            "32",
+            "--bounces",
+            "1",
+            "-o",
+            "t.probes",
+            "--json",
+        ],
+    );
+    let j = json(
+        d,
+        &[
+            "render",
+            "--probes",
+            "t.probes",
+            "-o",
+            "r.png",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--samples",
+            "32",
+            "--json",
+        ],
+    );
+    assert_eq!(j["output"], "r.png");
+    assert_eq!(j["probes"], baked["probes"]);
+    let (w, h) = (j["width"].as_u64().unwrap(), j["height"].as_u64().unwrap());
+    assert!(w > 3 * 48 && h > 32);
+    assert!(j["object_pixels"].as_u64().is_some());
+    assert!(j["rel_rmse"].as_f64().is_some_and(f64::is_finite));
+    assert!(j["max_rel_error"].as_f64().is_some_and(f64::is_finite));
+    // PNG signature, then the IHDR chunk: big-endian width and height.
+    let png = std::fs::read(d.join("r.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let be = |i: usize| u32::from_be_bytes(png[i..i + 4].try_into().unwrap()) as u64;
+    assert_eq!((be(16), be(20)), (w, h));
+
+    // A mesh test object: a 0.5 m cube (OBJ) in room B, the camera aimed at it.
+    let mut obj = String::new();
+    for k in 0..8 {
+        let f = |b: usize| if k & b == 0 { -0.25 } else { 0.25 };
+        obj += &format!("v {} {} {}\n", 5.8 + f(4), 1.2 + f(2), 2.6 + f(1));
+    }
+    for q in [
+        [1, 2, 4, 3],
+        [5, 7, 8, 6],
+        [1, 5, 6, 2],
+        [3, 4, 8, 7],
+        [1, 3, 7, 5],
+        [2, 6, 8, 4],
+    ] {
+        obj += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            q[0], q[1], q[2], q[0], q[2], q[3]
+        );
+    }
+    std::fs::write(d.join("cube.obj"), obj).unwrap();
+    let m = json(
+        d,
+        &[
+            "render",
+            "--probes",
+            "t.probes",
+            "-o",
+            "m.png",
+            "--object",
+            "cube.obj",
+            "--camera",
+            "7.7,2.3,3.7,5.8,1.2,2.6",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--samples",
+            "16",
+            "--json",
+        ],
+    );
+    assert!(m["object_pixels"].as_u64().unwrap() > 20, "{m}");
+    assert!(m["rel_rmse"].as_f64().is_some_and(f64::is_finite));
+    fails_one_line(
+        d,
+        &[
+            "render", "--probes", "t.probes", "-o", "x.png", "--object", "nope.obj",
+        ],
+        "nope.obj",
+    );
+
+    // A volume file (of another scene: only the code path is checked) with
+    // its samples drawn.
+    json(
+        d,
+        &[
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "v.probes",
+            "--uniform",
+            "--resolution",
+            "4,3,3",
+            "--json",
+        ],
+    );
+    let v = json(
+        d,
+        &[
+            "render",
+            "--probes",
+            "v.probes",
+            "-o",
+            "v.png",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--samples",
+            "16",
+            "--show-probes",
+            "--json",
+        ],
+    );
+    assert_eq!(v["probes"], 36);
+    assert!(d.join("v.png").is_file());
+
+    std::fs::write(d.join("bad.probes"), b"PKPRnot really a probe file").unwrap();
+    fails_one_line(
+        d,
+        &["render", "--probes", "bad.probes", "-o", "x.png"],
+        "bad.probes",
+    );
+    fails_one_line(
+        d,
+        &["render", "--probes", "missing.probes", "-o", "x.png"],
+        "missing.probes",
+    );
+    fails_one_line(
+        d,
+        &[
+            "render", "--probes", "t.probes", "-o", "x.png", "--width", "0",
+        ],
+        "image size",
+    );
+    fails_one_line(
+        d,
+        &[
+            "render", "--probes", "t.probes", "-o", "x.png", "--camera", "1,2,3",
+        ],
+        "--camera",
+    );
+    assert!(!d.join("x.png").exists());
+}
