@@ -407,6 +407,114 @@ pub fn line_chart(
     c.save(path)
 }
 
+/// Writes a line chart PNG (1000×600) with BOTH axes on a base-10 log scale
+/// (decade grid lines, plus 2× and 5× minor ticks labelled where a range
+/// spans under two decades): each series a polyline with square markers,
+/// legend at the top right. For error-versus-memory plots. Points with a
+/// non-finite or non-positive coordinate are skipped.
+///
+/// Errors: no positive finite point, or a file that cannot be written.
+pub fn line_chart_log_log(
+    path: impl AsRef<Path>,
+    title: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    x_label: &str,
+    y_label: &str,
+) -> Result<(), PlotError> {
+    let path = path.as_ref();
+    let ok = |(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0;
+    let pts: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().copied())
+        .filter(ok)
+        .collect();
+    if pts.is_empty() {
+        return Err(PlotError::BadData {
+            path: path.to_path_buf(),
+            message: "log-log chart needs at least one positive finite point".into(),
+        });
+    }
+    let bottom = H as i64 - 70;
+    let right = W as i64 - RIGHT;
+    let mut c = Canvas::new();
+    title_and_axes(&mut c, title, y_label, bottom);
+    let range = |f: &dyn Fn(&(f64, f64)) -> f64| {
+        let (lo, hi) = pts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(f(p).log10()), b.max(f(p).log10()))
+            });
+        let (lo, hi) = (lo.floor(), hi.ceil());
+        (lo, if hi <= lo { lo + 1.0 } else { hi })
+    };
+    let (x0, x1) = range(&|p| p.0);
+    let (y0, y1) = range(&|p| p.1);
+    let to_x =
+        |x: f64| LEFT + ((x.log10() - x0) / (x1 - x0) * (right - LEFT) as f64).round() as i64;
+    let to_y =
+        |y: f64| bottom - ((y.log10() - y0) / (y1 - y0) * (bottom - TOP) as f64).round() as i64;
+    let ticks = |lo: f64, hi: f64| -> Vec<(f64, bool)> {
+        let few = hi - lo <= 2.0;
+        let mut t = Vec::new();
+        for k in lo as i64..=hi as i64 {
+            let d = 10f64.powi(k as i32);
+            t.push((d, true));
+            if k < hi as i64 {
+                for m in [2.0, 5.0] {
+                    t.push((d * m, few));
+                }
+            }
+        }
+        t
+    };
+    for (t, label) in ticks(x0, x1) {
+        let x = to_x(t);
+        c.line((x, TOP), (x, bottom), 1, GRID);
+        if label {
+            let s = fmt_num(t);
+            c.text(x - text_width(&s, 2) / 2, bottom + 10, &s, 2, BLACK, false);
+        }
+    }
+    for (t, label) in ticks(y0, y1) {
+        let y = to_y(t);
+        c.line((LEFT, y), (right, y), 1, GRID);
+        if label {
+            let s = fmt_num(t);
+            c.text(LEFT - 8 - text_width(&s, 2), y - 7, &s, 2, BLACK, false);
+        }
+    }
+    let xl = text_width(x_label, 2);
+    c.text(
+        LEFT + (right - LEFT - xl) / 2,
+        bottom + 38,
+        x_label,
+        2,
+        BLACK,
+        false,
+    );
+    c.line((LEFT, TOP), (LEFT, bottom), 2, BLACK);
+    c.line((LEFT, bottom), (right, bottom), 2, BLACK);
+    for (k, (name, p)) in series.iter().enumerate() {
+        let colour = PALETTE[k % PALETTE.len()];
+        let good: Vec<(i64, i64)> = p
+            .iter()
+            .filter(|q| ok(q))
+            .map(|(x, y)| (to_x(*x), to_y(*y)))
+            .collect();
+        for w in good.windows(2) {
+            c.line(w[0], w[1], 3, colour);
+        }
+        for (x, y) in &good {
+            c.rect(x - 4, y - 4, x + 4, y + 4, colour);
+        }
+        let ly = TOP + 10 + k as i64 * 24;
+        let lx = right - 20 - text_width(name, 2) - 40;
+        c.rect(lx, ly + 2, lx + 28, ly + 10, colour);
+        c.text(lx + 36, ly, name, 2, BLACK, false);
+    }
+    c.save(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -466,6 +574,44 @@ mod tests {
         assert!(matches!(
             bar_chart(&missing, "t", &["a".to_string()], &[1.0], "y"),
             Err(PlotError::Write { .. })
+        ));
+    }
+
+    #[test]
+    fn log_log_chart_places_decades_evenly() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ll.png");
+        // y = 1/x over three decades: a straight line on log-log axes, so the
+        // marker centres are collinear and equally spaced.
+        let pts: Vec<(f64, f64)> = [1.0, 10.0, 100.0, 1000.0]
+            .iter()
+            .map(|x| (*x, 1.0 / x))
+            .collect();
+        line_chart_log_log(&p, "t", &[("s".to_string(), pts)], "x", "y").unwrap();
+        let img = decode(&p);
+        // Columns containing the series colour, grouped into marker runs.
+        let cols: Vec<u32> = (0..W)
+            .filter(|&x| (TOP as u32..H - 70).any(|y| *img.get_pixel(x, y) == PALETTE[0]))
+            .collect();
+        assert!(!cols.is_empty());
+        let rows: Vec<u32> = (TOP as u32..H - 70)
+            .filter(|&y| {
+                (LEFT as u32..W - RIGHT as u32).any(|x| *img.get_pixel(x, y) == PALETTE[0])
+            })
+            .collect();
+        // The line spans the whole plot diagonally: from left edge to right edge, top to bottom.
+        assert!(cols[0] as i64 <= LEFT + 6 && *cols.last().unwrap() as i64 >= W as i64 - RIGHT - 6);
+        assert!(rows[0] as i64 <= TOP + 6 && *rows.last().unwrap() as i64 >= H as i64 - 70 - 6);
+        // Middle of the line: at the centre column, the series is at the centre row.
+        let xm = ((LEFT + W as i64 - RIGHT) / 2) as u32;
+        let ys: Vec<u32> = (TOP as u32..H - 70)
+            .filter(|&y| *img.get_pixel(xm, y) == PALETTE[0])
+            .collect();
+        let ymid = (TOP + H as i64 - 70) / 2;
+        assert!(ys.iter().any(|&y| (y as i64 - ymid).abs() <= 4), "{ys:?}");
+        assert!(matches!(
+            line_chart_log_log(&p, "t", &[("s".to_string(), vec![(0.0, 1.0)])], "x", "y"),
+            Err(PlotError::BadData { .. })
         ));
     }
 
