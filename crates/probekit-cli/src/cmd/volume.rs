@@ -136,6 +136,13 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         let (min, max) = parse_box(a, LightsDemo::demo_box())?;
         return build_and_write(a, &src, min, max, 0.5, None);
     }
+    if a.gradients.as_deref() == Some("analytic") {
+        bail!(
+            "{}: --gradients analytic needs a source with closed-form lights \
+             (builtin:lights-demo); path-traced scenes use --gradients central",
+            a.scene
+        );
+    }
     let scene = load_scene(&a.scene)?;
     let mut settings = CaptureSettings::from_scene(&scene);
     settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);

@@ -206,10 +206,20 @@ fn central_gradients_match_the_closed_form_and_a_wider_difference() {
             *p,
             l.position,
             l.radius,
-            l.radiance(),
+            l.color * l.intensity,
             &mut value,
             &mut grad,
         );
+        // The stored value itself matches the closed form.
+        let got = sample_sh(&file, i);
+        let vnorm: f32 = value.iter().map(|v| v.length_squared()).sum::<f32>().sqrt();
+        let verr: f32 = got
+            .iter()
+            .zip(&value)
+            .map(|(a, b)| (*a - *b).length_squared())
+            .sum::<f32>()
+            .sqrt();
+        assert!(verr < 0.03 * vnorm, "sample {i} value: {verr} vs {vnorm}");
         let norm: f32 = grad
             .iter()
             .flat_map(|c| c.iter())
@@ -452,4 +462,39 @@ fn depth_rows_partition_leaves_samples_and_volume() {
     let p = dir.path().join("d.png");
     plot_depths(&file, &p, "t").unwrap();
     assert!(std::fs::metadata(&p).unwrap().len() > 1000);
+}
+
+/// Draws docs/bench/img/volume_error_memory.png from the CSV named by
+/// `PROBEKIT_VOLBAKE_CSV` (`method,bytes,rel_rmse` rows, one line per
+/// method in file order), for docs/bench/volbake.md. Not a test: run with
+/// `--ignored` after the measurement script.
+#[test]
+#[ignore]
+fn draw_error_memory_plot_from_bench_csv() {
+    let Ok(csv) = std::env::var("PROBEKIT_VOLBAKE_CSV") else {
+        return;
+    };
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for line in text.lines().filter(|l| !l.trim().is_empty()) {
+        let f: Vec<&str> = line.split(',').map(str::trim).collect();
+        let (x, y) = (f[1].parse::<f64>().unwrap(), f[2].parse::<f64>().unwrap());
+        match series.iter_mut().find(|s| s.0 == f[0]) {
+            Some(s) => s.1.push((x, y)),
+            None => series.push((f[0].to_string(), vec![(x, y)])),
+        }
+    }
+    for s in &mut series {
+        s.1.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    let out = std::env::var("PROBEKIT_VOLBAKE_PNG")
+        .unwrap_or_else(|_| "../../docs/bench/img/volume_error_memory.png".into());
+    crate::plot::line_chart_log_log(
+        out,
+        "builtin:demo: eval rel. RMSE vs file bytes",
+        &series,
+        "bytes (inspect --json)",
+        "rel_rmse",
+    )
+    .unwrap();
 }

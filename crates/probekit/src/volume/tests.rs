@@ -571,6 +571,7 @@ impl VolumeSource for ConstantWithWall {
                 ])
                 .unwrap(),
                 validity: 1.0,
+                virtual_offset: false,
             })
             .collect()
     }
