@@ -67,6 +67,7 @@ fn main() {
             gradient_threshold: None,
             prediction_tolerance: Some(tol),
             prune_tolerance: Some(tol * 0.4),
+            relative_floor: 0.0,
         };
         let (f, _) = build_adaptive(&demo, &st).unwrap();
         rows.push((format!("adaptive {a}..{b} tol {tol}"), f));

@@ -1,25 +1,34 @@
 //! `probekit volume SCENE -o OUT.probes (--uniform (--cell SIZE | --resolution X,Y,Z)
 //! | --adaptive --min-depth A --max-depth B) [--gradients central|analytic]
-//! [--box MINX,MINY,MINZ,MAXX,MAXY,MAXZ] [--order N] [--json]`.
+//! [--box MINX,MINY,MINZ,MAXX,MAXY,MAXZ] [--order N] [--samples N] [--bounces B]
+//! [--seed S] [--plot FILE.png] [--json]`.
 //!
-//! Bakes an irradiance volume (seed 001) through `probekit::volume`. Until the
-//! scene loader and path-traced capture land, SCENE must be
-//! `builtin:lights-demo` (analytic sphere lights behind a slab).
+//! Bakes an irradiance volume (seed 001) through `probekit::volume`. SCENE
+//! is any scene the loader accepts (`builtin:demo`, `.toml`, `.gltf`/`.glb`,
+//! `.obj`), captured by the path tracer (`probekit::volume::BakerSource`,
+//! the same capture, validity and virtual offset as `bake`), or
+//! `builtin:lights-demo` (analytic sphere lights behind a slab, with
+//! closed-form gradients).
 
+use super::bake::DEFAULT_SAMPLES;
+use super::util::load_scene;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use probekit::bake::CaptureSettings;
 use probekit::format::write_probe_file;
 use probekit::volume::{
-    build_adaptive, build_uniform, inspect_json, resolution_for_cell, AdaptiveSettings,
-    CommonSettings, GradientMode, LightsDemo, VolumeSource,
+    build_adaptive, build_uniform, inspect_json, plot_depths, resolution_for_cell,
+    AdaptiveSettings, BakerSource, CommonSettings, GradientMode, LightsDemo, VolumeSource,
 };
 use std::path::PathBuf;
 
 /// Arguments of `probekit volume`.
 #[derive(Debug, Args)]
 pub struct VolumeArgs {
-    /// Scene to bake; for now only `builtin:lights-demo`.
+    /// Scene file (`.toml`, `.gltf`, `.glb`, `.obj`), `builtin:demo`, or
+    /// `builtin:lights-demo` (analytic sphere lights, closed-form gradients).
     pub scene: String,
     /// Output `.probes` file.
     #[arg(short, long)]
@@ -48,28 +57,73 @@ pub struct VolumeArgs {
     /// Relative tolerance under which children are pruned (adaptive).
     #[arg(long, default_value_t = 0.1)]
     pub prune: f32,
-    /// Store SH gradients: `central` (6 extra captures) or `analytic`.
+    /// Tolerances are relative to max(local DC, this × the mean DC of the
+    /// min-depth samples), so dark corners are not over-refined (adaptive;
+    /// 0 = purely local).
+    #[arg(long, default_value_t = 0.5)]
+    pub relative_floor: f32,
+    /// Subdivide cells that intersect scene geometry (adaptive; `false` to disable).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub geometry: bool,
+    /// Subdivide when the cell's edge exceeds this × the harmonic mean of
+    /// scene depth at its corners (adaptive; 0 disables).
+    #[arg(long, default_value_t = 1.0)]
+    pub depth_factor: f32,
+    /// Subdivide when the relative SH change along a cell edge exceeds this
+    /// (adaptive; off by default).
+    #[arg(long)]
+    pub gradient_threshold: Option<f32>,
+    /// Store SH gradients: `central` (6 extra captures per sample, any
+    /// scene) or `analytic` (closed form; only `builtin:lights-demo`).
     #[arg(long)]
     pub gradients: Option<String>,
-    /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres); default the scene's.
-    #[arg(long = "box", value_delimiter = ',')]
+    /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres); default the scene's `[bake] box`.
+    #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
     pub bbox: Option<Vec<f32>>,
     /// SH bands (1..=8).
     #[arg(long, default_value_t = 3)]
     pub order: usize,
-    /// Print `inspect --json`-style statistics.
+    /// Receiver directions per sample (path-traced scenes; default the
+    /// scene's `[bake] samples`, else 1024).
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Scattering events per path (path-traced scenes).
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Random seed (path-traced scenes).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Write a PNG of leaves and samples per octree depth (log scale) — where
+    /// the adaptive octree spent its samples; a uniform grid is one depth.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Print `inspect --json`-style statistics (plus `captures`, `dilated`).
     #[arg(long)]
     pub json: bool,
 }
 
+fn parse_box(a: &VolumeArgs, default: (Vec3, Vec3)) -> Result<(Vec3, Vec3)> {
+    match &a.bbox {
+        None => Ok(default),
+        Some(b) if b.len() == 6 => Ok((Vec3::new(b[0], b[1], b[2]), Vec3::new(b[3], b[4], b[5]))),
+        Some(_) => bail!(
+            "{}: --box needs 6 numbers MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
+            a.scene
+        ),
+    }
+}
+
+fn resolution(a: &VolumeArgs, min: Vec3, max: Vec3) -> Result<[u32; 3]> {
+    Ok(match (&a.resolution, a.cell) {
+        (Some(r), _) if r.len() == 3 => [r[0], r[1], r[2]],
+        (Some(_), _) => bail!("{}: --resolution needs 3 numbers X,Y,Z", a.scene),
+        (None, Some(c)) => resolution_for_cell(min, max, c).with_context(|| a.scene.clone())?,
+        (None, None) => bail!("{}: --uniform needs --cell or --resolution", a.scene),
+    })
+}
+
 /// Runs `probekit volume`.
 pub fn run(a: &VolumeArgs) -> Result<()> {
-    if a.scene != "builtin:lights-demo" {
-        bail!(
-            "{}: unknown scene (only builtin:lights-demo until the scene loader lands)",
-            a.scene
-        );
-    }
     if !(1..=probekit::sh::MAX_ORDER).contains(&a.order) {
         bail!(
             "{}: --order must be in 1..={}",
@@ -77,18 +131,69 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             probekit::sh::MAX_ORDER
         );
     }
-    let src = LightsDemo::demo(a.order);
-    let (mut min, mut max) = LightsDemo::demo_box();
-    if let Some(b) = &a.bbox {
-        if b.len() != 6 {
-            bail!(
-                "{}: --box needs 6 numbers MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
-                a.scene
-            );
-        }
-        min = Vec3::new(b[0], b[1], b[2]);
-        max = Vec3::new(b[3], b[4], b[5]);
+    if a.scene == "builtin:lights-demo" {
+        let src = LightsDemo::demo(a.order);
+        let (min, max) = parse_box(a, LightsDemo::demo_box())?;
+        return build_and_write(a, &src, min, max, 0.5, None);
     }
+    if a.gradients.as_deref() == Some("analytic") {
+        bail!(
+            "{}: --gradients analytic needs a source with closed-form lights \
+             (builtin:lights-demo); path-traced scenes use --gradients central",
+            a.scene
+        );
+    }
+    let scene = load_scene(&a.scene)?;
+    let mut settings = CaptureSettings::from_scene(&scene);
+    settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
+    if let Some(b) = a.bounces {
+        settings.bounces = b;
+    }
+    if let Some(s) = a.seed {
+        settings.seed = s;
+    }
+    settings.order = a.order;
+    let bb = scene.bake_box();
+    let (min, max) = parse_box(a, (bb.min, bb.max))?;
+    let pb = ProgressBar::new(0);
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} captures  {elapsed} elapsed, ETA {eta}")
+            .expect("valid template"),
+    );
+    let bar = pb.clone();
+    let src = BakerSource::new(&scene, settings)
+        .with_context(|| a.scene.clone())?
+        .with_progress(Box::new(move |done, requested| {
+            bar.set_length(requested as u64);
+            bar.set_position(done as u64);
+        }));
+    // A virtual offset longer than a quarter of the finest cell moves a
+    // corner sample out of its cell (typically through a wall): dilate it.
+    let size = max - min;
+    let finest = if a.adaptive {
+        (size / (1u64 << a.max_depth.min(20)) as f32).min_element()
+    } else {
+        let r = resolution(a, min, max)?;
+        (size / (Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32) - 1.0).max(Vec3::ONE))
+            .min_element()
+    };
+    let src = src.with_max_offset(0.25 * finest);
+    let thr = src.validity_threshold();
+    let r = build_and_write(a, &src, min, max, thr, Some(&pb));
+    if let Some(e) = src.take_error() {
+        bail!("{}: capture failed: {e}", a.scene);
+    }
+    r
+}
+
+fn build_and_write(
+    a: &VolumeArgs,
+    src: &dyn VolumeSource,
+    min: Vec3,
+    max: Vec3,
+    validity_threshold: f32,
+    pb: Option<&ProgressBar>,
+) -> Result<()> {
     let gradients = match a.gradients.as_deref() {
         None => GradientMode::None,
         Some("central") => GradientMode::Central { step: 0.0 },
@@ -99,36 +204,37 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         min,
         max,
         gradients,
-        validity_threshold: 0.5,
+        validity_threshold,
     };
-    let src: &dyn VolumeSource = &src;
-    let (file, stats) = if a.adaptive {
+    let built = if a.adaptive {
         build_adaptive(
             src,
             &AdaptiveSettings {
                 common,
                 min_depth: a.min_depth,
                 max_depth: a.max_depth,
-                geometry: true,
-                depth_factor: Some(1.0),
-                gradient_threshold: None,
+                geometry: a.geometry,
+                depth_factor: (a.depth_factor > 0.0).then_some(a.depth_factor),
+                gradient_threshold: a.gradient_threshold,
                 prediction_tolerance: Some(a.tolerance),
                 prune_tolerance: Some(a.prune),
+                relative_floor: a.relative_floor,
             },
         )
     } else if a.uniform {
-        let res = match (&a.resolution, a.cell) {
-            (Some(r), _) if r.len() == 3 => [r[0], r[1], r[2]],
-            (Some(_), _) => bail!("{}: --resolution needs 3 numbers X,Y,Z", a.scene),
-            (None, Some(c)) => resolution_for_cell(min, max, c).with_context(|| a.scene.clone())?,
-            (None, None) => bail!("{}: --uniform needs --cell or --resolution", a.scene),
-        };
-        build_uniform(src, &common, res)
+        build_uniform(src, &common, resolution(a, min, max)?)
     } else {
         bail!("{}: choose --uniform or --adaptive", a.scene)
+    };
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
     }
-    .with_context(|| a.scene.clone())?;
+    let (file, stats) = built.with_context(|| a.scene.clone())?;
     write_probe_file(&a.output, &file).with_context(|| a.output.display().to_string())?;
+    if let Some(p) = &a.plot {
+        let title = format!("{}: leaves and samples per depth", a.scene);
+        plot_depths(&file, p, &title)?;
+    }
     if a.json {
         let mut j = inspect_json(&file).with_context(|| a.output.display().to_string())?;
         j["captures"] = stats.captures.into();

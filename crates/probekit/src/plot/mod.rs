@@ -465,6 +465,7 @@ pub fn line_chart_log(
     c.save(path)
 }
 
+
 #[cfg(test)]
 mod tests {
     use super::*;

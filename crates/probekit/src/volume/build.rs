@@ -3,7 +3,7 @@
 use super::source::{Captured, VolumeSource};
 use super::VolumeBuildError;
 use crate::format::{
-    layout::{NONE, VALIDITY_INVALID},
+    layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET},
     Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeFileKind, Validity, VolumeGrid,
 };
 use glam::Vec3;
@@ -61,6 +61,14 @@ pub struct AdaptiveSettings {
     /// After sampling, collapse a cell whose children are leaves and whose
     /// children's samples the parent predicts within this (relative).
     pub prune_tolerance: Option<f32>,
+    /// Floor of the denominator of the prediction and prune tolerances, as
+    /// a fraction of the mean DC magnitude of the samples at `min_depth`:
+    /// misses are measured relative to `max(|DC local|, floor × mean)`, so
+    /// a dark corner (a closet) is not refined to chase differences that
+    /// are large relative to its own tiny light but invisible against the
+    /// scene's (which is how `probekit eval` normalises its error). 0 =
+    /// purely local (the original criterion).
+    pub relative_floor: f32,
 }
 
 /// Counters of a build.
@@ -275,9 +283,40 @@ fn child_points(lo: [u32; 3], s: u32) -> Vec<([u32; 3], [f32; 8])> {
     out
 }
 
+/// How prediction misses are measured: irradiance-weighted SH distance
+/// (each band scaled by `Â_l / π`, the clamped-cosine convolution, so by
+/// Parseval the distance is the L2 norm over the sphere of the irradiance
+/// difference / π and L2 noise counts a quarter) relative to
+/// `max(|DC(prediction)|, floor)`.
+struct MissScale {
+    band: Vec<f32>,
+    floor: f32,
+}
+
+impl MissScale {
+    fn new(order: usize) -> Self {
+        let mut band = Vec::with_capacity(order * order);
+        for l in 0..order {
+            let w = (probekit_sh::clamped_cosine_band(l) / std::f64::consts::PI) as f32;
+            band.extend(std::iter::repeat(w).take(2 * l + 1));
+        }
+        Self { band, floor: 0.0 }
+    }
+
+    fn miss(&self, pred: &[Vec3], actual: &[Vec3]) -> f32 {
+        let d: f32 = pred
+            .iter()
+            .zip(actual)
+            .zip(&self.band)
+            .map(|((x, y), w)| ((*x - *y) * *w).length_squared())
+            .sum();
+        d.sqrt() / (pred[0].length().max(self.floor) + 1e-4)
+    }
+}
+
 /// Largest relative miss of trilinear prediction from the parent's corners
 /// over the 27 child lattice points (all must be captured).
-fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize) -> f32 {
+fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize, scale: &MissScale) -> f32 {
     let cs = corners(lo, s);
     let mut pred = vec![Vec3::ZERO; n];
     let mut worst = 0.0f32;
@@ -288,7 +327,7 @@ fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize) -> f32 {
                 *p += *v * wc;
             }
         }
-        worst = worst.max(relative_difference(&pred, lat.sh(q), &pred));
+        worst = worst.max(scale.miss(&pred, lat.sh(q)));
     }
     worst
 }
@@ -324,6 +363,7 @@ pub fn build_adaptive(
     }];
     let mut frontier = vec![0usize];
     let mut depth_cache: HashMap<[u32; 3], f32> = HashMap::new();
+    let mut scale = MissScale::new(src.order());
     while !frontier.is_empty() {
         let depth = cells[frontier[0]].depth;
         let size = full >> depth;
@@ -332,6 +372,18 @@ pub fn build_adaptive(
             .flat_map(|&c| corners(cells[c].lo, size))
             .collect();
         lat.ensure(&qs);
+        if depth == s.min_depth.min(s.max_depth) && s.relative_floor > 0.0 {
+            // Mean DC over the valid samples of the min-depth lattice.
+            let valid: Vec<f32> = lat
+                .caps
+                .iter()
+                .filter(|c| c.validity >= common.validity_threshold)
+                .map(|c| c.sh.coeffs()[0].length())
+                .collect();
+            if !valid.is_empty() {
+                scale.floor = s.relative_floor * valid.iter().sum::<f32>() / valid.len() as f32;
+            }
+        }
         if depth == s.max_depth {
             break;
         }
@@ -387,7 +439,7 @@ pub fn build_adaptive(
                 .collect();
             lat.ensure(&qs);
             for &fi in &undecided {
-                split[fi] = prediction_error(&lat, cells[frontier[fi]].lo, size, n) > tol;
+                split[fi] = prediction_error(&lat, cells[frontier[fi]].lo, size, n, &scale) > tol;
             }
         }
         let mut next = Vec::new();
@@ -422,7 +474,7 @@ pub fn build_adaptive(
                 continue;
             }
             let all_leaves = (0..8).all(|k| cells[c.first_child + k].first_child == NO_CHILD);
-            if all_leaves && prediction_error(&lat, c.lo, full >> c.depth, n) <= tol {
+            if all_leaves && prediction_error(&lat, c.lo, full >> c.depth, n, &scale) <= tol {
                 cells[ci].first_child = NO_CHILD;
             }
         }
@@ -540,28 +592,8 @@ fn finish(
         ),
         GradientMode::Central { step } => {
             let step = if step > 0.0 { step } else { 0.05 * finest_cell };
-            let mut probe = Vec::with_capacity(points.len() * 6);
-            for p in &points {
-                for a in 0..3 {
-                    let mut e = Vec3::ZERO;
-                    e[a] = step;
-                    probe.push(*p + e);
-                    probe.push(*p - e);
-                }
-            }
-            stats.captures += probe.len();
-            let c = src.capture(&probe);
-            let mut g = vec![Vec3::ZERO; points.len() * 3 * n];
-            for s in 0..points.len() {
-                for a in 0..3 {
-                    let (plus, minus) = (&c[s * 6 + 2 * a], &c[s * 6 + 2 * a + 1]);
-                    for k in 0..n {
-                        g[(s * 3 + a) * n + k] =
-                            (plus.sh.coeffs()[k] - minus.sh.coeffs()[k]) / (2.0 * step);
-                    }
-                }
-            }
-            Some(g)
+            stats.captures += points.len() * 6;
+            Some(src.central_gradients(&points, step))
         }
     };
     if let Some(g) = &gradients {
@@ -578,7 +610,12 @@ fn finish(
             } else {
                 0.0
             },
-            flags: if ok { 0 } else { VALIDITY_INVALID },
+            flags: if ok { 0 } else { VALIDITY_INVALID }
+                | if c.virtual_offset {
+                    VALIDITY_VIRTUAL_OFFSET
+                } else {
+                    0
+                },
         })
         .collect();
     let mut file = ProbeFile {

@@ -17,7 +17,11 @@
 //! volume is written at its own resolution. An octree is resampled onto the
 //! uniform lattice of its finest level (`2^depth + 1` texels per axis) with
 //! the runtime's continuous trilinear query — simple, but memory grows like
-//! the finest level; bricked export is not done.
+//! the finest level. In the words ("an octree resampled to bricks")
+//! this is the single-brick case: one brick covering the whole volume at
+//! the finest level, no indirection texture. A real brick atlas (8³ bricks
+//! at the finest level only where the octree is fine, coarser bricks
+//! elsewhere, plus an indirection texture) is not done.
 //!
 //! * [`Ktx2Encoding::F16`]: the `3·order²` floats of a texel, ordered
 //!   `c0.r, c0.g, c0.b, c1.r, …`, are cut into groups of 4, one

@@ -6,17 +6,23 @@
 //! Queries live in `probekit_runtime::volume` (re-exported here as
 //! [`Volume`] and [`Interp`]) so engines get them without the baker.
 
+mod baker_source;
+#[cfg(test)]
+mod baker_tests;
 mod build;
 pub mod export;
+mod report;
 mod source;
 #[cfg(test)]
 mod tests;
 
+pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress};
 pub use build::{
     build_adaptive, build_uniform, dilate, relative_difference, resolution_for_cell,
     AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
 };
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
+pub use report::{depth_rows, plot_depths, DepthRow};
 pub use source::{Captured, LightsDemo, Slab, SphereLight, VolumeSource};
 
 use crate::format::FormatError;

@@ -14,6 +14,11 @@ pub struct Captured {
     /// Validity in `[0, 1]` (fraction of rays that did not hit back faces;
     /// 1 = fully valid). Samples under the builder's threshold are dilated.
     pub validity: f32,
+    /// The source captured at a point moved out of geometry (virtual
+    /// offset) rather than at the requested point; the builder stores the
+    /// sample at the requested point (grid/octree corner) and flags it
+    /// `VALIDITY_VIRTUAL_OFFSET`.
+    pub virtual_offset: bool,
 }
 
 /// A scene the volume builder can sample. Calls are batched so that an
@@ -39,11 +44,60 @@ pub trait VolumeSource: Sync {
         f32::INFINITY
     }
 
+    /// Central-difference gradients at `points` (seed 001: "project 6
+    /// additional irradiance functions" at `p ± step·eᵢ`), layout
+    /// `[(p·3 + axis)·order² + c]` (per metre): `(c(p + h eᵢ) − c(p − h eᵢ)) / 2h`.
+    /// The default captures the 6 points with [`Self::capture`]; a Monte
+    /// Carlo source should override it to use the same random numbers for
+    /// the 6 captures of one sample (common random numbers), or the noise
+    /// divided by `2h` swamps the gradient.
+    fn central_gradients(&self, points: &[Vec3], step: f32) -> Vec<Vec3> {
+        let probe = central_points(points, step);
+        let caps = self.capture(&probe);
+        central_difference(&caps, self.order(), step)
+    }
+
     /// Closed-form spatial gradients at `points`, layout
     /// `[(p·3 + axis)·order² + c]` (per metre), if the source knows them.
     fn analytic_gradients(&self, _points: &[Vec3]) -> Option<Vec<Vec3>> {
         None
     }
+}
+
+/// The 6 points `p + h e₀, p − h e₀, p + h e₁, …` per point, in that order.
+pub(crate) fn central_points(points: &[Vec3], step: f32) -> Vec<Vec3> {
+    let mut probe = Vec::with_capacity(points.len() * 6);
+    for p in points {
+        for a in 0..3 {
+            let mut e = Vec3::ZERO;
+            e[a] = step;
+            probe.push(*p + e);
+            probe.push(*p - e);
+        }
+    }
+    probe
+}
+
+/// Central differences from captures laid out as [`central_points`].
+pub(crate) fn central_difference(caps: &[Captured], order: usize, step: f32) -> Vec<Vec3> {
+    let n = order * order;
+    let count = caps.len() / 6;
+    let mut g = vec![Vec3::ZERO; count * 3 * n];
+    for s in 0..count {
+        for a in 0..3 {
+            let (plus, minus) = (&caps[s * 6 + 2 * a], &caps[s * 6 + 2 * a + 1]);
+            let (pc, mc) = (plus.sh.coeffs(), minus.sh.coeffs());
+            if pc.len() != n || mc.len() != n {
+                // Wrong order: leave NaN so the builder reports SourceOrder.
+                g[(s * 3 + a) * n..(s * 3 + a + 1) * n].fill(Vec3::NAN);
+                continue;
+            }
+            for k in 0..n {
+                g[(s * 3 + a) * n + k] = (pc[k] - mc[k]) / (2.0 * step);
+            }
+        }
+    }
+    g
 }
 
 /// A sphere light (uniform emitter).
@@ -171,6 +225,7 @@ impl VolumeSource for LightsDemo {
                 Captured {
                     sh: ShRgb::from_coeffs(v).expect("square length"),
                     validity: if self.inside_slab(p) { 0.0 } else { 1.0 },
+                    virtual_offset: false,
                 }
             })
             .collect()

@@ -25,6 +25,7 @@ impl<F: Fn(Vec3) -> Vec<Vec3> + Sync, G: Fn(Vec3) -> Vec<Vec3> + Sync> VolumeSou
             .map(|p| Captured {
                 sh: ShRgb::from_coeffs((self.f)(*p)).unwrap(),
                 validity: 1.0,
+                virtual_offset: false,
             })
             .collect()
     }
@@ -232,6 +233,7 @@ fn adaptive(
             gradient_threshold: None,
             prediction_tolerance: Some(0.25),
             prune_tolerance: Some(0.1),
+            relative_floor: 0.0,
         },
     )
     .unwrap()
@@ -427,6 +429,7 @@ fn file_round_trip_memory_and_errors() {
                 .map(|_| Captured {
                     sh: ShRgb::zeros(1),
                     validity: 0.0,
+                    virtual_offset: false,
                 })
                 .collect()
         }
@@ -568,6 +571,7 @@ impl VolumeSource for ConstantWithWall {
                 ])
                 .unwrap(),
                 validity: 1.0,
+                virtual_offset: false,
             })
             .collect()
     }
@@ -597,6 +601,7 @@ mod props {
                     gradient_threshold: None,
                     prediction_tolerance: None,
                     prune_tolerance: None,
+                    relative_floor: 0.0,
                 },
             )
             .unwrap();
