@@ -750,9 +750,39 @@ impl<'s> Baker<'s> {
                 }
             }
         }
+        // A probe inside a sphere light sees the emitter over its whole
+        // sphere (irradiance π·L_e, thousands of times the room's), which
+        // interpolation would smear over every neighbouring tetrahedron:
+        // push it radially out past the surface, or flag it invalid.
+        let mut in_light = false;
+        for _ in 0..4 {
+            let Some(l) = self.inside_sphere_light(pos, v.offset_margin) else {
+                break;
+            };
+            if !v.virtual_offset {
+                in_light = true;
+                break;
+            }
+            let d = (pos - l.position).try_normalize().unwrap_or(Vec3::Y);
+            pos = l.position + d * (l.radius + v.offset_margin.max(0.5 * l.radius));
+            pushed = true;
+        }
         let (acc, st) = self.capture_at(pos, probe_index, s);
-        let validity = Validity::from_stats(&st, v, pos - point, pushed);
+        let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
+        if in_light || self.inside_sphere_light(pos, 0.0).is_some() {
+            validity.valid = false;
+        }
         Ok(self.assemble(acc, s, pos, validity))
+    }
+
+    /// The first sphere light of the scene whose radius plus `margin`
+    /// contains `p`, if any.
+    fn inside_sphere_light(&self, p: Vec3, margin: f32) -> Option<&crate::scene::Light> {
+        self.scene.lights.iter().find(|l| {
+            l.kind == crate::scene::LightKind::Sphere
+                && l.radius > 0.0
+                && p.distance(l.position) < l.radius + margin
+        })
     }
 
     fn assemble(

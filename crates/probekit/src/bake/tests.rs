@@ -246,6 +246,39 @@ fn sphere_light_in_empty_space_matches_zonal_closed_form() {
     );
 }
 
+/// A probe requested inside a sphere light is pushed out past its surface
+/// (or, without virtual offset, flagged invalid), and what it then captures
+/// matches the closed form for the point it was moved to: the light's DC
+/// `L·2π(1 − cos α)·Y00` seen from distance `d`, with `sin α = r / d`.
+#[test]
+fn probe_inside_a_sphere_light_is_pushed_out_or_flagged() {
+    let (c, r, intensity) = (Vec3::new(0.0, 1.0, 0.0), 0.3f32, 10.0f32);
+    let scene = scene_of(
+        vec![],
+        vec![],
+        vec![light(LightKind::Sphere, c, Vec3::NEG_Y, intensity, r)],
+        Vec3::ZERO,
+    );
+    let baker = Baker::new(&scene).unwrap();
+    let s = quick(256, 1, 3, 1);
+    let got = baker
+        .capture(c + Vec3::new(0.05, 0.02, 0.0), 0, &s)
+        .unwrap();
+    let d = got.position.distance(c);
+    assert!(d > r, "still inside: {d}");
+    assert!(got.validity.offset_applied && got.validity.valid);
+    let sin_a = (r / d) as f64;
+    let l = intensity as f64 / (PI * (r * r) as f64);
+    let dc = l * 2.0 * PI * (1.0 - (1.0 - sin_a * sin_a).sqrt()) * 0.5 / PI.sqrt();
+    let g = got.sh.coeffs()[0].x as f64;
+    assert!((g - dc).abs() < 0.03 * dc, "DC {g} vs closed form {dc}");
+    let mut off = s.clone();
+    off.validity.virtual_offset = false;
+    let stuck = baker.capture(c, 0, &off).unwrap();
+    assert_eq!(stuck.position, c);
+    assert!(!stuck.validity.valid);
+}
+
 #[test]
 fn point_light_reference_irradiance_is_inverse_square_cosine() {
     let lp = Vec3::new(0.0, 2.0, 0.0);

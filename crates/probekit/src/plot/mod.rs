@@ -465,7 +465,6 @@ pub fn line_chart_log(
     c.save(path)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
