@@ -16,6 +16,7 @@
 //! unscaled file).
 
 use super::codec::Coefficients;
+use crate::prelude::*;
 use super::error::FormatError;
 use super::layout::SectionId;
 use super::ProbeFile;

@@ -567,7 +567,7 @@ fn parse_groups(s: &Sec<'_>) -> Result<Vec<LightGroup>, FormatError> {
             .iter()
             .try_fold(start, |p, a| pad16(a.len()).and_then(|l| p.checked_add(l)))
             .ok_or(FormatError::CountOverflow(s.id))?;
-        let name = std::str::from_utf8(name)
+        let name = core::str::from_utf8(name)
             .map_err(|_| FormatError::InvalidUtf8(s.id))?
             .to_string();
         groups.push(LightGroup {
