@@ -16,10 +16,10 @@
 //! unscaled file).
 
 use super::codec::Coefficients;
-use crate::prelude::*;
 use super::error::FormatError;
 use super::layout::SectionId;
 use super::ProbeFile;
+use crate::prelude::*;
 use glam::Vec3;
 
 /// The radiance SH of one light group at every probe.
