@@ -5,36 +5,9 @@
 //! all × 0 leaves nothing, since the groups sum to the stored total — also
 //! with `--indirect-only`); bad scales fail with one line.
 
+mod common;
+use common::{fails_one_line, json, run};
 use serde_json::Value;
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_probekit"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run probekit")
-}
-
-fn json(dir: &Path, args: &[&str]) -> Value {
-    let o = run(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let text = String::from_utf8(o.stdout).unwrap();
-    serde_json::from_str(text.lines().last().unwrap()).unwrap()
-}
-
-fn fails_one_line(dir: &Path, args: &[&str], needle: &str) {
-    let o = run(dir, args);
-    assert_eq!(o.status.code(), Some(1), "{args:?}");
-    let err = String::from_utf8(o.stderr).unwrap();
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains(needle), "{err} lacks {needle}");
-}
 
 fn rgb(v: &Value) -> [f64; 3] {
     let a = v.as_array().unwrap();

@@ -2,36 +2,8 @@
 //! tiny sizes: the JSON shape, the PNG on disk, one-line errors with exit
 //! code 1 for missing/corrupt probe files and a zero-size image.
 
-use serde_json::Value;
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn run(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_probekit"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run probekit")
-}
-
-fn json(dir: &Path, args: &[&str]) -> Value {
-    let o = run(dir, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let text = String::from_utf8(o.stdout).unwrap();
-    serde_json::from_str(text.lines().last().unwrap()).unwrap()
-}
-
-fn fails_one_line(dir: &Path, args: &[&str], needle: &str) {
-    let o = run(dir, args);
-    assert_eq!(o.status.code(), Some(1), "{args:?}");
-    let err = String::from_utf8(o.stderr).unwrap();
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains(needle), "{err} lacks {needle}");
-}
+mod common;
+use common::{fails_one_line, json};
 
 #[test]
 fn render_json_png_and_errors() {
