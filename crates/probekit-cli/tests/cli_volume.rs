@@ -32,6 +32,8 @@ fn volume_bake_and_export() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["probes"], 60);
     assert_eq!(v["leaves"], 4 * 3 * 2);
+    // `basis` is spelled as for clouds (`sh<order>/<codec name>`).
+    assert_eq!(v["basis"], "sh3/f32");
     let by = v["bytes_by_section"].as_object().unwrap();
     let sum: u64 = by.values().map(|x| x.as_u64().unwrap()).sum();
     assert_eq!(sum, v["bytes"].as_u64().unwrap());

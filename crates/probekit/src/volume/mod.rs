@@ -71,7 +71,7 @@ pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value
         "kind": "volume",
         "probes": file.positions.len(),
         "leaves": v.leaf_count(),
-        "basis": format!("sh{}/{:?}", file.coefficients.order, file.coefficients.codec),
+        "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
         "gradients": file.gradients.is_some(),
         "bytes": bytes,
         "bytes_by_section": by,
