@@ -66,8 +66,9 @@ pub struct VolumeArgs {
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub geometry: bool,
     /// Subdivide when the cell's edge exceeds this × the harmonic mean of
-    /// scene depth at its corners (adaptive; 0 disables).
-    #[arg(long, default_value_t = 1.0)]
+    /// scene depth at its corners (adaptive; 0, the default, disables: at 1
+    /// it refines nearly every cell of an interior, see BENCHMARKS).
+    #[arg(long, default_value_t = 0.0)]
     pub depth_factor: f32,
     /// Subdivide when the relative SH change along a cell edge exceeds this
     /// (adaptive; off by default).
