@@ -442,29 +442,6 @@ pub fn leak_points(
     Ok(out)
 }
 
-/// Relative irradiance disagreement between two radiance SH: the largest
-/// difference of irradiance luminance over the 6 axis normals, divided by the
-/// mean irradiance luminance of `truth` over them (plus a small floor).
-pub fn relative_disagreement(pred: &ShRgb, truth: &ShRgb, floor: f32) -> f32 {
-    const N: [Vec3; 6] = [
-        Vec3::X,
-        Vec3::NEG_X,
-        Vec3::Y,
-        Vec3::NEG_Y,
-        Vec3::Z,
-        Vec3::NEG_Z,
-    ];
-    let lum = |v: Vec3| 0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z;
-    let mut maxd = 0.0f32;
-    let mut mean = 0.0f32;
-    for n in N {
-        let t = lum(truth.irradiance(n));
-        maxd = maxd.max((lum(pred.irradiance(n)) - t).abs());
-        mean += t.max(0.0) / 6.0;
-    }
-    maxd / (mean + floor)
-}
-
 /// Places probes in `bake_box` with `method`. Captures during placement use
 /// `settings` with the sample count lowered to [`PLACEMENT_SAMPLES`].
 /// `progress(phase, done, total)` reports each phase. Deterministic for a
