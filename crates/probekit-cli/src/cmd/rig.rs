@@ -7,6 +7,7 @@
 use anyhow::{anyhow, Context};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
+use probekit::placement::eval::Predictor;
 use probekit::rig::render::{comparison_figure, zones_figure, Column};
 use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
 use probekit::rig::source::ProbeSource;
@@ -106,9 +107,9 @@ fn json(spec: &RigSpec, r: &RunReport) -> String {
 }
 
 fn kind_name(p: &ProbeSource) -> &'static str {
-    match p {
-        ProbeSource::Cloud(_) => "cloud",
-        ProbeSource::Volume(..) => "volume",
+    match p.predictor() {
+        Predictor::Cloud(_) => "cloud",
+        Predictor::Volume(..) => "volume",
     }
 }
 

@@ -176,7 +176,7 @@ pub enum PredictError {
 /// irradiance volume (uniform or octree, with the chosen interpolation).
 /// `probekit query`, `probekit eval` and the renderer all go through it, so
 /// clouds and volumes are measured the same way.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub enum Predictor {
     /// A probe cloud.
     Cloud(ProbeCloud),
@@ -207,6 +207,29 @@ impl Predictor {
             Predictor::Cloud(c) => c.irradiance(p, n, state),
             Predictor::Volume(v, i) => v.irradiance(p, n, *i)?,
         })
+    }
+
+    /// SH order (bands) of the file's coefficients.
+    pub fn order(&self) -> usize {
+        match self {
+            Predictor::Cloud(c) => c.order() as usize,
+            Predictor::Volume(v, _) => v.order(),
+        }
+    }
+
+    /// Interpolated radiance SH at `p` into `out[..order²]` (`out` must hold
+    /// at least `order²` coefficients); `state` caches the cloud walk.
+    pub fn sh_at(
+        &self,
+        p: Vec3,
+        state: &mut WalkState,
+        out: &mut [Vec3],
+    ) -> Result<(), PredictError> {
+        match self {
+            Predictor::Cloud(c) => c.sh_at(p, state, out),
+            Predictor::Volume(v, i) => v.sample_sh(p, *i, out)?,
+        }
+        Ok(())
     }
 
     /// Irradiance at every point, in order.

@@ -1,8 +1,8 @@
 //! A baked probe file as a rig's lighting source (issue 7: "a baked probe
 //! cloud or volume sampled at the rig's points").
 //!
-//! [`ProbeSource`] wraps the runtime's own queries — [`ProbeCloud::sh_at`]
-//! (barycentric blend in the enclosing tetrahedron) or [`Volume::sample_sh`]
+//! [`ProbeSource`] wraps the runtime's own queries, through [`Predictor`] — [`probekit_runtime::ProbeCloud::sh_at`]
+//! (barycentric blend in the enclosing tetrahedron) or [`probekit_runtime::Volume::sample_sh`]
 //! (trilinear by default; points outside the box clamp to it) — so the rig
 //! sees exactly what an engine would read from the file. The rig is fitted
 //! to the file's SH at its sample points ([`ProbeSource::add_sh`], the
@@ -17,38 +17,34 @@
 //! zeros (both exact, SH bands are orthogonal).
 
 use super::RigSetupError;
+use crate::placement::eval::Predictor;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::ProbeFile;
-use probekit_runtime::{Interp, ProbeCloud, Volume};
+use probekit_runtime::Interp;
 use probekit_sh::MAX_COEFFS;
 use std::path::Path;
 
-/// A loaded cloud or volume, ready to be sampled at world positions.
+/// A loaded cloud or volume, ready to be sampled at world positions: the
+/// [`Predictor`] that `probekit query` and `probekit eval` use, with the
+/// rig's error type and its truncate-or-pad SH accumulation.
 #[derive(Clone, Debug)]
-pub enum ProbeSource {
-    /// A tetrahedralised probe cloud (file with a `TETS` section).
-    Cloud(ProbeCloud),
-    /// A grid or octree volume, queried with the given interpolation.
-    Volume(Volume, Interp),
-}
+pub struct ProbeSource(Predictor);
 
 impl ProbeSource {
     /// Builds the source from a loaded file: a cloud when it has
     /// tetrahedra, else a volume queried trilinearly (the dispatch of
     /// `probekit query`).
     pub fn from_file(file: &ProbeFile) -> Result<Self, RigSetupError> {
-        if file.tetrahedra.is_some() {
-            ProbeCloud::from_file(file)
-                .map(ProbeSource::Cloud)
-                .map_err(|e| RigSetupError::Probes(e.to_string()))
-        } else {
-            Volume::from_file(file)
-                .map(|v| ProbeSource::Volume(v, Interp::Trilinear))
-                .map_err(|e| RigSetupError::Probes(e.to_string()))
-        }
+        Predictor::from_file(file, Interp::Trilinear)
+            .map(ProbeSource)
+            .map_err(|e| RigSetupError::Probes(e.to_string()))
     }
 
+    /// The underlying cloud or volume.
+    pub fn predictor(&self) -> &Predictor {
+        &self.0
+    }
     /// Loads a `.probes` file (errors name the file).
     pub fn load(path: &Path) -> Result<Self, RigSetupError> {
         let name = path.display();
@@ -63,25 +59,22 @@ impl ProbeSource {
     /// Uses `interp` for a volume (no effect on a cloud). Interpolations
     /// that need gradients are refused when the file has none.
     pub fn with_interp(self, interp: Interp) -> Result<Self, RigSetupError> {
-        match self {
-            ProbeSource::Volume(v, _) => {
+        match self.0 {
+            Predictor::Volume(v, _) => {
                 if interp.needs_gradients() && !v.has_gradients() {
                     return Err(RigSetupError::Probes(format!(
                         "interpolation {interp:?} needs gradients; the volume has none"
                     )));
                 }
-                Ok(ProbeSource::Volume(v, interp))
+                Ok(ProbeSource(Predictor::Volume(v, interp)))
             }
-            c => Ok(c),
+            c => Ok(ProbeSource(c)),
         }
     }
 
     /// SH order (bands) stored in the file.
     pub fn order(&self) -> usize {
-        match self {
-            ProbeSource::Cloud(c) => c.order() as usize,
-            ProbeSource::Volume(v, _) => v.order(),
-        }
+        self.0.order()
     }
 
     /// Adds `weight ×` the file's radiance SH at world position `p` to
@@ -90,16 +83,11 @@ impl ProbeSource {
     /// a volume). No allocation.
     pub fn add_sh(&self, p: Vec3, weight: f32, state: &mut WalkState, out: &mut [Vec3]) {
         let mut buf = [Vec3::ZERO; MAX_COEFFS];
-        match self {
-            ProbeSource::Cloud(c) => c.sh_at(p, state, &mut buf),
-            ProbeSource::Volume(v, interp) => {
-                // Cannot fail: the buffer holds MAX_COEFFS ≥ order², and
-                // `from_file`/`with_interp` refuse interpolations the file
-                // cannot serve; stay silent-zero rather than panic.
-                if v.sample_sh(p, *interp, &mut buf).is_err() {
-                    buf.fill(Vec3::ZERO);
-                }
-            }
+        // Cannot fail: the buffer holds MAX_COEFFS ≥ order², and
+        // `from_file`/`with_interp` refuse interpolations the file cannot
+        // serve; stay silent-zero rather than panic.
+        if self.0.sh_at(p, state, &mut buf).is_err() {
+            buf.fill(Vec3::ZERO);
         }
         let n = out.len().min(self.order() * self.order());
         for (o, b) in out[..n].iter_mut().zip(&buf[..n]) {
