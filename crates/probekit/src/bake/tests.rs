@@ -113,6 +113,17 @@ fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32, radiu
 }
 
 /// Mean and standard error of the mean over runs, per coefficient (red channel).
+/// Empty space, black sky, one sphere light (centre `c`, radius `r`,
+/// `intensity` candela).
+fn lone_sphere_light(c: Vec3, r: f32, intensity: f32) -> Scene {
+    scene_of(
+        vec![],
+        vec![],
+        vec![light(LightKind::Sphere, c, Vec3::NEG_Y, intensity, r)],
+        Vec3::ZERO,
+    )
+}
+
 fn mean_se(runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
     let k = runs.len() as f64;
     let n = runs[0].len();
@@ -195,12 +206,7 @@ fn quick(samples: u32, bounces: u32, order: usize, seed: u64) -> CaptureSettings
 #[test]
 fn sphere_light_in_empty_space_matches_zonal_closed_form() {
     let (c, r, intensity) = (Vec3::new(0.6, 1.5, -0.8), 0.4f32, 20.0f32);
-    let scene = scene_of(
-        vec![],
-        vec![],
-        vec![light(LightKind::Sphere, c, Vec3::NEG_Y, intensity, r)],
-        Vec3::ZERO,
-    );
+    let scene = lone_sphere_light(c, r, intensity);
     let baker = Baker::new(&scene).unwrap();
     let order = 4;
     let runs: Vec<Vec<f64>> = (0..8)
@@ -253,12 +259,7 @@ fn sphere_light_in_empty_space_matches_zonal_closed_form() {
 #[test]
 fn probe_inside_a_sphere_light_is_pushed_out_or_flagged() {
     let (c, r, intensity) = (Vec3::new(0.0, 1.0, 0.0), 0.3f32, 10.0f32);
-    let scene = scene_of(
-        vec![],
-        vec![],
-        vec![light(LightKind::Sphere, c, Vec3::NEG_Y, intensity, r)],
-        Vec3::ZERO,
-    );
+    let scene = lone_sphere_light(c, r, intensity);
     let baker = Baker::new(&scene).unwrap();
     let s = quick(256, 1, 3, 1);
     let got = baker
