@@ -8,7 +8,10 @@
 //! 1. **Pool.** About `4 × budget` points, jittered-stratified over the bake
 //!    box, kept when in free space (not inside geometry, no surface within
 //!    [`PROBE_CLEARANCE`]), captured at the placement sample count. The pool
-//!    is both the candidate set and the validation set.
+//!    is both the candidate set and the validation set. Around every
+//!    positional light it adds shells of candidates at geometrically growing
+//!    distances ([`light_shells`]), where the `1/d²` fall-off needs probes
+//!    closer together than a uniform pool offers.
 //! 2. **Seed set.** `budget / 8` pool points by farthest-point sampling, so
 //!    the coarse cloud spans the free space, including its corners.
 //! 3. **Greedy insertion.** Tetrahedralize the probes, interpolate at every
@@ -39,10 +42,11 @@
 use super::{LeakSettings, PlacementError, State};
 use crate::bake::sampling::SampleRng;
 use crate::cloud::tetrahedralize;
-use crate::scene::Aabb;
+use crate::scene::{Aabb, Light, LightKind};
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_sh::convolve::clamped_cosine_band;
+use probekit_sh::project::fibonacci_point;
 use probekit_sh::ShRgb;
 use rayon::prelude::*;
 
@@ -61,6 +65,15 @@ const RELATIVE_WEIGHT: f32 = 0.05;
 /// volume itself). Measured on builtin:demo (docs/bench/placement.md): 1.5
 /// beat 0 and 3 at 500 probes and tied at 2000.
 const SPACING_EXPONENT: f32 = 1.5;
+
+/// Directions per shell of [`light_shells`].
+const LIGHT_SHELL_DIRECTIONS: usize = 24;
+
+/// Ratio of successive shell radii in [`light_shells`].
+const LIGHT_SHELL_RATIO: f32 = 1.6;
+
+/// Largest shell radius in [`light_shells`], metres.
+const LIGHT_SHELL_MAX: f32 = 2.5;
 
 /// New candidates spawned around each inserted probe.
 const SPAWN: usize = 4;
@@ -114,6 +127,41 @@ fn jittered(b: &Aabb, n: usize, seed: u64) -> Vec<Vec3> {
                 );
                 out.push(b.min + u * size);
             }
+        }
+    }
+    out
+}
+
+/// Shells of candidates around each positional light (point, spot, sphere,
+/// disk): [`LIGHT_SHELL_DIRECTIONS`] spherical-Fibonacci directions at
+/// distances growing geometrically by [`LIGHT_SHELL_RATIO`] from just outside
+/// the light to [`LIGHT_SHELL_MAX`]. Direct light falls off as `1/d²`, so the
+/// probe spacing that keeps linear interpolation's error even grows in
+/// proportion to the distance from the light; a uniform pool is far too sparse
+/// near a light to offer such positions. They are only candidates: the greedy
+/// ranking decides which become probes.
+fn light_shells(lights: &[Light], bbox: &Aabb, max_radius: f32) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for (li, l) in lights.iter().enumerate() {
+        if l.kind == LightKind::Directional || !l.position.is_finite() {
+            continue;
+        }
+        let mut r = (3.0 * l.radius)
+            .max(l.radius + 2.0 * PROBE_CLEARANCE)
+            .max(0.3);
+        let mut shell = 0usize;
+        while r <= max_radius {
+            // A different rotation per shell, so shells do not line up.
+            let rot = glam::Quat::from_rotation_y(2.399_963 * (shell + li) as f32);
+            for k in 0..LIGHT_SHELL_DIRECTIONS {
+                let d = rot * fibonacci_point(k, LIGHT_SHELL_DIRECTIONS);
+                let p = l.position + r * d;
+                if bbox.contains(p) {
+                    out.push(p);
+                }
+            }
+            r *= LIGHT_SHELL_RATIO;
+            shell += 1;
         }
     }
     out
@@ -465,6 +513,15 @@ pub(super) fn adaptive(
         (POOL_FACTOR * budget).clamp(512, 60_000),
         st.settings.seed,
     );
+    let mut raw = raw;
+    // Shells reach out to where the uniform pool is about as dense.
+    let size = bbox.size();
+    let spacing = (size.x * size.y * size.z / raw.len().max(1) as f32).cbrt();
+    raw.extend(light_shells(
+        &st.baker.scene().lights,
+        bbox,
+        (1.5 * spacing).min(LIGHT_SHELL_MAX),
+    ));
     let nraw = raw.len();
     let raw: Vec<Vec3> = raw
         .into_par_iter()
@@ -556,6 +613,56 @@ mod tests {
             (dense - closed).abs() < 1e-3 * closed,
             "{dense} vs {closed}"
         );
+    }
+
+    /// Shell candidates lie at `r0·1.6^k` from the light (r0 = 0.3 m for a
+    /// 0.1 m sphere), up to the cap, inside the box only; directional lights
+    /// get none.
+    #[test]
+    fn light_shells_are_geometric_and_inside_the_box() {
+        let sphere = Light {
+            kind: LightKind::Sphere,
+            position: Vec3::new(1.0, 2.9, 1.0),
+            direction: Vec3::NEG_Y,
+            color: Vec3::ONE,
+            intensity: 10.0,
+            radius: 0.1,
+            inner_angle: 0.0,
+            outer_angle: 0.0,
+            group: None,
+        };
+        let sun = Light {
+            kind: LightKind::Directional,
+            ..sphere.clone()
+        };
+        let bbox = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::new(10.0, 3.0, 10.0),
+        };
+        let pts = light_shells(&[sphere.clone(), sun], &bbox, 1.0);
+        // Radii 0.3, 0.48, 0.768 (≤ 1.0); the shell at 1.2288 is beyond the cap.
+        let radii = [0.3f32, 0.48, 0.768];
+        assert!(!pts.is_empty());
+        for p in &pts {
+            assert!(bbox.contains(*p));
+            let d = p.distance(sphere.position);
+            assert!(
+                radii.iter().any(|r| (d - r).abs() < 1e-4),
+                "distance {d} is not a shell radius"
+            );
+        }
+        // The ceiling cuts each shell: points above y = 3 are dropped, so
+        // fewer than 24 per shell, but the lower half is always there.
+        for r in radii {
+            let n = pts
+                .iter()
+                .filter(|p| (p.distance(sphere.position) - r).abs() < 1e-4)
+                .count();
+            assert!(
+                (12..LIGHT_SHELL_DIRECTIONS).contains(&n),
+                "shell {r}: {n} points"
+            );
+        }
     }
 
     #[test]
