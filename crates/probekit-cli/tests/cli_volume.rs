@@ -93,7 +93,45 @@ fn volume_adaptive_and_errors() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["probes"].as_u64().unwrap() > 27 && v["probes"].as_u64().unwrap() <= 9 * 9 * 9);
+    // An octree exports as a brick atlas by default: indirection texture,
+    // atlas textures and a sidecar that says so.
+    let k = dir.path().join("bricks");
+    let o = probekit(&[
+        "export",
+        out.to_str().unwrap(),
+        "--format",
+        "ktx2",
+        "-o",
+        k.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let side: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(k.join("volume.json")).unwrap()).unwrap();
+    assert_eq!(side["format"], "probekit-volume-bricks");
+    assert!(side["bricks"].as_u64().unwrap() >= 1);
+    assert!(k.join("indirection_rgba8ui.ktx2").exists() && k.join("sh_f16_0.ktx2").exists());
+    let u = dir.path().join("u.probes");
+    let o = probekit(&[
+        "volume",
+        "builtin:lights-demo",
+        "-o",
+        u.to_str().unwrap(),
+        "--uniform",
+        "--resolution",
+        "2,2,2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (us, ks) = (
+        u.to_str().unwrap().to_string(),
+        k.join("u").to_str().unwrap().to_string(),
+    );
     for args in [
+        vec![
+            "export", &us, "--format", "ktx2", "--layout", "bricks", "-o", &ks,
+        ],
+        vec![
+            "export", &us, "--format", "ktx2", "--layout", "sparse", "-o", &ks,
+        ],
         vec![
             "volume",
             "nope",

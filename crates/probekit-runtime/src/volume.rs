@@ -243,6 +243,22 @@ impl Volume {
         }
     }
 
+    /// Depth of the octree leaf containing `p` (clamped to the box); 0 for a
+    /// uniform grid. Leaves are aligned: the leaf at depth `d` containing
+    /// `p` covers the whole depth-`d` cell of `p`.
+    pub fn leaf_depth_at(&self, p: Vec3) -> u32 {
+        match &self.layout {
+            Layout::Grid { .. } => 0,
+            Layout::Tree { nodes, depths, .. } => {
+                let (bmin, bmax) = self.bounds();
+                depths
+                    .get(find_leaf(nodes, p.clamp(bmin, bmax)))
+                    .copied()
+                    .unwrap_or(0)
+            }
+        }
+    }
+
     /// Depth of the deepest leaf (0 for a uniform grid).
     pub fn max_depth(&self) -> u32 {
         match &self.layout {

@@ -653,3 +653,147 @@ mod props {
         }
     }
 }
+
+/// The brick atlas, looked up as its sidecar describes (indirection texel →
+/// brick and level → hardware-style trilinear inside the brick, written here
+/// from the description), reproduces the octree's own trilinear query, in
+/// fewer texels than the finest-level lattice; a uniform volume is refused.
+#[test]
+fn brick_atlas_reproduces_the_octree_query() {
+    use super::export::*;
+    // A smooth, non-linear field; the octree refines only at a wall
+    // (x ∈ 0.30..0.35), so most of the box stays coarse.
+    struct WavyWithWall;
+    impl VolumeSource for WavyWithWall {
+        fn order(&self) -> usize {
+            3
+        }
+        fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
+            p.iter()
+                .map(|p| Captured {
+                    sh: ShRgb::from_coeffs(
+                        (0..9)
+                            .map(|k| {
+                                let k = k as f32;
+                                Vec3::new(
+                                    2.0 + (3.0 * p.x + k).sin() * (2.0 * p.y).cos(),
+                                    1.0 + p.z * p.z - 0.1 * k,
+                                    (p.x * p.y + 0.3 * k).cos(),
+                                )
+                            })
+                            .collect(),
+                    )
+                    .unwrap(),
+                    validity: 1.0,
+                    virtual_offset: false,
+                })
+                .collect()
+        }
+        fn contains_geometry(&self, min: Vec3, max: Vec3) -> bool {
+            min.x < 0.35 && max.x > 0.3
+        }
+    }
+    let (file, _) = build_adaptive(
+        &WavyWithWall,
+        &AdaptiveSettings {
+            common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
+            min_depth: 1,
+            max_depth: 5,
+            geometry: true,
+            depth_factor: None,
+            gradient_threshold: None,
+            prediction_tolerance: None,
+            prune_tolerance: None,
+            relative_floor: 0.0,
+        },
+    )
+    .unwrap();
+    let v = Volume::from_file(&file).unwrap();
+    let ex = export_bricks(&v, Ktx2Encoding::F16).unwrap();
+    let ind = Ktx2::from_bytes(&ex.textures[0].1.to_bytes()).unwrap();
+    assert_eq!(ind.format, TexelFormat::Rgba8Uint);
+    let atlas: Vec<Ktx2> = ex.textures[1..]
+        .iter()
+        .map(|(_, t)| Ktx2::from_bytes(&t.to_bytes()).unwrap())
+        .collect();
+    assert_eq!(atlas.len(), 7);
+    let n = v.coeffs_per_sample();
+    let res = atlas[0].size.map(|r| r as usize);
+    let bricks = ex.sidecar["bricks"].as_u64().unwrap() as usize;
+    let finest = ((1usize << v.max_depth()) + 1).pow(3);
+    let t = BRICK_CELLS as usize + 1;
+    assert!(
+        bricks * t.pow(3) < finest,
+        "{bricks} bricks of {t}³ vs {finest} finest-level texels"
+    );
+    assert_eq!(
+        ex.sidecar["atlas_resolution"][0].as_u64(),
+        Some(res[0] as u64)
+    );
+    let fetch = |x: usize, y: usize, z: usize, f: usize| -> f32 {
+        let tex = &atlas[f / 4];
+        let o = 8 * (x + res[0] * (y + res[1] * z)) + 2 * (f % 4);
+        half::f16::from_bits(u16::from_le_bytes([tex.data[o], tex.data[o + 1]])).to_f32()
+    };
+    let (min, max) = v.bounds();
+    let cells = ind.size[0] as f32;
+    let lookup = |p: Vec3| -> Vec<f32> {
+        let g = (p - min) / (max - min) * cells;
+        let c = g.floor().clamp(Vec3::ZERO, Vec3::splat(cells - 1.0));
+        let o = 4
+            * (c.x as usize
+                + ind.size[0] as usize * (c.y as usize + ind.size[1] as usize * c.z as usize));
+        let b = [ind.data[o], ind.data[o + 1], ind.data[o + 2]].map(|x| x as usize);
+        let s = (1u32 << ind.data[o + 3]) as f32;
+        let f = ((g - (c / s).floor() * s) / s).clamp(Vec3::ZERO, Vec3::ONE);
+        let tc = f * BRICK_CELLS as f32;
+        let i0 = tc.floor().min(Vec3::splat(BRICK_CELLS as f32 - 1.0));
+        let fr = tc - i0;
+        let mut out = vec![0.0f32; 3 * n];
+        for corner in 0..8usize {
+            let bit = |a: usize| (corner >> a) & 1;
+            let w: f32 = (0..3)
+                .map(|a| if bit(a) == 1 { fr[a] } else { 1.0 - fr[a] })
+                .product();
+            let (x, y, z) = (
+                b[0] * t + i0.x as usize + bit(0),
+                b[1] * t + i0.y as usize + bit(1),
+                b[2] * t + i0.z as usize + bit(2),
+            );
+            for (k, o) in out.iter_mut().enumerate() {
+                *o += w * fetch(x, y, z, k);
+            }
+        }
+        out
+    };
+    let mut rng = Rng(11);
+    let (mut diff, mut mag, mut worst, mut dc_max) = (0.0f64, 0.0f64, 0.0f32, 0.0f32);
+    for _ in 0..400 {
+        let p = rng.point(min, max);
+        let want = sh_at(&v, p, Interp::Trilinear);
+        let got = lookup(p);
+        dc_max = dc_max.max(want[0].max_element());
+        for (k, w) in want.iter().enumerate() {
+            for ch in 0..3 {
+                let d = (got[3 * k + ch] - w[ch]).abs();
+                diff += d as f64;
+                mag += w[ch].abs() as f64;
+                worst = worst.max(d);
+            }
+        }
+    }
+    // f16 rounding, and coarse leaves next to finer ones (whose query blends
+    // the finer face samples) sampled at 5 texels per axis.
+    assert!(diff < 0.005 * mag, "mean difference {}", diff / mag);
+    assert!(worst < 0.05 * dc_max, "worst {worst} vs DC {dc_max}");
+    let (u, _) = build_uniform(
+        &WavyWithWall,
+        &common(min, max, GradientMode::None),
+        [3, 3, 3],
+    )
+    .unwrap();
+    assert!(matches!(
+        export_bricks(&Volume::from_file(&u).unwrap(), Ktx2Encoding::F16),
+        Err(ExportError::NotAnOctree)
+    ));
+}
