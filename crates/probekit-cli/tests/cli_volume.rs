@@ -93,7 +93,7 @@ fn volume_adaptive_and_errors() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["probes"].as_u64().unwrap() > 27 && v["probes"].as_u64().unwrap() <= 9 * 9 * 9);
-    // An octree exports as a brick atlas by default: indirection texture,
+    // An octree exports as a brick atlas on request: indirection texture,
     // atlas textures and a sidecar that says so.
     let k = dir.path().join("bricks");
     let o = probekit(&[
@@ -101,6 +101,8 @@ fn volume_adaptive_and_errors() {
         out.to_str().unwrap(),
         "--format",
         "ktx2",
+        "--layout",
+        "bricks",
         "-o",
         k.to_str().unwrap(),
     ]);

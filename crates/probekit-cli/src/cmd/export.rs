@@ -2,15 +2,15 @@
 //! [--layout auto|bricks|dense] [--resolution X,Y,Z]`.
 //!
 //! `ktx2`: a directory of KTX2 3D textures plus `volume.json`
-//! (`probekit::volume::export`); an octree exports as a brick atlas by
-//! default. `bevy`: one `.ktx2` for Bevy's
+//! (`probekit::volume::export`); an octree exports as a brick atlas when
+//! that is smaller than its dense finest-level lattice. `bevy`: one `.ktx2` for Bevy's
 //! `IrradianceVolume` plus `OUT.json` with the `LightProbe` transform.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use probekit::format::{write_atomic, ProbeFile};
 use probekit::volume::export::{
-    export_bevy, export_bricks, export_ktx2, write_ktx2_export, Ktx2Encoding,
+    export_auto, export_bevy, export_bricks, export_ktx2, write_ktx2_export, Ktx2Encoding,
 };
 use probekit::volume::Volume;
 use std::path::PathBuf;
@@ -30,8 +30,8 @@ pub struct ExportArgs {
     #[arg(long, default_value = "f16")]
     pub encoding: String,
     /// `bricks` (an octree as a brick atlas plus indirection texture),
-    /// `dense` (resampled at its finest level) or `auto` (bricks for an
-    /// octree, dense for a uniform volume); ktx2 only.
+    /// `dense` (resampled at its finest level) or `auto` (the smaller of
+    /// the two for an octree; a uniform volume is always dense); ktx2 only.
     #[arg(long, default_value = "auto")]
     pub layout: String,
     /// Voxels per axis `X,Y,Z` (bevy; default the grid's probe counts, or
@@ -55,11 +55,11 @@ pub fn run(a: &ExportArgs) -> Result<()> {
                 "quantized" => Ktx2Encoding::Quantized,
                 o => bail!("{name}: --encoding {o}: expected f16 or quantized"),
             };
-            let octree = v.grid_resolution().is_none();
-            let ex = match (a.layout.as_str(), octree) {
-                ("auto", true) | ("bricks", _) => export_bricks(&v, enc),
-                ("auto", false) | ("dense", _) => export_ktx2(&v, enc, None),
-                (o, _) => bail!("{name}: --layout {o}: expected auto, bricks or dense"),
+            let ex = match a.layout.as_str() {
+                "auto" => export_auto(&v, enc),
+                "bricks" => export_bricks(&v, enc),
+                "dense" => export_ktx2(&v, enc, None),
+                o => bail!("{name}: --layout {o}: expected auto, bricks or dense"),
             }
             .with_context(|| name.clone())?;
             write_ktx2_export(&ex, &a.output).with_context(|| a.output.display().to_string())?;

@@ -18,7 +18,8 @@
 //! uniform lattice of its finest level (`2^depth + 1` texels per axis) with
 //! the runtime's continuous trilinear query — simple, but memory grows like
 //! the finest level (`--layout dense`); [`export_bricks`] keeps the
-//! octree's adaptivity instead.
+//! octree's adaptivity instead, and [`export_auto`] (the CLI's default)
+//! picks the smaller.
 //!
 //! # Brick atlas ([`export_bricks`])
 //! The usual GPU form of an adaptive volume (a two-level sparse grid, as in
@@ -691,6 +692,27 @@ pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Expo
         sidecar: with_coefficient_fields(sidecar, volume.order(), encoding, &bounds, &textures),
         textures,
     })
+}
+
+/// The smaller of the two KTX2 layouts: a uniform volume at its own
+/// resolution; an octree as a brick atlas ([`export_bricks`]) when its atlas
+/// holds fewer texels than the finest-level lattice, else resampled densely
+/// ([`export_ktx2`]). Bricks duplicate their faces (5³ texels per 4³ cells),
+/// so an octree that is nearly full at its finest level is smaller dense.
+pub fn export_auto(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Export, ExportError> {
+    if volume.grid_resolution().is_some() {
+        return export_ktx2(volume, encoding, None);
+    }
+    let bricks = export_bricks(volume, encoding)?;
+    let atlas: u64 = bricks.sidecar["atlas_resolution"]
+        .as_array()
+        .map_or(u64::MAX, |r| r.iter().filter_map(|x| x.as_u64()).product());
+    let dense = ((1u64 << volume.max_depth().min(10)) + 1).pow(3);
+    if atlas < dense {
+        Ok(bricks)
+    } else {
+        export_ktx2(volume, encoding, None)
+    }
 }
 
 /// Writes an [`export_ktx2`] result into directory `dir` (created).

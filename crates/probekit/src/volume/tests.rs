@@ -792,8 +792,13 @@ fn brick_atlas_reproduces_the_octree_query() {
         [3, 3, 3],
     )
     .unwrap();
+    let u = Volume::from_file(&u).unwrap();
     assert!(matches!(
-        export_bricks(&Volume::from_file(&u).unwrap(), Ktx2Encoding::F16),
+        export_bricks(&u, Ktx2Encoding::F16),
         Err(ExportError::NotAnOctree)
     ));
+    // `export_auto`: the sparse octree as bricks, the grid densely.
+    let auto = |v: &Volume| export_auto(v, Ktx2Encoding::F16).unwrap().sidecar["format"].clone();
+    assert_eq!(auto(&v), "probekit-volume-bricks");
+    assert_eq!(auto(&u), "probekit-volume-ktx2");
 }
