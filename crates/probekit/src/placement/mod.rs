@@ -354,17 +354,35 @@ impl State<'_, '_> {
 
     /// One or more passes of leak prevention; at most `limit` probes added.
     fn fix_leaks(&mut self, ls: &LeakSettings, limit: usize) -> Result<(), PlacementError> {
+        self.fix_leaks_within(ls, limit, None)
+    }
+
+    /// [`Self::fix_leaks`], keeping only probes inside `bounds` (when given):
+    /// the far side of an edge that crosses an outer wall is outside the
+    /// building, where a probe sees the sky and sun, and the virtual offset
+    /// can push a capture through a thin wall.
+    fn fix_leaks_within(
+        &mut self,
+        ls: &LeakSettings,
+        limit: usize,
+        bounds: Option<&Aabb>,
+    ) -> Result<(), PlacementError> {
+        let inside = |p: &Vec3| bounds.map_or(true, |b| b.contains(*p));
         let mut added_total = 0;
         for _ in 0..ls.iterations {
             if added_total >= limit {
                 break;
             }
-            let new = leak_points(self.baker.tracer(), &self.positions, ls)?;
+            let mut new = leak_points(self.baker.tracer(), &self.positions, ls)?;
+            let n = new.len();
+            new.retain(inside);
+            self.stats.rejected_inside += n - new.len();
             if new.is_empty() {
                 break;
             }
             let new = self.filter_free(new);
             let mut got = self.capture(&new)?;
+            got.retain(|(p, _)| inside(p));
             got.truncate(limit - added_total);
             added_total += got.len();
             self.stats.leak_probes += got.len();

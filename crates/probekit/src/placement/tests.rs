@@ -66,6 +66,8 @@ fn adaptive_places_no_probe_inside_and_is_deterministic() {
     let tracer = baker.tracer();
     for p in &a.positions {
         assert!(!inside_geometry(tracer, *p), "{p}");
+        // Not outside the building either (where a probe sees the sun).
+        assert!(scene.bake_box().contains(*p), "{p}");
         assert!(a.positions.iter().filter(|q| *q == p).count() == 1);
     }
     // Grid drops the points inside the walls and pillars.
