@@ -38,7 +38,10 @@ fn lum(v: Vec3) -> f32 {
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let file_name = args.first().cloned().unwrap_or_else(|| "demo.probes".into());
+    let file_name = args
+        .first()
+        .cloned()
+        .unwrap_or_else(|| "demo.probes".into());
     let scene_name = args
         .get(1)
         .filter(|a| !a.starts_with("--"))
@@ -82,7 +85,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let order = cloud.order() as usize;
     let sh_of = |i: usize| ShRgb::from_coeffs(cloud.probe_sh(i).to_vec()).expect("order²");
     let mut ws = WalkState::new();
-    println!("mean truth luminance {mean:.4}; leak floor 0.01·mean = {:.4}", 0.01 * mean);
+    println!(
+        "mean truth luminance {mean:.4}; leak floor 0.01·mean = {:.4}",
+        0.01 * mean
+    );
     for (i, p) in pts.iter().enumerate() {
         let (t, e) = (truth[i], predicted[i]);
         if lum(e) <= 4.0 * lum(t) + 0.01 * mean {

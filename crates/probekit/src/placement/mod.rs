@@ -120,6 +120,11 @@ pub struct PlacementStats {
     pub crossing_after: f32,
     /// Mean relative error at the last round's candidates (adaptive).
     pub last_mean_error: Option<f32>,
+    /// Pool points that still fail issue 5's leak test (interpolated
+    /// irradiance above 4× the captured one plus 1 % of the pool's mean, for
+    /// one of 26 normals) when adaptive placement ends; `None` for the other
+    /// methods.
+    pub leaking_pool_points: Option<usize>,
 }
 
 /// Result of [`place`].
