@@ -5,6 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
+//!     [--light-shells]
 //! ```
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
@@ -47,6 +48,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .map(|s| s.trim().parse())
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
+    let shells = args.iter().any(|a| a == "--light-shells");
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let pts = sample_points(baker.tracer(), &bbox, npts, 1);
@@ -134,6 +136,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         let m = PlacementMethod::Adaptive {
             budget: b,
             tolerance: 0.0,
+            light_shells: shells,
         };
         let a = place(&baker, bbox, &m, &s, &|_, _, _| {})?;
         eprintln!(

@@ -57,6 +57,11 @@ pub struct BakeArgs {
     /// placement's own captured pool is below this.
     #[arg(long, default_value_t = 0.02)]
     pub tolerance: f32,
+    /// Adaptive placement: add candidate shells around point, spot, sphere
+    /// and disk lights (lower error near small bright lights, fewer probes
+    /// elsewhere).
+    #[arg(long)]
+    pub light_shells: bool,
     /// CSV of probe positions `x,y,z` (header optional).
     #[arg(long)]
     pub positions: Option<PathBuf>,
@@ -231,6 +236,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             &probekit::placement::PlacementMethod::Adaptive {
                 budget: a.budget,
                 tolerance: a.tolerance,
+                light_shells: a.light_shells,
             },
             &settings,
             &|phase, done, total| {
@@ -244,7 +250,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let n = placed.positions.len();
         (
             placed.positions,
-            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "count": n }),
+            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "light_shells": a.light_shells, "count": n }),
         )
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;

@@ -39,6 +39,8 @@ fn adaptive_places_no_probe_inside_and_is_deterministic() {
     let m = PlacementMethod::Adaptive {
         budget: 48,
         tolerance: 0.0,
+        // Exercises the light shells too: they must obey the same rules.
+        light_shells: true,
     };
     let a = place(
         &baker,
@@ -66,6 +68,8 @@ fn adaptive_places_no_probe_inside_and_is_deterministic() {
     let tracer = baker.tracer();
     for p in &a.positions {
         assert!(!inside_geometry(tracer, *p), "{p}");
+        // Not outside the building either (where a probe sees the sun).
+        assert!(scene.bake_box().contains(*p), "{p}");
         assert!(a.positions.iter().filter(|q| *q == p).count() == 1);
     }
     // Grid drops the points inside the walls and pillars.
@@ -160,6 +164,7 @@ fn adaptive_beats_grid_at_equal_probe_count() {
     let m = PlacementMethod::Adaptive {
         budget: 96,
         tolerance: 0.0,
+        light_shells: false,
     };
     let a = place(&baker, scene.bake_box(), &m, &s, &|_, _, _| {}).unwrap();
     let g = grid_points(&scene.bake_box(), None, Some(a.positions.len())).unwrap();
