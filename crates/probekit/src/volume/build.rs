@@ -49,6 +49,12 @@ pub struct AdaptiveSettings {
     pub max_depth: u32,
     /// Subdivide cells that contain geometry (Greger et al. 1998).
     pub geometry: bool,
+    /// Geometry alone splits only cells shallower than this; deeper cells
+    /// that contain geometry split only if the other heuristics (the
+    /// prediction test) say so. `max_depth` or more = the seed's rule (every
+    /// cell touching a wall down to the finest level, which spends most of
+    /// an interior's samples on walls the light field is smooth across).
+    pub geometry_depth: u32,
     /// Subdivide when the cell's largest edge exceeds `factor ×` the
     /// smallest harmonic mean of scene depth at its corners (Pharr 2004).
     pub depth_factor: Option<f32>,
@@ -69,6 +75,12 @@ pub struct AdaptiveSettings {
     /// scene's (which is how `probekit eval` normalises its error). 0 =
     /// purely local (the original criterion).
     pub relative_floor: f32,
+    /// Noise-aware prediction and pruning: a child point counts as missed
+    /// only by what its miss exceeds `noise_k ×` the standard error of the
+    /// miss (the point's and the interpolated corners' capture errors
+    /// combined, [`Captured::std_error`]), so Monte Carlo noise alone does
+    /// not refine. 0 = compare raw misses (the original criterion).
+    pub noise_k: f32,
 }
 
 /// Counters of a build.
@@ -248,7 +260,11 @@ impl Lattice<'_> {
     }
 
     fn sh(&self, q: [u32; 3]) -> &[Vec3] {
-        self.caps[self.index[&q]].sh.coeffs()
+        self.cap(q).sh.coeffs()
+    }
+
+    fn cap(&self, q: [u32; 3]) -> &Captured {
+        &self.caps[self.index[&q]]
     }
 }
 
@@ -288,46 +304,76 @@ fn child_points(lo: [u32; 3], s: u32) -> Vec<([u32; 3], [f32; 8])> {
 /// Parseval the distance is the L2 norm over the sphere of the irradiance
 /// difference / π and L2 noise counts a quarter) relative to
 /// `max(|DC(prediction)|, floor)`.
+///
+/// With `noise_k > 0` the miss at a point is reduced by `noise_k × σ`, where
+/// `σ² = ν(q) + Σ_c w_c² ν(c)` is the variance of the miss from capture
+/// noise alone (independent captures: the point's own and the parent
+/// corners' weighted by their trilinear weights), `ν = Σ_k band_k² |se_k|²`
+/// the same weighted norm of a capture's standard errors.
 struct MissScale {
     band: Vec<f32>,
     floor: f32,
+    noise_k: f32,
 }
 
 impl MissScale {
-    fn new(order: usize) -> Self {
+    fn new(order: usize, noise_k: f32) -> Self {
         let mut band = Vec::with_capacity(order * order);
         for l in 0..order {
             let w = (probekit_sh::clamped_cosine_band(l) / std::f64::consts::PI) as f32;
             band.extend(std::iter::repeat(w).take(2 * l + 1));
         }
-        Self { band, floor: 0.0 }
+        Self {
+            band,
+            floor: 0.0,
+            noise_k,
+        }
     }
 
-    fn miss(&self, pred: &[Vec3], actual: &[Vec3]) -> f32 {
+    /// Weighted squared norm `ν` of a capture's standard errors (0 if none).
+    fn noise2(&self, c: &Captured) -> f32 {
+        c.std_error.as_ref().map_or(0.0, |se| {
+            se.iter()
+                .zip(&self.band)
+                .map(|(e, w)| (*e * *w).length_squared())
+                .sum()
+        })
+    }
+
+    /// Relative miss, less `noise_k` standard errors (`noise2` = `σ²`).
+    fn miss(&self, pred: &[Vec3], actual: &[Vec3], noise2: f32) -> f32 {
         let d: f32 = pred
             .iter()
             .zip(actual)
             .zip(&self.band)
             .map(|((x, y), w)| ((*x - *y) * *w).length_squared())
             .sum();
-        d.sqrt() / (pred[0].length().max(self.floor) + 1e-4)
+        let excess = (d.sqrt() - self.noise_k * noise2.max(0.0).sqrt()).max(0.0);
+        excess / (pred[0].length().max(self.floor) + 1e-4)
     }
 }
 
-/// Largest relative miss of trilinear prediction from the parent's corners
-/// over the 27 child lattice points (all must be captured).
+/// Largest relative (noise-discounted) miss of trilinear prediction from
+/// the parent's corners over the 27 child lattice points (all must be
+/// captured; the 8 corners themselves miss by 0).
 fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize, scale: &MissScale) -> f32 {
     let cs = corners(lo, s);
+    let corner_noise: [f32; 8] = cs.map(|c| scale.noise2(lat.cap(c)));
     let mut pred = vec![Vec3::ZERO; n];
     let mut worst = 0.0f32;
     for (q, w) in child_points(lo, s) {
         pred.fill(Vec3::ZERO);
-        for (c, wc) in cs.iter().zip(w) {
+        let mut noise2 = scale.noise2(lat.cap(q));
+        for ((c, wc), nc) in cs.iter().zip(w).zip(corner_noise) {
             for (p, v) in pred.iter_mut().zip(lat.sh(*c)) {
                 *p += *v * wc;
             }
+            noise2 += wc * wc * nc;
         }
-        worst = worst.max(scale.miss(&pred, lat.sh(q)));
+        if w.contains(&1.0) {
+            continue; // a parent corner: predicted exactly
+        }
+        worst = worst.max(scale.miss(&pred, lat.sh(q), noise2));
     }
     worst
 }
@@ -363,7 +409,7 @@ pub fn build_adaptive(
     }];
     let mut frontier = vec![0usize];
     let mut depth_cache: HashMap<[u32; 3], f32> = HashMap::new();
-    let mut scale = MissScale::new(src.order());
+    let mut scale = MissScale::new(src.order(), s.noise_k.max(0.0));
     while !frontier.is_empty() {
         let depth = cells[frontier[0]].depth;
         let size = full >> depth;
@@ -395,7 +441,8 @@ pub fn build_adaptive(
             let cmax = lat.pos([c.lo[0] + size, c.lo[1] + size, c.lo[2] + size]);
             let edge = (cmax - cmin).max_element();
             let cs = corners(c.lo, size);
-            let mut yes = depth < s.min_depth || (s.geometry && src.contains_geometry(cmin, cmax));
+            let mut yes = depth < s.min_depth
+                || (s.geometry && depth < s.geometry_depth && src.contains_geometry(cmin, cmax));
             if !yes {
                 if let Some(f) = s.depth_factor {
                     let hm = cs

@@ -26,6 +26,7 @@ impl<F: Fn(Vec3) -> Vec<Vec3> + Sync, G: Fn(Vec3) -> Vec<Vec3> + Sync> VolumeSou
                 sh: ShRgb::from_coeffs((self.f)(*p)).unwrap(),
                 validity: 1.0,
                 virtual_offset: false,
+                std_error: None,
             })
             .collect()
     }
@@ -234,6 +235,8 @@ fn adaptive(
             prediction_tolerance: Some(0.25),
             prune_tolerance: Some(0.1),
             relative_floor: 0.0,
+            geometry_depth: u32::MAX,
+            noise_k: 0.0,
         },
     )
     .unwrap()
@@ -430,6 +433,7 @@ fn file_round_trip_memory_and_errors() {
                     sh: ShRgb::zeros(1),
                     validity: 0.0,
                     virtual_offset: false,
+                    std_error: None,
                 })
                 .collect()
         }
@@ -572,6 +576,7 @@ impl VolumeSource for ConstantWithWall {
                 .unwrap(),
                 validity: 1.0,
                 virtual_offset: false,
+                std_error: None,
             })
             .collect()
     }
@@ -602,6 +607,8 @@ mod props {
                     prediction_tolerance: None,
                     prune_tolerance: None,
                     relative_floor: 0.0,
+                    geometry_depth: u32::MAX,
+                    noise_k: 0.0,
                 },
             )
             .unwrap();
@@ -652,4 +659,102 @@ mod props {
             prop_assert!(dist(&got, &want) < 1e-4 * (1.0 + want[0].abs().max_element()));
         }
     }
+}
+
+/// DC-only field `base(p)` plus a position-hashed noise of half-width
+/// `amp` (uniform, standard deviation `amp/√3`), reported as the capture's
+/// standard error, like a Monte Carlo capture.
+struct NoisySource<F: Fn(Vec3) -> f32 + Sync> {
+    base: F,
+    amp: f32,
+}
+
+impl<F: Fn(Vec3) -> f32 + Sync> VolumeSource for NoisySource<F> {
+    fn order(&self) -> usize {
+        1
+    }
+    fn capture(&self, points: &[Vec3]) -> Vec<Captured> {
+        points
+            .iter()
+            .map(|p| {
+                let mut r = Rng(position_key(*p) | 1);
+                let v = (self.base)(*p) + self.amp * (2.0 * r.next() - 1.0);
+                Captured {
+                    sh: ShRgb::from_coeffs(vec![Vec3::splat(v)]).unwrap(),
+                    validity: 1.0,
+                    virtual_offset: false,
+                    std_error: Some(vec![Vec3::splat(self.amp / 3f32.sqrt())]),
+                }
+            })
+            .collect()
+    }
+}
+
+fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
+    AdaptiveSettings {
+        common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
+        min_depth: 1,
+        max_depth: 4,
+        geometry: false,
+        geometry_depth: 0,
+        depth_factor: None,
+        gradient_threshold: None,
+        prediction_tolerance: Some(0.1),
+        prune_tolerance: None,
+        relative_floor: 0.0,
+        noise_k,
+    }
+}
+
+/// Depth of the leaf containing `p` (boxes from the file's octree).
+fn leaf_depth(file: &crate::format::ProbeFile, p: Vec3) -> u32 {
+    let o = file.octree.as_ref().unwrap();
+    let mut i = 0;
+    loop {
+        let n = o.nodes[i];
+        if n.first_child == crate::format::layout::NONE {
+            return n.depth;
+        }
+        let mid = (n.min + n.max) * 0.5;
+        let k = (p.x >= mid.x) as usize
+            | ((p.y >= mid.y) as usize) << 1
+            | ((p.z >= mid.z) as usize) << 2;
+        i = n.first_child as usize + k;
+    }
+}
+
+/// Noise-aware refinement: on a linear ramp (which trilinear prediction
+/// reproduces exactly) plus capture noise 3× the tolerance, raw misses
+/// refine the octree almost everywhere, misses discounted by 3 standard
+/// errors leave it at `min_depth`; a real step of 5 (50× the tolerance)
+/// is still refined to the finest level where it lies, and not far from it.
+#[test]
+fn noise_aware_refinement_ignores_noise_but_not_a_step() {
+    let ramp = NoisySource {
+        base: |p: Vec3| 1.0 + 0.1 * p.x,
+        amp: 0.3,
+    };
+    let (raw, raw_stats) = build_adaptive(&ramp, &noisy_settings(0.0)).unwrap();
+    let (aware, aware_stats) = build_adaptive(&ramp, &noisy_settings(3.0)).unwrap();
+    assert_eq!(aware_stats.leaves, 8, "noise alone must not refine");
+    assert!(
+        raw_stats.leaves > 400,
+        "raw misses chase noise: {raw_stats:?}"
+    );
+    assert!(leaf_depth(&raw, Vec3::splat(0.4)) >= 3);
+
+    let step = NoisySource {
+        base: |p: Vec3| if p.x < 0.3 { 1.0 } else { 6.0 },
+        amp: 0.3,
+    };
+    let (file, stats) = build_adaptive(&step, &noisy_settings(3.0)).unwrap();
+    assert!(
+        stats.leaves > 8 && stats.leaves < raw_stats.leaves,
+        "{stats:?}"
+    );
+    for y in [0.1, 0.45, 0.8] {
+        assert_eq!(leaf_depth(&file, Vec3::new(0.3, y, 0.6)), 4);
+        assert!(leaf_depth(&file, Vec3::new(0.9, y, 0.6)) <= 2);
+    }
+    let _ = aware;
 }
