@@ -493,12 +493,14 @@ fn draw_error_memory_plot_from_bench_csv() {
     }
     let out = std::env::var("PROBEKIT_VOLBAKE_PNG")
         .unwrap_or_else(|_| "../../docs/bench/img/volume_error_memory.png".into());
+    let title = std::env::var("PROBEKIT_VOLBAKE_TITLE")
+        .unwrap_or_else(|_| "builtin:demo: eval rel. RMSE vs file bytes".into());
     crate::plot::line_chart_log(
         out,
-        "builtin:demo: eval rel. RMSE vs file bytes",
+        &title,
         &series,
         "bytes (inspect --json)",
-        "rel_rmse",
+        &std::env::var("PROBEKIT_VOLBAKE_YLABEL").unwrap_or_else(|_| "rel_rmse".into()),
         true,
         true,
     )
