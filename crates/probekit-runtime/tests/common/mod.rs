@@ -609,6 +609,20 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
         let bytes = g.to_bytes().unwrap();
         patch(&bytes, SectionId::GRID, |s| put_u32(s, 4, 2))
     }, |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 10 } if *id == SectionId::GRID)));
+    let compact = compact_volume_file().to_bytes().unwrap();
+    v.push((
+        "octc_node_count_not_one_plus_eight_per_parent",
+        patch(&compact, SectionId::OCTREE_COMPACT, |s| put_u32(s, 0, 10)),
+        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE_COMPACT),
+    ));
+    v.push((
+        "octc_leaf_corner_without_probe",
+        // Root box max x 1 → 2: the octants' corners leave the probe lattice.
+        patch(&compact, SectionId::OCTREE_COMPACT, |s| {
+            s[28..32].copy_from_slice(&2.0f32.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::InvalidTopology { id, .. } if *id == SectionId::OCTREE_COMPACT),
+    ));
     v.push((
         "metadata_not_utf8",
         patch(&good, SectionId::METADATA, |s| s[16] = 0xFF),
