@@ -758,3 +758,51 @@ fn noise_aware_refinement_ignores_noise_but_not_a_step() {
     }
     let _ = aware;
 }
+
+/// `geometry_depth`: geometry alone refines the slab's cells to the
+/// finest level under the seed's rule, only down to `geometry_depth` when
+/// the field (constant, so the prediction test never fires) gives no reason.
+#[test]
+fn geometry_depth_caps_refinement_by_geometry_alone() {
+    let build = |g: u32| {
+        let (file, _) = build_adaptive(
+            &ConstantWithWall,
+            &AdaptiveSettings {
+                common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
+                min_depth: 1,
+                max_depth: 4,
+                geometry: true,
+                geometry_depth: g,
+                depth_factor: None,
+                gradient_threshold: None,
+                prediction_tolerance: Some(0.1),
+                prune_tolerance: None,
+                relative_floor: 0.0,
+                noise_k: 2.0,
+            },
+        )
+        .unwrap();
+        file
+    };
+    let deepest = |f: &crate::format::ProbeFile| {
+        f.octree
+            .as_ref()
+            .unwrap()
+            .nodes
+            .iter()
+            .map(|n| n.depth)
+            .max()
+            .unwrap()
+    };
+    let seed_rule = build(4);
+    assert_eq!(deepest(&seed_rule), 4);
+    assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.32, 0.5, 0.5)), 4);
+    for g in [1, 2, 3] {
+        let f = build(g);
+        assert_eq!(deepest(&f), g.max(1));
+        assert_eq!(leaf_depth(&f, Vec3::new(0.32, 0.5, 0.5)), g.max(1));
+        assert!(f.positions.len() < seed_rule.positions.len());
+    }
+    // Far from the slab nothing refines beyond min_depth in either case.
+    assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.9, 0.9, 0.9)), 1);
+}
