@@ -76,6 +76,10 @@ pub struct VolumeArgs {
     /// adaptive; 0 = raw misses, the old criterion).
     #[arg(long, default_value_t = 2.0)]
     pub noise_k: f32,
+    /// 2:1-balance the octree (leaves sharing a point differ by at most one
+    /// level) so coarse leaves do not blend into much finer ones (adaptive).
+    #[arg(long)]
+    pub balance: bool,
     /// Subdivide when the cell's edge exceeds this × the harmonic mean of
     /// scene depth at its corners (adaptive; 0, the default, disables: at 1
     /// it refines nearly every cell of an interior, see BENCHMARKS).
@@ -233,6 +237,7 @@ fn build_and_write(
                 relative_floor: a.relative_floor,
                 geometry_depth: a.geometry_depth.unwrap_or(a.max_depth),
                 noise_k: a.noise_k,
+                balance: a.balance,
             },
         )
     } else if a.uniform {

@@ -302,6 +302,7 @@ fn adaptive_baker_build_captures_shared_corners_once_and_is_deterministic() {
         relative_floor: 0.0,
         geometry_depth: u32::MAX,
         noise_k: 0.0,
+        balance: false,
     };
     let (file, stats) = build_adaptive(&rec, &s).unwrap();
     let seen = rec.seen.into_inner().unwrap();
@@ -453,6 +454,7 @@ fn depth_rows_partition_leaves_samples_and_volume() {
         relative_floor: 0.0,
         geometry_depth: u32::MAX,
         noise_k: 0.0,
+        balance: false,
     };
     let (file, stats) = build_adaptive(&src, &s).unwrap();
     let rows = depth_rows(&file);

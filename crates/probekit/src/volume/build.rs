@@ -81,6 +81,12 @@ pub struct AdaptiveSettings {
     /// combined, [`Captured::std_error`]), so Monte Carlo noise alone does
     /// not refine. 0 = compare raw misses (the original criterion).
     pub noise_k: f32,
+    /// After pruning, split leaves until leaves that share a point differ
+    /// by at most one level (2:1 balance). The run-time blend lets a leaf's
+    /// corner kernels reach one leaf size into its neighbours, so a coarse
+    /// leaf next to much finer ones smears its far-away samples over them;
+    /// balance bounds that reach to twice the fine size.
+    pub balance: bool,
 }
 
 /// Counters of a build.
@@ -526,6 +532,9 @@ pub fn build_adaptive(
             }
         }
     }
+    if s.balance {
+        balance_cells(&mut cells, &mut lat, full);
+    }
     // Emit reachable nodes breadth-first; keep only samples used by leaves.
     let mut order = vec![0usize];
     let mut new_first = Vec::new();
@@ -602,6 +611,74 @@ pub fn build_adaptive(
         })
     })?;
     Ok((file, stats))
+}
+
+/// Splits leaves until any two leaves sharing a point (face, edge or
+/// corner neighbours) differ by at most one level; captures new corners.
+fn balance_cells(cells: &mut Vec<Cell>, lat: &mut Lattice, full: u32) {
+    loop {
+        let by_pos: HashMap<(u32, [u32; 3]), usize> = cells
+            .iter()
+            .enumerate()
+            .map(|(i, c)| ((c.depth, c.lo), i))
+            .collect();
+        let is_leaf = |i: usize| cells[i].first_child == NO_CHILD;
+        let mut split = Vec::new();
+        for (i, c) in cells.iter().enumerate() {
+            if !is_leaf(i) {
+                continue;
+            }
+            let size = full >> c.depth;
+            let mut must = false;
+            'nb: for dz in -1i64..=1 {
+                for dy in -1i64..=1 {
+                    for dx in -1i64..=1 {
+                        let q = [dx, dy, dz];
+                        let lo: Option<Vec<u32>> = (0..3)
+                            .map(|a| {
+                                let v = c.lo[a] as i64 + q[a] * size as i64;
+                                (v >= 0 && v < full as i64).then_some(v as u32)
+                            })
+                            .collect();
+                        let Some(lo) = lo else { continue };
+                        let Some(&j) = by_pos.get(&(c.depth, [lo[0], lo[1], lo[2]])) else {
+                            continue;
+                        };
+                        if !is_leaf(j) && (0..8).any(|k| !is_leaf(cells[j].first_child + k)) {
+                            must = true;
+                            break 'nb;
+                        }
+                    }
+                }
+            }
+            if must {
+                split.push(i);
+            }
+        }
+        if split.is_empty() {
+            return;
+        }
+        let mut qs = Vec::new();
+        for &i in &split {
+            let c = cells[i];
+            let h = (full >> c.depth) / 2;
+            cells[i].first_child = cells.len();
+            for k in 0..8u32 {
+                let lo = [
+                    c.lo[0] + h * (k & 1),
+                    c.lo[1] + h * ((k >> 1) & 1),
+                    c.lo[2] + h * ((k >> 2) & 1),
+                ];
+                qs.extend(corners(lo, h));
+                cells.push(Cell {
+                    lo,
+                    depth: c.depth + 1,
+                    first_child: NO_CHILD,
+                });
+            }
+        }
+        lat.ensure(&qs);
+    }
 }
 
 /// Dilation, gradients and file assembly shared by both builders.

@@ -237,6 +237,7 @@ fn adaptive(
             relative_floor: 0.0,
             geometry_depth: u32::MAX,
             noise_k: 0.0,
+            balance: false,
         },
     )
     .unwrap()
@@ -609,6 +610,7 @@ mod props {
                     relative_floor: 0.0,
                     geometry_depth: u32::MAX,
                     noise_k: 0.0,
+                    balance: false,
                 },
             )
             .unwrap();
@@ -703,6 +705,7 @@ fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
         prune_tolerance: None,
         relative_floor: 0.0,
         noise_k,
+        balance: false,
     }
 }
 
@@ -779,6 +782,7 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
                 prune_tolerance: None,
                 relative_floor: 0.0,
                 noise_k: 2.0,
+                balance: false,
             },
         )
         .unwrap();
@@ -805,4 +809,52 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
     }
     // Far from the slab nothing refines beyond min_depth in either case.
     assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.9, 0.9, 0.9)), 1);
+}
+
+/// Largest depth difference between two leaves whose closed boxes touch
+/// (brute force over all pairs).
+fn worst_neighbour_jump(file: &crate::format::ProbeFile) -> u32 {
+    let o = file.octree.as_ref().unwrap();
+    let leaves: Vec<_> = o
+        .nodes
+        .iter()
+        .filter(|n| n.first_child == crate::format::layout::NONE)
+        .collect();
+    let mut worst = 0;
+    for a in &leaves {
+        for b in &leaves {
+            let touch = (0..3).all(|k| a.min[k] <= b.max[k] + 1e-6 && b.min[k] <= a.max[k] + 1e-6);
+            if touch {
+                worst = worst.max(a.depth.abs_diff(b.depth));
+            }
+        }
+    }
+    worst
+}
+
+/// 2:1 balance: on a step that refines to depth 4 next to depth-1
+/// leaves, the balanced octree has no touching leaves two levels apart,
+/// keeps every split of the unbalanced one (more leaves) and still
+/// reproduces the step's side values at the samples.
+#[test]
+fn balance_limits_neighbouring_leaves_to_one_level() {
+    let step = NoisySource {
+        base: |p: Vec3| if p.x < 0.3 { 1.0 } else { 6.0 },
+        amp: 0.0,
+    };
+    let mut s = noisy_settings(2.0);
+    let (plain, plain_stats) = build_adaptive(&step, &s).unwrap();
+    assert!(worst_neighbour_jump(&plain) >= 2);
+    s.balance = true;
+    let (bal, bal_stats) = build_adaptive(&step, &s).unwrap();
+    assert_eq!(worst_neighbour_jump(&bal), 1);
+    assert!(bal_stats.leaves > plain_stats.leaves);
+    for p in [Vec3::new(0.3, 0.5, 0.5), Vec3::new(0.9, 0.1, 0.2)] {
+        assert!(leaf_depth(&bal, p) >= leaf_depth(&plain, p));
+    }
+    let c = bal.coefficients.to_f32().unwrap();
+    for (i, p) in bal.positions.iter().enumerate() {
+        let want = if p.x < 0.3 { 1.0 } else { 6.0 };
+        assert_eq!(c[i], Vec3::splat(want));
+    }
 }
