@@ -30,6 +30,7 @@ fn seeds() -> Vec<Vec<u8>> {
         small.to_bytes().unwrap(),
         rig.to_bytes().unwrap(),
         groups_file().to_bytes().unwrap(),
+        compact_volume_file().to_bytes().unwrap(),
     ]
 }
 

@@ -68,6 +68,9 @@ fn main() {
             prediction_tolerance: Some(tol),
             prune_tolerance: Some(tol * 0.4),
             relative_floor: 0.0,
+            geometry_depth: u32::MAX,
+            noise_k: 0.0,
+            balance: false,
         };
         let (f, _) = build_adaptive(&demo, &st).unwrap();
         rows.push((format!("adaptive {a}..{b} tol {tol}"), f));

@@ -1,5 +1,6 @@
 //! `probekit volume SCENE -o OUT.probes (--uniform (--cell SIZE | --resolution X,Y,Z)
-//! | --adaptive --min-depth A --max-depth B) [--gradients central|analytic]
+//! | --adaptive --min-depth A --max-depth B [--tolerance T] [--noise-k K]
+//! [--geometry-depth G]) [--gradients central|analytic]
 //! [--box MINX,MINY,MINZ,MAXX,MAXY,MAXZ] [--order N] [--samples N] [--bounces B]
 //! [--seed S] [--plot FILE.png] [--json]`.
 //!
@@ -65,6 +66,20 @@ pub struct VolumeArgs {
     /// Subdivide cells that intersect scene geometry (adaptive; `false` to disable).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub geometry: bool,
+    /// Geometry alone splits cells only above this depth; deeper cells
+    /// touching geometry split only on a significant prediction miss
+    /// (adaptive; default: down to --max-depth, the seed's rule).
+    #[arg(long)]
+    pub geometry_depth: Option<u32>,
+    /// A prediction miss counts only by what it exceeds this many standard
+    /// errors of the capture noise (batch means over 256-sample chunks;
+    /// adaptive; 0 = raw misses, the old criterion).
+    #[arg(long, default_value_t = 2.0)]
+    pub noise_k: f32,
+    /// 2:1-balance the octree (leaves sharing a point differ by at most one
+    /// level) so coarse leaves do not blend into much finer ones (adaptive).
+    #[arg(long)]
+    pub balance: bool,
     /// Subdivide when the cell's edge exceeds this × the harmonic mean of
     /// scene depth at its corners (adaptive; 0, the default, disables: at 1
     /// it refines nearly every cell of an interior, see BENCHMARKS).
@@ -220,6 +235,9 @@ fn build_and_write(
                 prediction_tolerance: Some(a.tolerance),
                 prune_tolerance: Some(a.prune),
                 relative_floor: a.relative_floor,
+                geometry_depth: a.geometry_depth.unwrap_or(a.max_depth),
+                noise_k: a.noise_k,
+                balance: a.balance,
             },
         )
     } else if a.uniform {

@@ -10,20 +10,24 @@ pub const MAGIC: [u8; 8] = *b"PROBEKIT";
 /// Major version written and read. A file with a larger major is refused.
 pub const VERSION_MAJOR: u16 = 1;
 /// Newest minor version this reader knows (1.1 added `LGRP`, light
-/// groups). Files with a larger minor load; their unknown sections are
+/// groups; 1.2 added `OCTC`, the compact octree). Files with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 1;
+pub const VERSION_MINOR: u16 = 2;
 
 /// The lowest minor version whose section set includes every id in `ids`:
-/// 1 if `LGRP` ([`SectionId::LIGHT_GROUPS`]) is present, else 0.
+/// 2 if `OCTC` ([`SectionId::OCTREE_COMPACT`]) is present, else 1 if `LGRP`
+/// ([`SectionId::LIGHT_GROUPS`]) is, else 0.
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
-    if ids.into_iter().any(|id| id == SectionId::LIGHT_GROUPS) {
-        1
-    } else {
-        0
-    }
+    ids.into_iter()
+        .map(|id| match id {
+            SectionId::OCTREE_COMPACT => 2,
+            SectionId::LIGHT_GROUPS => 1,
+            _ => 0,
+        })
+        .max()
+        .unwrap_or(0)
 }
 /// Bytes in the fixed file header.
 pub const HEADER_LEN: usize = 48;
@@ -76,6 +80,9 @@ impl SectionId {
     pub const OUTER: Self = Self::from_fourcc(*b"OUTR");
     /// Octree nodes and their sample lists (adaptive volumes).
     pub const OCTREE: Self = Self::from_fourcc(*b"OCTR");
+    /// The same octree compactly: one child bit per node, corners found by
+    /// position (format 1.2; the writer's choice for regular octrees).
+    pub const OCTREE_COMPACT: Self = Self::from_fourcc(*b"OCTC");
     /// Uniform volume grid: box and resolution.
     pub const GRID: Self = Self::from_fourcc(*b"GRID");
     /// Per-probe SH gradients.
@@ -90,13 +97,14 @@ impl SectionId {
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 11] = [
+    pub const KNOWN: [Self; 12] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
         Self::TETRAHEDRA,
         Self::OUTER,
         Self::OCTREE,
+        Self::OCTREE_COMPACT,
         Self::GRID,
         Self::GRADIENTS,
         Self::RIGS,
@@ -124,6 +132,7 @@ impl SectionId {
             Self::TETRAHEDRA => "tetrahedra",
             Self::OUTER => "outer_cells",
             Self::OCTREE => "octree",
+            Self::OCTREE_COMPACT => "octree",
             Self::GRID => "grid",
             Self::GRADIENTS => "gradients",
             Self::RIGS => "rigs",

@@ -22,6 +22,7 @@ mod crc;
 mod error;
 mod groups;
 pub mod layout;
+mod octree_compact;
 mod read;
 mod validate;
 mod write;

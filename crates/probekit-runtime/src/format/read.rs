@@ -393,6 +393,21 @@ fn parse_octree(s: &Sec<'_>) -> Result<Octree, FormatError> {
     })
 }
 
+fn parse_octree_compact(s: &Sec<'_>) -> Result<super::octree_compact::Compact, FormatError> {
+    let [nodes, max_depth, ..] = s.header()?;
+    let bits_len = (nodes as usize).div_ceil(8);
+    let [b, bits] = s.arrays([Some(24), Some(bits_len)])?;
+    let b = pod_vec::<[f32; 6]>(b);
+    let b = b.first().ok_or(s.size_error(48))?;
+    Ok(super::octree_compact::Compact {
+        min: Vec3::new(b[0], b[1], b[2]),
+        max: Vec3::new(b[3], b[4], b[5]),
+        max_depth,
+        nodes,
+        bits: bits.to_vec(),
+    })
+}
+
 fn parse_grid(s: &Sec<'_>) -> Result<VolumeGrid, FormatError> {
     let [rx, ry, rz, _] = s.header()?;
     let [b] = s.arrays([Some(24)])?;
@@ -600,6 +615,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     let kind = ProbeFileKind::from_id(head.kind)?;
     let mut positions = None;
     let mut coefficients = None;
+    let mut compact = None;
     let mut file = ProbeFile::new(kind, Coefficients::empty(1));
     for raw in &sections {
         let s = Sec {
@@ -613,6 +629,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::TETRAHEDRA => file.tetrahedra = Some(parse_tetrahedra(&s)?),
             SectionId::OUTER => file.outer = Some(parse_outer(&s)?),
             SectionId::OCTREE => file.octree = Some(parse_octree(&s)?),
+            SectionId::OCTREE_COMPACT => compact = Some(parse_octree_compact(&s)?),
             SectionId::GRID => file.grid = Some(parse_grid(&s)?),
             SectionId::GRADIENTS => file.gradients = Some(parse_gradients(&s)?),
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
@@ -627,6 +644,16 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     }
     file.positions = positions.ok_or(FormatError::MissingSection(SectionId::POSITIONS))?;
     file.coefficients = coefficients.ok_or(FormatError::MissingSection(SectionId::COEFFICIENTS))?;
+    if let Some(c) = compact {
+        if file.octree.is_some() {
+            return Err(FormatError::InvalidValue {
+                id: SectionId::OCTREE_COMPACT,
+                element: 0,
+                reason: "a file holds OCTR or OCTC, not both",
+            });
+        }
+        file.octree = Some(c.expand(&file.positions)?);
+    }
     file.validate()?;
     Ok(file)
 }

@@ -170,7 +170,17 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::OUTER, s.finish()));
     }
 
-    if let Some(o) = &f.octree {
+    if let Some(c) = f
+        .octree
+        .as_ref()
+        .and_then(|o| super::octree_compact::encode(o, &f.positions))
+    {
+        // Regular octree (every builder-made one): 1 bit per node.
+        let mut s = SectionBuilder::new([c.nodes, c.max_depth, 0, 0]);
+        s.vec3s([&c.min, &c.max]).pad();
+        s.bytes(&c.bits);
+        out.push((SectionId::OCTREE_COMPACT, s.finish()));
+    } else if let Some(o) = &f.octree {
         let mut s = SectionBuilder::new([
             count(o.nodes.len(), "octree nodes")?,
             count(o.samples.len(), "octree samples")?,
@@ -266,7 +276,8 @@ impl ProbeFile {
     /// Serializes the file (after [`ProbeFile::validate`]). Deterministic:
     /// equal contents give equal bytes. The header's minor version is the
     /// lowest that holds the sections present
-    /// ([`layout::minor_for_sections`]): 0 unless the file has light groups.
+    /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
+    /// (1) or a regular octree, written compactly as `OCTC` (2).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;

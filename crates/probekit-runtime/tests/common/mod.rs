@@ -609,6 +609,20 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
         let bytes = g.to_bytes().unwrap();
         patch(&bytes, SectionId::GRID, |s| put_u32(s, 4, 2))
     }, |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 10 } if *id == SectionId::GRID)));
+    let compact = compact_volume_file().to_bytes().unwrap();
+    v.push((
+        "octc_node_count_not_one_plus_eight_per_parent",
+        patch(&compact, SectionId::OCTREE_COMPACT, |s| put_u32(s, 0, 10)),
+        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE_COMPACT),
+    ));
+    v.push((
+        "octc_leaf_corner_without_probe",
+        // Root box max x 1 → 2: the octants' corners leave the probe lattice.
+        patch(&compact, SectionId::OCTREE_COMPACT, |s| {
+            s[28..32].copy_from_slice(&2.0f32.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::InvalidTopology { id, .. } if *id == SectionId::OCTREE_COMPACT),
+    ));
     v.push((
         "metadata_not_utf8",
         patch(&good, SectionId::METADATA, |s| s[16] = 0xFF),
@@ -749,4 +763,48 @@ fn light_group_cases(v: &mut Vec<(&'static str, Vec<u8>, Expect)>) {
         }),
         |e| matches!(e, FormatError::UnknownSection(_)),
     ));
+}
+
+/// An adaptive volume whose octree the writer stores as `OCTC`: a root
+/// over [0, 1]³ split into 8 leaves, corners on the 3×3×3 lattice.
+pub fn compact_volume_file() -> ProbeFile {
+    let mut positions = Vec::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..3 {
+                positions.push(Vec3::new(i as f32, j as f32, k as f32) * 0.5);
+            }
+        }
+    }
+    let mut nodes = vec![OctreeNode {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+        first_child: 1,
+        depth: 0,
+        sample_offset: 0,
+        sample_count: 0,
+    }];
+    let mut samples = Vec::new();
+    for k in 0..8u32 {
+        let o = [k & 1, (k >> 1) & 1, (k >> 2) & 1];
+        let lo = Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32) * 0.5;
+        nodes.push(OctreeNode {
+            min: lo,
+            max: lo + 0.5,
+            first_child: NONE,
+            depth: 1,
+            sample_offset: samples.len() as u32,
+            sample_count: 8,
+        });
+        for c in 0..8u32 {
+            let q = [0, 1, 2].map(|a| o[a] + ((c >> a) & 1));
+            samples.push(q[0] + 3 * (q[1] + 3 * q[2]));
+        }
+    }
+    let coeffs: Vec<Vec3> = (0..27 * 4).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
+    let mut f = ProbeFile::cloud(positions, 2, &coeffs).unwrap();
+    f.kind = ProbeFileKind::Volume;
+    f.octree = Some(Octree { nodes, samples });
+    f.metadata = "{}".into();
+    f
 }

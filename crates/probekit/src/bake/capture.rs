@@ -683,8 +683,15 @@ impl<'s> Baker<'s> {
     }
 
     /// Captures the radiance SH at `x` (no virtual offset), returning the
-    /// per-slot sums (already divided by the sample count, delta lights added).
-    fn capture_at(&self, x: Vec3, probe_index: u64, s: &CaptureSettings) -> (Accum, HitStats) {
+    /// per-slot sums (already divided by the sample count, delta lights
+    /// added) and, with two chunks or more, the standard error of each
+    /// coefficient (all slots summed) from the chunk means.
+    fn capture_at(
+        &self,
+        x: Vec3,
+        probe_index: u64,
+        s: &CaptureSettings,
+    ) -> (Accum, HitStats, Option<Vec<DVec3>>) {
         let slots = 2 * self.emitters.groups.len();
         let rot = SampleRng::new(s.seed, probe_index, STREAM_ROTATION).next_2d();
         let n = s.samples;
@@ -702,6 +709,7 @@ impl<'s> Baker<'s> {
             acc.merge(a);
             st.merge(h);
         }
+        let se = (parts.len() >= 2).then(|| chunk_std_error(&parts, &chunks, ncoef));
         let inv_n = 1.0 / n as f64;
         for c in &mut acc.data {
             *c *= inv_n;
@@ -711,7 +719,7 @@ impl<'s> Baker<'s> {
             eval_basis(s.order, wi, &mut basis);
             acc.add(slot(g, true), &basis[..ncoef], e);
         }
-        (acc, st)
+        (acc, st, se)
     }
 
     /// Captures probe number `probe_index` (its global index in the bake,
@@ -725,6 +733,23 @@ impl<'s> Baker<'s> {
         probe_index: u64,
         s: &CaptureSettings,
     ) -> Result<CaptureResult, BakeError> {
+        self.capture_with_error(point, probe_index, s).map(|r| r.0)
+    }
+
+    /// [`Baker::capture`] plus the Monte Carlo standard error of each
+    /// coefficient of `sh` (RGB, same layout), estimated by batch means
+    /// over the [`CHUNK`]-sample chunks the capture sums anyway (standard
+    /// error of the mean of the chunk means, chunks weighted equally). With
+    /// the R2 sequence each chunk is itself stratified, so this tends to
+    /// overstate the error of the whole capture (a conservative noise
+    /// scale). `None` below two chunks (`samples ≤ CHUNK`). Same results
+    /// for any thread count.
+    pub fn capture_with_error(
+        &self,
+        point: Vec3,
+        probe_index: u64,
+        s: &CaptureSettings,
+    ) -> Result<(CaptureResult, Option<Vec<Vec3>>), BakeError> {
         s.validate()?;
         if !point.is_finite() {
             return Err(BakeError::NonFinitePosition {
@@ -767,12 +792,13 @@ impl<'s> Baker<'s> {
             pos = l.position + d * (l.radius + v.offset_margin.max(0.5 * l.radius));
             pushed = true;
         }
-        let (acc, st) = self.capture_at(pos, probe_index, s);
+        let (acc, st, se) = self.capture_at(pos, probe_index, s);
         let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
         if in_light || self.inside_sphere_light(pos, 0.0).is_some() {
             validity.valid = false;
         }
-        Ok(self.assemble(acc, s, pos, validity))
+        let se = se.map(|e| e.into_iter().map(|v| v.as_vec3()).collect());
+        Ok((self.assemble(acc, s, pos, validity), se))
     }
 
     /// The first sphere light of the scene whose radius plus `margin`
@@ -964,6 +990,29 @@ impl<'s> Baker<'s> {
             samples,
         })
     }
+}
+
+/// Standard error of each coefficient (slots summed) of the mean of the
+/// per-chunk means: `sqrt(Σ (m_c − m̄)² / (k (k − 1)))` per RGB channel.
+fn chunk_std_error(parts: &[(Accum, HitStats)], chunks: &[(u32, u32)], ncoef: usize) -> Vec<DVec3> {
+    let k = parts.len() as f64;
+    let means: Vec<Vec<DVec3>> = parts
+        .iter()
+        .zip(chunks)
+        .map(|((a, _), (lo, hi))| {
+            let inv = 1.0 / (hi - lo).max(1) as f64;
+            (0..ncoef)
+                .map(|c| a.data.chunks_exact(ncoef).map(|row| row[c]).sum::<DVec3>() * inv)
+                .collect()
+        })
+        .collect();
+    (0..ncoef)
+        .map(|c| {
+            let m = means.iter().map(|v| v[c]).sum::<DVec3>() / k;
+            let var = means.iter().map(|v| (v[c] - m) * (v[c] - m)).sum::<DVec3>() / (k - 1.0);
+            (var / k).map(f64::sqrt)
+        })
+        .collect()
 }
 
 /// Mean per sample and its standard error, from per-batch sums of [`CHUNK`]

@@ -141,18 +141,19 @@ impl<'s> BakerSource<'s> {
             .par_iter()
             .zip(keys)
             .map(|(p, k)| {
-                let r = self.baker.capture(*p, *k, &self.settings);
+                let r = self.baker.capture_with_error(*p, *k, &self.settings);
                 let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
                 if let Some(f) = &self.progress {
                     f(done, total);
                 }
                 match r {
-                    Ok(r) if r.validity.offset.length() > self.max_offset => Captured {
+                    Ok((r, se)) if r.validity.offset.length() > self.max_offset => Captured {
                         sh: r.sh,
                         validity: 0.0,
                         virtual_offset: false,
+                        std_error: se,
                     },
-                    Ok(r) => {
+                    Ok((r, se)) => {
                         let v = 1.0 - r.validity.backface_fraction;
                         // Keep the builder's threshold test identical to the baker's.
                         let validity = if r.validity.valid {
@@ -166,6 +167,7 @@ impl<'s> BakerSource<'s> {
                             sh: r.sh,
                             validity,
                             virtual_offset: r.validity.offset_applied,
+                            std_error: se,
                         }
                     }
                     Err(e) => {
@@ -176,6 +178,7 @@ impl<'s> BakerSource<'s> {
                             sh: crate::sh::ShRgb::zeros(self.settings.order),
                             validity: 0.0,
                             virtual_offset: false,
+                            std_error: None,
                         }
                     }
                 }

@@ -300,6 +300,9 @@ fn adaptive_baker_build_captures_shared_corners_once_and_is_deterministic() {
         prediction_tolerance: None,
         prune_tolerance: None,
         relative_floor: 0.0,
+        geometry_depth: u32::MAX,
+        noise_k: 0.0,
+        balance: false,
     };
     let (file, stats) = build_adaptive(&rec, &s).unwrap();
     let seen = rec.seen.into_inner().unwrap();
@@ -449,6 +452,9 @@ fn depth_rows_partition_leaves_samples_and_volume() {
         prediction_tolerance: Some(0.25),
         prune_tolerance: None,
         relative_floor: 0.0,
+        geometry_depth: u32::MAX,
+        noise_k: 0.0,
+        balance: false,
     };
     let (file, stats) = build_adaptive(&src, &s).unwrap();
     let rows = depth_rows(&file);
@@ -489,14 +495,62 @@ fn draw_error_memory_plot_from_bench_csv() {
     }
     let out = std::env::var("PROBEKIT_VOLBAKE_PNG")
         .unwrap_or_else(|_| "../../docs/bench/img/volume_error_memory.png".into());
+    let title = std::env::var("PROBEKIT_VOLBAKE_TITLE")
+        .unwrap_or_else(|_| "builtin:demo: eval rel. RMSE vs file bytes".into());
     crate::plot::line_chart_log(
         out,
-        "builtin:demo: eval rel. RMSE vs file bytes",
+        &title,
         &series,
         "bytes (inspect --json)",
-        "rel_rmse",
+        &std::env::var("PROBEKIT_VOLBAKE_YLABEL").unwrap_or_else(|_| "rel_rmse".into()),
         true,
         true,
     )
     .unwrap();
+}
+
+/// The capture's standard error is the batch-means formula over its
+/// 256-sample chunks, recomputed here from captures of 256, 512, 768 and
+/// 1024 samples (the same random numbers per sample index, so chunk `k`'s
+/// mean is `k·c_k − (k−1)·c_{k−1}`); below two chunks there is none.
+#[test]
+fn capture_std_error_is_batch_means_over_the_chunks() {
+    let sc = scene(
+        box_tris(Vec3::new(0.3, -1.0, -1.0), Vec3::new(1.0, 1.0, 1.0)),
+        Vec3::ONE,
+        Vec::new(),
+    );
+    let baker = crate::bake::Baker::new(&sc).unwrap();
+    let p = Vec3::new(-0.2, 0.1, 0.0);
+    let cap = |n: u32| baker.capture_with_error(p, 5, &settings(n, false)).unwrap();
+    assert!(cap(256).1.is_none());
+    let c: Vec<Vec<Vec3>> = (1..=4)
+        .map(|k| cap(256 * k).0.sh.coeffs().to_vec())
+        .collect();
+    let (_, se) = cap(1024);
+    let se = se.unwrap();
+    assert_eq!(se.len(), 9);
+    for i in 0..9 {
+        let m: Vec<Vec3> = (0..4)
+            .map(|k| {
+                let prev = if k == 0 {
+                    Vec3::ZERO
+                } else {
+                    c[k - 1][i] * k as f32
+                };
+                c[k][i] * (k + 1) as f32 - prev
+            })
+            .collect();
+        let mean = m.iter().copied().sum::<Vec3>() / 4.0;
+        let var = m.iter().map(|x| (*x - mean) * (*x - mean)).sum::<Vec3>() / 3.0;
+        let want = (var / 4.0).powf(0.5);
+        let tol = 1e-3 * c[3][0].length() + 1e-3 * want.length();
+        assert!(
+            (se[i] - want).abs().max_element() <= tol,
+            "{i}: {} vs {want}",
+            se[i]
+        );
+    }
+    // A Monte Carlo capture of a lit scene is noisy, not exact.
+    assert!(se[0].max_element() > 0.0);
 }

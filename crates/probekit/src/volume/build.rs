@@ -49,6 +49,12 @@ pub struct AdaptiveSettings {
     pub max_depth: u32,
     /// Subdivide cells that contain geometry (Greger et al. 1998).
     pub geometry: bool,
+    /// Geometry alone splits only cells shallower than this; deeper cells
+    /// that contain geometry split only if the other heuristics (the
+    /// prediction test) say so. `max_depth` or more = the seed's rule (every
+    /// cell touching a wall down to the finest level, which spends most of
+    /// an interior's samples on walls the light field is smooth across).
+    pub geometry_depth: u32,
     /// Subdivide when the cell's largest edge exceeds `factor ×` the
     /// smallest harmonic mean of scene depth at its corners (Pharr 2004).
     pub depth_factor: Option<f32>,
@@ -69,6 +75,18 @@ pub struct AdaptiveSettings {
     /// scene's (which is how `probekit eval` normalises its error). 0 =
     /// purely local (the original criterion).
     pub relative_floor: f32,
+    /// Noise-aware prediction and pruning: a child point counts as missed
+    /// only by what its miss exceeds `noise_k ×` the standard error of the
+    /// miss (the point's and the interpolated corners' capture errors
+    /// combined, [`Captured::std_error`]), so Monte Carlo noise alone does
+    /// not refine. 0 = compare raw misses (the original criterion).
+    pub noise_k: f32,
+    /// After pruning, split leaves until leaves that share a point differ
+    /// by at most one level (2:1 balance). The run-time blend lets a leaf's
+    /// corner kernels reach one leaf size into its neighbours, so a coarse
+    /// leaf next to much finer ones smears its far-away samples over them;
+    /// balance bounds that reach to twice the fine size.
+    pub balance: bool,
 }
 
 /// Counters of a build.
@@ -248,7 +266,11 @@ impl Lattice<'_> {
     }
 
     fn sh(&self, q: [u32; 3]) -> &[Vec3] {
-        self.caps[self.index[&q]].sh.coeffs()
+        self.cap(q).sh.coeffs()
+    }
+
+    fn cap(&self, q: [u32; 3]) -> &Captured {
+        &self.caps[self.index[&q]]
     }
 }
 
@@ -288,46 +310,76 @@ fn child_points(lo: [u32; 3], s: u32) -> Vec<([u32; 3], [f32; 8])> {
 /// Parseval the distance is the L2 norm over the sphere of the irradiance
 /// difference / π and L2 noise counts a quarter) relative to
 /// `max(|DC(prediction)|, floor)`.
+///
+/// With `noise_k > 0` the miss at a point is reduced by `noise_k × σ`, where
+/// `σ² = ν(q) + Σ_c w_c² ν(c)` is the variance of the miss from capture
+/// noise alone (independent captures: the point's own and the parent
+/// corners' weighted by their trilinear weights), `ν = Σ_k band_k² |se_k|²`
+/// the same weighted norm of a capture's standard errors.
 struct MissScale {
     band: Vec<f32>,
     floor: f32,
+    noise_k: f32,
 }
 
 impl MissScale {
-    fn new(order: usize) -> Self {
+    fn new(order: usize, noise_k: f32) -> Self {
         let mut band = Vec::with_capacity(order * order);
         for l in 0..order {
             let w = (probekit_sh::clamped_cosine_band(l) / std::f64::consts::PI) as f32;
             band.extend(std::iter::repeat(w).take(2 * l + 1));
         }
-        Self { band, floor: 0.0 }
+        Self {
+            band,
+            floor: 0.0,
+            noise_k,
+        }
     }
 
-    fn miss(&self, pred: &[Vec3], actual: &[Vec3]) -> f32 {
+    /// Weighted squared norm `ν` of a capture's standard errors (0 if none).
+    fn noise2(&self, c: &Captured) -> f32 {
+        c.std_error.as_ref().map_or(0.0, |se| {
+            se.iter()
+                .zip(&self.band)
+                .map(|(e, w)| (*e * *w).length_squared())
+                .sum()
+        })
+    }
+
+    /// Relative miss, less `noise_k` standard errors (`noise2` = `σ²`).
+    fn miss(&self, pred: &[Vec3], actual: &[Vec3], noise2: f32) -> f32 {
         let d: f32 = pred
             .iter()
             .zip(actual)
             .zip(&self.band)
             .map(|((x, y), w)| ((*x - *y) * *w).length_squared())
             .sum();
-        d.sqrt() / (pred[0].length().max(self.floor) + 1e-4)
+        let excess = (d.sqrt() - self.noise_k * noise2.max(0.0).sqrt()).max(0.0);
+        excess / (pred[0].length().max(self.floor) + 1e-4)
     }
 }
 
-/// Largest relative miss of trilinear prediction from the parent's corners
-/// over the 27 child lattice points (all must be captured).
+/// Largest relative (noise-discounted) miss of trilinear prediction from
+/// the parent's corners over the 27 child lattice points (all must be
+/// captured; the 8 corners themselves miss by 0).
 fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize, scale: &MissScale) -> f32 {
     let cs = corners(lo, s);
+    let corner_noise: [f32; 8] = cs.map(|c| scale.noise2(lat.cap(c)));
     let mut pred = vec![Vec3::ZERO; n];
     let mut worst = 0.0f32;
     for (q, w) in child_points(lo, s) {
         pred.fill(Vec3::ZERO);
-        for (c, wc) in cs.iter().zip(w) {
+        let mut noise2 = scale.noise2(lat.cap(q));
+        for ((c, wc), nc) in cs.iter().zip(w).zip(corner_noise) {
             for (p, v) in pred.iter_mut().zip(lat.sh(*c)) {
                 *p += *v * wc;
             }
+            noise2 += wc * wc * nc;
         }
-        worst = worst.max(scale.miss(&pred, lat.sh(q)));
+        if w.contains(&1.0) {
+            continue; // a parent corner: predicted exactly
+        }
+        worst = worst.max(scale.miss(&pred, lat.sh(q), noise2));
     }
     worst
 }
@@ -363,7 +415,7 @@ pub fn build_adaptive(
     }];
     let mut frontier = vec![0usize];
     let mut depth_cache: HashMap<[u32; 3], f32> = HashMap::new();
-    let mut scale = MissScale::new(src.order());
+    let mut scale = MissScale::new(src.order(), s.noise_k.max(0.0));
     while !frontier.is_empty() {
         let depth = cells[frontier[0]].depth;
         let size = full >> depth;
@@ -395,7 +447,8 @@ pub fn build_adaptive(
             let cmax = lat.pos([c.lo[0] + size, c.lo[1] + size, c.lo[2] + size]);
             let edge = (cmax - cmin).max_element();
             let cs = corners(c.lo, size);
-            let mut yes = depth < s.min_depth || (s.geometry && src.contains_geometry(cmin, cmax));
+            let mut yes = depth < s.min_depth
+                || (s.geometry && depth < s.geometry_depth && src.contains_geometry(cmin, cmax));
             if !yes {
                 if let Some(f) = s.depth_factor {
                     let hm = cs
@@ -479,6 +532,9 @@ pub fn build_adaptive(
             }
         }
     }
+    if s.balance {
+        balance_cells(&mut cells, &mut lat, full);
+    }
     // Emit reachable nodes breadth-first; keep only samples used by leaves.
     let mut order = vec![0usize];
     let mut new_first = Vec::new();
@@ -555,6 +611,74 @@ pub fn build_adaptive(
         })
     })?;
     Ok((file, stats))
+}
+
+/// Splits leaves until any two leaves sharing a point (face, edge or
+/// corner neighbours) differ by at most one level; captures new corners.
+fn balance_cells(cells: &mut Vec<Cell>, lat: &mut Lattice, full: u32) {
+    loop {
+        let by_pos: HashMap<(u32, [u32; 3]), usize> = cells
+            .iter()
+            .enumerate()
+            .map(|(i, c)| ((c.depth, c.lo), i))
+            .collect();
+        let is_leaf = |i: usize| cells[i].first_child == NO_CHILD;
+        let mut split = Vec::new();
+        for (i, c) in cells.iter().enumerate() {
+            if !is_leaf(i) {
+                continue;
+            }
+            let size = full >> c.depth;
+            let mut must = false;
+            'nb: for dz in -1i64..=1 {
+                for dy in -1i64..=1 {
+                    for dx in -1i64..=1 {
+                        let q = [dx, dy, dz];
+                        let lo: Option<Vec<u32>> = (0..3)
+                            .map(|a| {
+                                let v = c.lo[a] as i64 + q[a] * size as i64;
+                                (v >= 0 && v < full as i64).then_some(v as u32)
+                            })
+                            .collect();
+                        let Some(lo) = lo else { continue };
+                        let Some(&j) = by_pos.get(&(c.depth, [lo[0], lo[1], lo[2]])) else {
+                            continue;
+                        };
+                        if !is_leaf(j) && (0..8).any(|k| !is_leaf(cells[j].first_child + k)) {
+                            must = true;
+                            break 'nb;
+                        }
+                    }
+                }
+            }
+            if must {
+                split.push(i);
+            }
+        }
+        if split.is_empty() {
+            return;
+        }
+        let mut qs = Vec::new();
+        for &i in &split {
+            let c = cells[i];
+            let h = (full >> c.depth) / 2;
+            cells[i].first_child = cells.len();
+            for k in 0..8u32 {
+                let lo = [
+                    c.lo[0] + h * (k & 1),
+                    c.lo[1] + h * ((k >> 1) & 1),
+                    c.lo[2] + h * ((k >> 2) & 1),
+                ];
+                qs.extend(corners(lo, h));
+                cells.push(Cell {
+                    lo,
+                    depth: c.depth + 1,
+                    first_child: NO_CHILD,
+                });
+            }
+        }
+        lat.ensure(&qs);
+    }
 }
 
 /// Dilation, gradients and file assembly shared by both builders.

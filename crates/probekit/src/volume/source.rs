@@ -19,6 +19,11 @@ pub struct Captured {
     /// sample at the requested point (grid/octree corner) and flags it
     /// `VALIDITY_VIRTUAL_OFFSET`.
     pub virtual_offset: bool,
+    /// Monte Carlo standard error of each coefficient of `sh` (RGB, same
+    /// layout), if the source knows it (`None`: exact, or unknown). The
+    /// adaptive builder refines only where a prediction miss exceeds the
+    /// tolerance by more than `noise_k` of these (combined).
+    pub std_error: Option<Vec<Vec3>>,
 }
 
 /// A scene the volume builder can sample. Calls are batched so that an
@@ -226,6 +231,7 @@ impl VolumeSource for LightsDemo {
                     sh: ShRgb::from_coeffs(v).expect("square length"),
                     validity: if self.inside_slab(p) { 0.0 } else { 1.0 },
                     virtual_offset: false,
+                    std_error: None,
                 }
             })
             .collect()

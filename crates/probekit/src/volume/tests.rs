@@ -26,6 +26,7 @@ impl<F: Fn(Vec3) -> Vec<Vec3> + Sync, G: Fn(Vec3) -> Vec<Vec3> + Sync> VolumeSou
                 sh: ShRgb::from_coeffs((self.f)(*p)).unwrap(),
                 validity: 1.0,
                 virtual_offset: false,
+                std_error: None,
             })
             .collect()
     }
@@ -234,6 +235,9 @@ fn adaptive(
             prediction_tolerance: Some(0.25),
             prune_tolerance: Some(0.1),
             relative_floor: 0.0,
+            geometry_depth: u32::MAX,
+            noise_k: 0.0,
+            balance: false,
         },
     )
     .unwrap()
@@ -430,6 +434,7 @@ fn file_round_trip_memory_and_errors() {
                     sh: ShRgb::zeros(1),
                     validity: 0.0,
                     virtual_offset: false,
+                    std_error: None,
                 })
                 .collect()
         }
@@ -572,6 +577,7 @@ impl VolumeSource for ConstantWithWall {
                 .unwrap(),
                 validity: 1.0,
                 virtual_offset: false,
+                std_error: None,
             })
             .collect()
     }
@@ -602,6 +608,9 @@ mod props {
                     prediction_tolerance: None,
                     prune_tolerance: None,
                     relative_floor: 0.0,
+                    geometry_depth: u32::MAX,
+                    noise_k: 0.0,
+                    balance: false,
                 },
             )
             .unwrap();
@@ -686,6 +695,7 @@ fn brick_atlas_reproduces_the_octree_query() {
                     .unwrap(),
                     validity: 1.0,
                     virtual_offset: false,
+                    std_error: None,
                 })
                 .collect()
         }
@@ -705,6 +715,9 @@ fn brick_atlas_reproduces_the_octree_query() {
             prediction_tolerance: None,
             prune_tolerance: None,
             relative_floor: 0.0,
+            geometry_depth: u32::MAX,
+            noise_k: 0.0,
+            balance: false,
         },
     )
     .unwrap();
@@ -801,4 +814,200 @@ fn brick_atlas_reproduces_the_octree_query() {
     let auto = |v: &Volume| export_auto(v, Ktx2Encoding::F16).unwrap().sidecar["format"].clone();
     assert_eq!(auto(&v), "probekit-volume-bricks");
     assert_eq!(auto(&u), "probekit-volume-ktx2");
+}
+
+/// DC-only field `base(p)` plus a position-hashed noise of half-width
+/// `amp` (uniform, standard deviation `amp/√3`), reported as the capture's
+/// standard error, like a Monte Carlo capture.
+struct NoisySource<F: Fn(Vec3) -> f32 + Sync> {
+    base: F,
+    amp: f32,
+}
+
+impl<F: Fn(Vec3) -> f32 + Sync> VolumeSource for NoisySource<F> {
+    fn order(&self) -> usize {
+        1
+    }
+    fn capture(&self, points: &[Vec3]) -> Vec<Captured> {
+        points
+            .iter()
+            .map(|p| {
+                let mut r = Rng(position_key(*p) | 1);
+                let v = (self.base)(*p) + self.amp * (2.0 * r.next() - 1.0);
+                Captured {
+                    sh: ShRgb::from_coeffs(vec![Vec3::splat(v)]).unwrap(),
+                    validity: 1.0,
+                    virtual_offset: false,
+                    std_error: Some(vec![Vec3::splat(self.amp / 3f32.sqrt())]),
+                }
+            })
+            .collect()
+    }
+}
+
+fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
+    AdaptiveSettings {
+        common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
+        min_depth: 1,
+        max_depth: 4,
+        geometry: false,
+        geometry_depth: 0,
+        depth_factor: None,
+        gradient_threshold: None,
+        prediction_tolerance: Some(0.1),
+        prune_tolerance: None,
+        relative_floor: 0.0,
+        noise_k,
+        balance: false,
+    }
+}
+
+/// Depth of the leaf containing `p` (boxes from the file's octree).
+fn leaf_depth(file: &crate::format::ProbeFile, p: Vec3) -> u32 {
+    let o = file.octree.as_ref().unwrap();
+    let mut i = 0;
+    loop {
+        let n = o.nodes[i];
+        if n.first_child == crate::format::layout::NONE {
+            return n.depth;
+        }
+        let mid = (n.min + n.max) * 0.5;
+        let k = (p.x >= mid.x) as usize
+            | ((p.y >= mid.y) as usize) << 1
+            | ((p.z >= mid.z) as usize) << 2;
+        i = n.first_child as usize + k;
+    }
+}
+
+/// Noise-aware refinement: on a linear ramp (which trilinear prediction
+/// reproduces exactly) plus capture noise 3× the tolerance, raw misses
+/// refine the octree almost everywhere, misses discounted by 3 standard
+/// errors leave it at `min_depth`; a real step of 5 (50× the tolerance)
+/// is still refined to the finest level where it lies, and not far from it.
+#[test]
+fn noise_aware_refinement_ignores_noise_but_not_a_step() {
+    let ramp = NoisySource {
+        base: |p: Vec3| 1.0 + 0.1 * p.x,
+        amp: 0.3,
+    };
+    let (raw, raw_stats) = build_adaptive(&ramp, &noisy_settings(0.0)).unwrap();
+    let (aware, aware_stats) = build_adaptive(&ramp, &noisy_settings(3.0)).unwrap();
+    assert_eq!(aware_stats.leaves, 8, "noise alone must not refine");
+    assert!(
+        raw_stats.leaves > 400,
+        "raw misses chase noise: {raw_stats:?}"
+    );
+    assert!(leaf_depth(&raw, Vec3::splat(0.4)) >= 3);
+
+    let step = NoisySource {
+        base: |p: Vec3| if p.x < 0.3 { 1.0 } else { 6.0 },
+        amp: 0.3,
+    };
+    let (file, stats) = build_adaptive(&step, &noisy_settings(3.0)).unwrap();
+    assert!(
+        stats.leaves > 8 && stats.leaves < raw_stats.leaves,
+        "{stats:?}"
+    );
+    for y in [0.1, 0.45, 0.8] {
+        assert_eq!(leaf_depth(&file, Vec3::new(0.3, y, 0.6)), 4);
+        assert!(leaf_depth(&file, Vec3::new(0.9, y, 0.6)) <= 2);
+    }
+    let _ = aware;
+}
+
+/// `geometry_depth`: geometry alone refines the slab's cells to the
+/// finest level under the seed's rule, only down to `geometry_depth` when
+/// the field (constant, so the prediction test never fires) gives no reason.
+#[test]
+fn geometry_depth_caps_refinement_by_geometry_alone() {
+    let build = |g: u32| {
+        let (file, _) = build_adaptive(
+            &ConstantWithWall,
+            &AdaptiveSettings {
+                common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
+                min_depth: 1,
+                max_depth: 4,
+                geometry: true,
+                geometry_depth: g,
+                depth_factor: None,
+                gradient_threshold: None,
+                prediction_tolerance: Some(0.1),
+                prune_tolerance: None,
+                relative_floor: 0.0,
+                noise_k: 2.0,
+                balance: false,
+            },
+        )
+        .unwrap();
+        file
+    };
+    let deepest = |f: &crate::format::ProbeFile| {
+        f.octree
+            .as_ref()
+            .unwrap()
+            .nodes
+            .iter()
+            .map(|n| n.depth)
+            .max()
+            .unwrap()
+    };
+    let seed_rule = build(4);
+    assert_eq!(deepest(&seed_rule), 4);
+    assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.32, 0.5, 0.5)), 4);
+    for g in [1, 2, 3] {
+        let f = build(g);
+        assert_eq!(deepest(&f), g.max(1));
+        assert_eq!(leaf_depth(&f, Vec3::new(0.32, 0.5, 0.5)), g.max(1));
+        assert!(f.positions.len() < seed_rule.positions.len());
+    }
+    // Far from the slab nothing refines beyond min_depth in either case.
+    assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.9, 0.9, 0.9)), 1);
+}
+
+/// Largest depth difference between two leaves whose closed boxes touch
+/// (brute force over all pairs).
+fn worst_neighbour_jump(file: &crate::format::ProbeFile) -> u32 {
+    let o = file.octree.as_ref().unwrap();
+    let leaves: Vec<_> = o
+        .nodes
+        .iter()
+        .filter(|n| n.first_child == crate::format::layout::NONE)
+        .collect();
+    let mut worst = 0;
+    for a in &leaves {
+        for b in &leaves {
+            let touch = (0..3).all(|k| a.min[k] <= b.max[k] + 1e-6 && b.min[k] <= a.max[k] + 1e-6);
+            if touch {
+                worst = worst.max(a.depth.abs_diff(b.depth));
+            }
+        }
+    }
+    worst
+}
+
+/// 2:1 balance: on a step that refines to depth 4 next to depth-1
+/// leaves, the balanced octree has no touching leaves two levels apart,
+/// keeps every split of the unbalanced one (more leaves) and still
+/// reproduces the step's side values at the samples.
+#[test]
+fn balance_limits_neighbouring_leaves_to_one_level() {
+    let step = NoisySource {
+        base: |p: Vec3| if p.x < 0.3 { 1.0 } else { 6.0 },
+        amp: 0.0,
+    };
+    let mut s = noisy_settings(2.0);
+    let (plain, plain_stats) = build_adaptive(&step, &s).unwrap();
+    assert!(worst_neighbour_jump(&plain) >= 2);
+    s.balance = true;
+    let (bal, bal_stats) = build_adaptive(&step, &s).unwrap();
+    assert_eq!(worst_neighbour_jump(&bal), 1);
+    assert!(bal_stats.leaves > plain_stats.leaves);
+    for p in [Vec3::new(0.3, 0.5, 0.5), Vec3::new(0.9, 0.1, 0.2)] {
+        assert!(leaf_depth(&bal, p) >= leaf_depth(&plain, p));
+    }
+    let c = bal.coefficients.to_f32().unwrap();
+    for (i, p) in bal.positions.iter().enumerate() {
+        let want = if p.x < 0.3 { 1.0 } else { 6.0 };
+        assert_eq!(c[i], Vec3::splat(want));
+    }
 }

@@ -1,0 +1,192 @@
+//! The compact octree section `OCTC` (format 1.2): an adaptive volume's
+//! octree as one bit per node, its corners found by position.
+//!
+//! The explicit `OCTR` section spends 40 bytes per node plus 8 `u32` corner
+//! indices per leaf (~72 bytes per leaf, a third of an adaptive volume file).
+//! The octrees the builder writes are regular: breadth-first node order with
+//! the 8 children of a node consecutive, every node box an octant of its
+//! parent on a lattice of `2^max_depth` cells per axis over the root box,
+//! leaves listing exactly their 8 corner samples, and each corner sample at
+//! the lattice position `min + q·step` (`step = (max − min) / 2^max_depth`,
+//! computed in `f32` exactly as here). Such a tree is fully described by the
+//! root box, `max_depth` and one "has children" bit per node; the reader
+//! rebuilds the boxes and finds each leaf corner by its position's bits among
+//! the probe positions. The writer uses `OCTC` only when decoding its
+//! encoding gives back the very same [`Octree`] (else it writes `OCTR`), so
+//! the choice never changes what a reader sees.
+//!
+//! Layout (`docs/file-format.md`, *`OCTC`*): header `w0` node count `N`,
+//! `w1` max depth `D ≤ 20`; arrays: `f32[6]` root min and max; `ceil(N/8)`
+//! bytes of child bits, bit `i % 8` of byte `i / 8` set when node `i` has
+//! children.
+
+use super::error::FormatError;
+use super::layout::{SectionId, NONE};
+use super::{Octree, OctreeNode};
+use crate::prelude::*;
+use alloc::collections::BTreeMap;
+use glam::Vec3;
+
+/// Deepest level `OCTC` accepts (lattice coordinates stay below `2^20`).
+pub const MAX_DEPTH: u32 = 20;
+
+/// A decoded-but-not-expanded `OCTC` section.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Compact {
+    /// Root box minimum.
+    pub min: Vec3,
+    /// Root box maximum.
+    pub max: Vec3,
+    /// Deepest level of the lattice.
+    pub max_depth: u32,
+    /// Node count.
+    pub nodes: u32,
+    /// Child bits, LSB first.
+    pub bits: Vec<u8>,
+}
+
+fn invalid(element: usize, reason: &'static str) -> FormatError {
+    FormatError::InvalidValue {
+        id: SectionId::OCTREE_COMPACT,
+        element: element as u64,
+        reason,
+    }
+}
+
+fn topology(element: usize, reason: &'static str) -> FormatError {
+    FormatError::InvalidTopology {
+        id: SectionId::OCTREE_COMPACT,
+        element: element as u64,
+        reason,
+    }
+}
+
+/// Lattice position `min + q·step`, the builder's formula.
+fn lattice_pos(min: Vec3, step: Vec3, q: [u32; 3]) -> Vec3 {
+    min + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * step
+}
+
+fn key(p: Vec3) -> [u32; 3] {
+    // +0.0 folds −0.0 into +0.0.
+    p.to_array().map(|v| (v + 0.0).to_bits())
+}
+
+impl Compact {
+    /// Expands to the explicit octree, finding leaf corners among
+    /// `positions` (the first probe with the corner's exact bits). Typed
+    /// errors for every inconsistency; work is `O(N + P log P)`.
+    pub fn expand(&self, positions: &[Vec3]) -> Result<Octree, FormatError> {
+        let n = self.nodes as usize;
+        if n == 0 {
+            return Err(invalid(0, "octree without a root node"));
+        }
+        if self.max_depth > MAX_DEPTH {
+            return Err(invalid(0, "compact octree deeper than 20 levels"));
+        }
+        if !(self.min.is_finite() && self.max.is_finite())
+            || (0..3).any(|a| self.max[a] < self.min[a])
+        {
+            return Err(invalid(0, "box is not finite with min <= max"));
+        }
+        let bit = |i: usize| (self.bits[i / 8] >> (i % 8)) & 1 == 1;
+        let parents = (0..n).filter(|&i| bit(i)).count();
+        if parents.checked_mul(8).and_then(|c| c.checked_add(1)) != Some(n) {
+            return Err(invalid(0, "node count is not 1 + 8 × nodes with children"));
+        }
+        if (n..self.bits.len() * 8).any(bit) {
+            return Err(invalid(n, "child bit set past the last node"));
+        }
+        let full = 1u32 << self.max_depth;
+        let step = (self.max - self.min) / full as f32;
+        let mut index: BTreeMap<[u32; 3], u32> = BTreeMap::new();
+        for (i, p) in positions.iter().enumerate().rev() {
+            index.insert(key(*p), i as u32);
+        }
+        // Lattice corner and depth of each node, filled as parents are met.
+        let mut lo = vec![[0u32; 3]; n];
+        let mut depth = vec![0u32; n];
+        let mut nodes = Vec::with_capacity(n);
+        let mut samples = Vec::new();
+        let mut next = 1usize;
+        for i in 0..n {
+            if i > 0 && i >= next {
+                // No earlier node claimed it: children must follow parents.
+                return Err(topology(i, "octree node unreachable from the root"));
+            }
+            let size = full >> depth[i];
+            let hi = lo[i].map(|v| v + size);
+            let mut node = OctreeNode {
+                min: lattice_pos(self.min, step, lo[i]),
+                max: lattice_pos(self.min, step, hi),
+                first_child: NONE,
+                depth: depth[i],
+                sample_offset: 0,
+                sample_count: 0,
+            };
+            if bit(i) {
+                if depth[i] >= self.max_depth {
+                    return Err(topology(i, "octree node below max depth"));
+                }
+                node.first_child = next as u32;
+                let h = size / 2;
+                for k in 0..8u32 {
+                    let c = next + k as usize;
+                    lo[c] = [
+                        lo[i][0] + h * (k & 1),
+                        lo[i][1] + h * ((k >> 1) & 1),
+                        lo[i][2] + h * ((k >> 2) & 1),
+                    ];
+                    depth[c] = depth[i] + 1;
+                }
+                next += 8;
+            } else {
+                node.sample_offset = samples.len() as u32;
+                node.sample_count = 8;
+                for k in 0..8u32 {
+                    let q = [
+                        lo[i][0] + size * (k & 1),
+                        lo[i][1] + size * ((k >> 1) & 1),
+                        lo[i][2] + size * ((k >> 2) & 1),
+                    ];
+                    let p = lattice_pos(self.min, step, q);
+                    let s = index
+                        .get(&key(p))
+                        .ok_or(topology(i, "no probe at an octree leaf corner"))?;
+                    samples.push(*s);
+                }
+            }
+            nodes.push(node);
+        }
+        Ok(Octree { nodes, samples })
+    }
+}
+
+/// The compact encoding of `o`, if it has one that expands back to exactly
+/// `o` with these `positions` (see the module docs); `None` otherwise.
+pub(crate) fn encode(o: &Octree, positions: &[Vec3]) -> Option<Compact> {
+    let root = o.nodes.first()?;
+    if root.depth != 0 || u32::try_from(o.nodes.len()).is_err() {
+        return None;
+    }
+    let max_depth = o.nodes.iter().map(|n| n.depth).max()?;
+    if max_depth > MAX_DEPTH {
+        return None;
+    }
+    let mut bits = vec![0u8; o.nodes.len().div_ceil(8)];
+    for (i, n) in o.nodes.iter().enumerate() {
+        if n.first_child != NONE {
+            bits[i / 8] |= 1 << (i % 8);
+        }
+    }
+    let c = Compact {
+        min: root.min,
+        max: root.max,
+        max_depth,
+        nodes: o.nodes.len() as u32,
+        bits,
+    };
+    match c.expand(positions) {
+        Ok(back) if back == *o => Some(c),
+        _ => None,
+    }
+}

@@ -1,0 +1,324 @@
+//! The compact octree section `OCTC` (format 1.2): round trip of a regular
+//! octree, a section assembled byte by byte from `docs/file-format.md`
+//! decoded and compared with boxes and corners computed independently (by
+//! halving), the fallback to `OCTR` for irregular trees, and typed errors
+//! for hostile sections.
+
+mod common;
+
+use common::*;
+use glam::Vec3;
+use probekit_runtime::format::layout::{self, header, NONE};
+use probekit_runtime::format::*;
+
+fn minor_of(bytes: &[u8]) -> u16 {
+    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
+}
+
+/// Box [0, 2]³ split once, child 0 split again (max depth 2): 17 nodes,
+/// 15 leaves. Positions are the 27 + 19 distinct lattice corners at spacing
+/// 0.5 (exact in f32, so halving gives the same bits as the lattice
+/// formula), listed in a scrambled order with one unused probe.
+fn regular_volume() -> ProbeFile {
+    let mut nodes = vec![OctreeNode {
+        min: Vec3::ZERO,
+        max: Vec3::splat(2.0),
+        first_child: 1,
+        depth: 0,
+        sample_offset: 0,
+        sample_count: 0,
+    }];
+    let octant = |min: Vec3, max: Vec3, k: u32| {
+        let h = (max - min) * 0.5;
+        let lo = min + h * Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32);
+        (lo, lo + h)
+    };
+    for k in 0..8 {
+        let (lo, hi) = octant(Vec3::ZERO, Vec3::splat(2.0), k);
+        nodes.push(OctreeNode {
+            min: lo,
+            max: hi,
+            first_child: if k == 0 { 9 } else { NONE },
+            depth: 1,
+            sample_offset: 0,
+            sample_count: 0,
+        });
+    }
+    for k in 0..8 {
+        let (lo, hi) = octant(Vec3::ZERO, Vec3::ONE, k);
+        nodes.push(OctreeNode {
+            min: lo,
+            max: hi,
+            first_child: NONE,
+            depth: 2,
+            sample_offset: 0,
+            sample_count: 0,
+        });
+    }
+    // Corner lists in node order; positions deduplicated, then reversed.
+    let mut positions: Vec<Vec3> = Vec::new();
+    let mut lists = Vec::new();
+    for n in &mut nodes {
+        if n.first_child != NONE {
+            continue;
+        }
+        n.sample_offset = lists.len() as u32;
+        n.sample_count = 8;
+        for k in 0..8u32 {
+            let p = Vec3::new(
+                if k & 1 == 1 { n.max.x } else { n.min.x },
+                if k & 2 == 2 { n.max.y } else { n.min.y },
+                if k & 4 == 4 { n.max.z } else { n.min.z },
+            );
+            let i = positions.iter().position(|q| *q == p).unwrap_or_else(|| {
+                positions.push(p);
+                positions.len() - 1
+            });
+            lists.push(i);
+        }
+    }
+    let count = positions.len();
+    positions.reverse();
+    positions.push(Vec3::splat(7.0)); // not a corner
+    let samples = lists.iter().map(|&i| (count - 1 - i) as u32).collect();
+    let coeffs: Vec<Vec3> = (0..positions.len())
+        .map(|i| Vec3::splat(i as f32))
+        .collect();
+    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
+    f.kind = ProbeFileKind::Volume;
+    f.octree = Some(Octree { nodes, samples });
+    f
+}
+
+fn section_ids(bytes: &[u8]) -> Vec<SectionId> {
+    read_sections(bytes)
+        .unwrap()
+        .1
+        .iter()
+        .map(|s| s.id)
+        .collect()
+}
+
+#[test]
+fn regular_octree_round_trips_compactly() {
+    let f = regular_volume();
+    assert_eq!(f.positions.len(), 47);
+    let bytes = f.to_bytes().unwrap();
+    let ids = section_ids(&bytes);
+    assert!(ids.contains(&SectionId::OCTREE_COMPACT));
+    assert!(!ids.contains(&SectionId::OCTREE));
+    assert_eq!(minor_of(&bytes), 2);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    // 16 header + 32 box + 16 bits (17 nodes → 3 bytes, padded).
+    let (_, len) = find_section(&bytes, SectionId::OCTREE_COMPACT);
+    assert_eq!(len, 64);
+    assert_eq!(f.bytes_by_section().unwrap()["octree"], 64);
+    // The explicit encoding of the same tree: 17 × 40 + 120 × 4 bytes.
+    let explicit = 16 + 17 * 40 + 120 * 4;
+    assert!(len * 10 < explicit);
+}
+
+#[test]
+fn fuzz_seed_volume_is_written_compactly() {
+    let f = compact_volume_file();
+    let bytes = f.to_bytes().unwrap();
+    assert!(section_ids(&bytes).contains(&SectionId::OCTREE_COMPACT));
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+}
+
+#[test]
+fn irregular_octree_falls_back_to_octr() {
+    // A leaf listing a 9th sample, or a corner moved off the lattice.
+    let mut f = regular_volume();
+    let o = f.octree.as_mut().unwrap();
+    o.nodes[2].sample_count = 9;
+    let bytes = f.to_bytes().unwrap();
+    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
+    assert_eq!(minor_of(&bytes), 0);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+
+    let mut g = regular_volume();
+    let moved = g.octree.as_ref().unwrap().samples[0] as usize;
+    g.positions[moved].x += 1e-3;
+    let bytes = g.to_bytes().unwrap();
+    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), g);
+}
+
+/// An `OCTC` section written from the documented layout, without the
+/// writer: header (N, D, 0, 0), f32[6] box padded to 32, child bits.
+fn octc_bytes(nodes: u32, depth: u32, min: Vec3, max: Vec3, bits: &[u8]) -> Vec<u8> {
+    let mut s = Vec::new();
+    for w in [nodes, depth, 0, 0] {
+        s.extend_from_slice(&w.to_le_bytes());
+    }
+    for v in min.to_array().into_iter().chain(max.to_array()) {
+        s.extend_from_slice(&v.to_le_bytes());
+    }
+    s.resize(48, 0);
+    s.extend_from_slice(bits);
+    s.resize(48 + bits.len().div_ceil(16) * 16, 0);
+    s
+}
+
+/// A volume file of the given positions whose octree section is `octc`.
+fn file_with(positions: Vec<Vec3>, extra: Vec<(SectionId, Vec<u8>)>) -> Vec<u8> {
+    let coeffs: Vec<Vec3> = vec![Vec3::ONE; positions.len()];
+    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
+    f.kind = ProbeFileKind::Volume;
+    f.grid = Some(VolumeGrid {
+        min: Vec3::ZERO,
+        max: Vec3::ONE,
+        resolution: [f.positions.len() as u32, 1, 1],
+    });
+    let bytes = f.to_bytes().unwrap();
+    let (_, sections) = read_sections(&bytes).unwrap();
+    let mut owned: Vec<(SectionId, Vec<u8>)> = sections
+        .iter()
+        .filter(|s| s.id != SectionId::GRID)
+        .map(|s| (s.id, s.bytes.to_vec()))
+        .collect();
+    let meta = owned.pop().unwrap();
+    owned.extend(extra);
+    owned.push(meta);
+    let minor = layout::minor_for_sections(owned.iter().map(|(id, _)| *id));
+    assemble_file(ProbeFileKind::Volume.id(), minor, 0, &owned)
+}
+
+/// The 27 points of a 3×3×3 lattice over [-1, 3] × [0, 1] × [2, 6], z-major.
+fn lattice27() -> Vec<Vec3> {
+    let (min, max) = (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 6.0));
+    let mut p = Vec::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..3 {
+                p.push(min + (max - min) * Vec3::new(i as f32, j as f32, k as f32) * 0.5);
+            }
+        }
+    }
+    p
+}
+
+#[test]
+fn documented_bytes_decode_to_root_and_eight_octants() {
+    let (min, max) = (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 6.0));
+    let positions = lattice27();
+    let bytes = file_with(
+        positions.clone(),
+        vec![(
+            SectionId::OCTREE_COMPACT,
+            octc_bytes(9, 1, min, max, &[0b0000_0001, 0]),
+        )],
+    );
+    assert_eq!(&SectionId::OCTREE_COMPACT.fourcc(), b"OCTC");
+    let f = ProbeFile::from_bytes(&bytes).unwrap();
+    let o = f.octree.as_ref().unwrap();
+    assert_eq!(o.nodes.len(), 9);
+    assert_eq!(o.nodes[0].first_child, 1);
+    assert_eq!((o.nodes[0].min, o.nodes[0].max), (min, max));
+    let mid = (min + max) * 0.5;
+    for k in 0..8usize {
+        let n = &o.nodes[1 + k];
+        assert_eq!((n.first_child, n.depth, n.sample_count), (NONE, 1, 8));
+        let pick = |bit: usize, a: f32, b: f32| if k & bit != 0 { b } else { a };
+        let lo = Vec3::new(
+            pick(1, min.x, mid.x),
+            pick(2, min.y, mid.y),
+            pick(4, min.z, mid.z),
+        );
+        let hi = Vec3::new(
+            pick(1, mid.x, max.x),
+            pick(2, mid.y, max.y),
+            pick(4, mid.z, max.z),
+        );
+        assert_eq!((n.min, n.max), (lo, hi));
+        // Corner c of octant k is lattice point (k bits + c bits) per axis.
+        for c in 0..8usize {
+            let s = o.samples[n.sample_offset as usize + c] as usize;
+            let ijk = [1, 2, 4].map(|b| (k & b != 0) as usize + (c & b != 0) as usize);
+            assert_eq!(s, ijk[0] + 3 * (ijk[1] + 3 * ijk[2]));
+        }
+    }
+}
+
+#[test]
+fn hostile_compact_sections_give_typed_errors() {
+    let (min, max) = (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 1.0, 6.0));
+    let ok = |bits: &[u8], n: u32, d: u32| {
+        file_with(
+            lattice27(),
+            vec![(SectionId::OCTREE_COMPACT, octc_bytes(n, d, min, max, bits))],
+        )
+    };
+    let err = |b: Vec<u8>| ProbeFile::from_bytes(&b).unwrap_err();
+    let compact = SectionId::OCTREE_COMPACT;
+    // 10 nodes with one parent.
+    let e = err(ok(&[1, 0], 10, 1));
+    assert!(
+        matches!(e, FormatError::InvalidValue { id, .. } if id == compact),
+        "{e:?}"
+    );
+    // A child bit on a node at the maximum depth.
+    let e = err(ok(&[0b11, 0, 0], 17, 1));
+    assert!(
+        matches!(e, FormatError::InvalidTopology { id, .. } if id == compact),
+        "{e:?}"
+    );
+    // Root a leaf, node 1 a parent: node 1 is unreachable.
+    let e = err(ok(&[0b10, 0], 9, 1));
+    assert!(
+        matches!(e, FormatError::InvalidTopology { id, element: 1, .. } if id == compact),
+        "{e:?}"
+    );
+    // A lattice corner without a probe.
+    let mut missing = lattice27();
+    missing.remove(13);
+    let e = err(file_with(
+        missing,
+        vec![(compact, octc_bytes(9, 1, min, max, &[1, 0]))],
+    ));
+    assert!(
+        matches!(e, FormatError::InvalidTopology { id, .. } if id == compact),
+        "{e:?}"
+    );
+    // Absurd depth; inverted box; a bit past the last node.
+    let e = err(ok(&[1, 0], 9, 40));
+    assert!(matches!(e, FormatError::InvalidValue { .. }), "{e:?}");
+    let e = err(file_with(
+        lattice27(),
+        vec![(compact, octc_bytes(9, 1, max, min, &[1, 0]))],
+    ));
+    assert!(matches!(e, FormatError::InvalidValue { .. }), "{e:?}");
+    let e = err(ok(&[1, 0b10], 9, 1));
+    assert!(
+        matches!(e, FormatError::InvalidValue { element: 9, .. }),
+        "{e:?}"
+    );
+    // A node count whose bit array the section does not hold.
+    let e = err(ok(&[1, 0], u32::MAX, 1));
+    assert!(matches!(e, FormatError::SectionSize { .. }), "{e:?}");
+    // Both encodings at once.
+    let f = regular_volume();
+    let mut g = f.clone();
+    g.octree.as_mut().unwrap().nodes[2].sample_count = 9;
+    let octr = read_sections(&g.to_bytes().unwrap())
+        .unwrap()
+        .1
+        .iter()
+        .find(|s| s.id == SectionId::OCTREE)
+        .map(|s| s.bytes.to_vec())
+        .unwrap();
+    let mut owned: Vec<(SectionId, Vec<u8>)> = read_sections(&f.to_bytes().unwrap())
+        .unwrap()
+        .1
+        .iter()
+        .map(|s| (s.id, s.bytes.to_vec()))
+        .collect();
+    owned.insert(2, (SectionId::OCTREE, octr));
+    let both = assemble_file(ProbeFileKind::Volume.id(), 2, 0, &owned);
+    let e = err(both);
+    assert!(
+        matches!(e, FormatError::InvalidValue { id, .. } if id == compact),
+        "{e:?}"
+    );
+}
