@@ -1,5 +1,6 @@
 //! `probekit eval` for many probe files on one ground truth: the reference
-//! irradiance (the expensive part) is computed once and reused, so an
+//! irradiance (the expensive part) is computed once (and cached in the
+//! temporary directory for later runs) and reused, so an
 //! error-against-memory table over several clouds and volumes costs one
 //! reference pass.
 //!
@@ -12,9 +13,11 @@
 //! `p95_rel_error` and leaks, the figures `probekit eval` reports (same
 //! sample points for the same scene, point count and seed).
 
-use probekit::bake::{Baker, ReferenceSettings};
+use probekit::bake::Baker;
 use probekit::format::ProbeFile;
-use probekit::placement::eval::{mean_luminance, metrics, reference, sample_points, Predictor};
+use probekit::placement::eval::{
+    mean_luminance, metrics, reference_cache_path, reference_cached, sample_points, Predictor,
+};
 use probekit::scene::Scene;
 use probekit::volume::Interp;
 use std::error::Error;
@@ -44,11 +47,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let baker = Baker::new(&scene)?;
     let pts = sample_points(baker.tracer(), &scene.bake_box(), points, seed);
     let t = std::time::Instant::now();
-    let rs = ReferenceSettings {
-        relative_precision: 0.03,
-        ..Default::default()
-    };
-    let truth = reference(&baker, &pts, &rs)?;
+    let truth = reference_cached(
+        &baker,
+        &pts,
+        &reference_cache_path(scene.content_hash(), points, seed),
+    )?;
     eprintln!(
         "reference at {} points in {:.1} s",
         pts.len(),

@@ -15,8 +15,10 @@
 //! whether the segment point→vertex is blocked by geometry.
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::placement::eval::{mean_luminance, reference, sample_points, Predictor};
+use probekit::bake::{Baker, CaptureSettings};
+use probekit::placement::eval::{
+    mean_luminance, reference_cache_path, reference_cached, sample_points, Predictor,
+};
 use probekit::scene::Scene;
 use probekit::trace::Ray;
 use probekit_runtime::cloud::WalkState;
@@ -58,26 +60,11 @@ fn main() -> Result<(), Box<dyn Error>> {
         return Err("not a cloud".into());
     };
     let pts = sample_points(baker.tracer(), &scene.bake_box(), npts, 1);
-    let cache = std::env::temp_dir().join(format!(
-        "probekit_truth_{}_{npts}.bin",
-        scene.content_hash()
-    ));
-    let truth: Vec<Vec3> = match std::fs::read(&cache) {
-        Ok(b) if b.len() == 12 * pts.len() => b
-            .chunks(12)
-            .map(|c| {
-                let f = |k: usize| f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
-                Vec3::new(f(0), f(4), f(8))
-            })
-            .collect(),
-        _ => {
-            let rs = ReferenceSettings {
-                relative_precision: 0.03,
-                ..Default::default()
-            };
-            reference(&baker, &pts, &rs)?
-        }
-    };
+    let truth = reference_cached(
+        &baker,
+        &pts,
+        &reference_cache_path(scene.content_hash(), npts, 1),
+    )?;
     let mean = mean_luminance(&truth);
     let predicted = pred.predict(&pts)?;
     let mut s = CaptureSettings::from_scene(&scene);

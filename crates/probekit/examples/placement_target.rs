@@ -14,10 +14,11 @@
 //! `rel_rmse/leaks` (the `probekit eval` figures).
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::bake::{Baker, CaptureSettings};
 use probekit::cloud::tetrahedralize;
 use probekit::placement::eval::{
-    interpolate_cloud, mean_luminance, metrics, reference, sample_points,
+    interpolate_cloud, mean_luminance, metrics, reference_cache_path, reference_cached,
+    sample_points,
 };
 use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
 use probekit::scene::Scene;
@@ -52,33 +53,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let pts = sample_points(baker.tracer(), &bbox, npts, 1);
-    let cache = std::env::temp_dir().join(format!(
-        "probekit_truth_{}_{npts}.bin",
-        scene.content_hash()
-    ));
-    let truth: Vec<Vec3> = match std::fs::read(&cache) {
-        Ok(b) if b.len() == 12 * pts.len() => b
-            .chunks(12)
-            .map(|c| {
-                let f = |k: usize| f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
-                Vec3::new(f(0), f(4), f(8))
-            })
-            .collect(),
-        _ => {
-            let rs = ReferenceSettings {
-                relative_precision: 0.03,
-                ..Default::default()
-            };
-            let t = reference(&baker, &pts, &rs)?;
-            let b: Vec<u8> = t
-                .iter()
-                .flat_map(|v| v.to_array())
-                .flat_map(f32::to_le_bytes)
-                .collect();
-            std::fs::write(&cache, b)?;
-            t
-        }
-    };
+    let truth = reference_cached(
+        &baker,
+        &pts,
+        &reference_cache_path(scene.content_hash(), npts, 1),
+    )?;
     let mean = mean_luminance(&truth);
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;

@@ -72,6 +72,49 @@ pub fn reference(
         .collect()
 }
 
+/// The reference irradiance `probekit eval` uses ([`reference`] at 3 %
+/// relative precision), read from `cache` when that file holds exactly one
+/// RGB `f32` triple per point (little-endian), else computed and written
+/// there (a failed write is ignored: the cache is only an optimisation).
+/// The caller keys the file name by everything the truth depends on — see
+/// [`reference_cache_path`].
+pub fn reference_cached(
+    baker: &Baker,
+    points: &[EvalPoint],
+    cache: &std::path::Path,
+) -> Result<Vec<Vec3>, BakeError> {
+    if let Ok(b) = std::fs::read(cache) {
+        if b.len() == 12 * points.len() {
+            return Ok(b
+                .chunks_exact(12)
+                .map(|c| {
+                    let f = |k: usize| f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]);
+                    Vec3::new(f(0), f(4), f(8))
+                })
+                .collect());
+        }
+    }
+    let rs = ReferenceSettings {
+        relative_precision: 0.03,
+        ..Default::default()
+    };
+    let t = reference(baker, points, &rs)?;
+    let bytes: Vec<u8> = t
+        .iter()
+        .flat_map(|v| v.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let _ = crate::format::write_atomic(cache, &bytes);
+    Ok(t)
+}
+
+/// A cache file for [`reference_cached`] in the system's temporary
+/// directory, keyed by the scene's content hash, the point count and the
+/// sampling seed of [`sample_points`] (the box is the scene's bake box).
+pub fn reference_cache_path(scene_hash: u64, points: usize, seed: u64) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("probekit_truth_{scene_hash}_{points}_s{seed}.bin"))
+}
+
 /// Error figures of a prediction against ground truth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Metrics {

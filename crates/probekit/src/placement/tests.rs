@@ -191,3 +191,33 @@ fn adaptive_beats_grid_at_equal_probe_count() {
     assert!(g.len() >= a.positions.len() * 8 / 10);
     assert!(ea.rel_rmse < eg.rel_rmse, "adaptive {ea:?} grid {eg:?}");
 }
+
+/// `reference_cached` reads a cache file of the right length as is, and
+/// ignores one of the wrong length: then it computes exactly what
+/// `reference` at 3 % computes, writes it, and reads it back next time.
+#[test]
+fn reference_cache_round_trips_and_rejects_a_wrong_length() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let pts = sample_points(baker.tracer(), &scene.bake_box(), 3, 5);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("truth.bin");
+    let fake: Vec<u8> = (0..pts.len() * 3)
+        .flat_map(|i| (i as f32 + 0.5).to_le_bytes())
+        .collect();
+    std::fs::write(&path, &fake).unwrap();
+    let read = reference_cached(&baker, &pts, &path).unwrap();
+    for (i, v) in read.iter().enumerate() {
+        let k = 3.0 * i as f32;
+        assert_eq!(*v, Vec3::new(k + 0.5, k + 1.5, k + 2.5));
+    }
+    std::fs::write(&path, &fake[..fake.len() - 4]).unwrap();
+    let computed = reference_cached(&baker, &pts, &path).unwrap();
+    let rs = ReferenceSettings {
+        relative_precision: 0.03,
+        ..Default::default()
+    };
+    assert_eq!(computed, reference(&baker, &pts, &rs).unwrap());
+    assert_eq!(std::fs::read(&path).unwrap().len(), 12 * pts.len());
+    assert_eq!(reference_cached(&baker, &pts, &path).unwrap(), computed);
+}
