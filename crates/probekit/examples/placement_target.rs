@@ -18,7 +18,7 @@ use probekit::bake::{Baker, CaptureSettings};
 use probekit::cloud::tetrahedralize;
 use probekit::placement::eval::{
     interpolate_cloud, mean_luminance, metrics, reference_cache_path, reference_cached,
-    sample_points,
+    region_metrics, sample_points,
 };
 use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
 use probekit::scene::Scene;
@@ -71,14 +71,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         let pred = interpolate_cloud(&mesh, &sh, &pts);
         let m = metrics(&pred, &truth, mean);
         let mut reg = String::new();
-        for r in &scene.regions {
-            let bb = r.aabb();
-            let idx: Vec<usize> = (0..pts.len())
-                .filter(|&i| bb.contains(pts[i].position))
-                .collect();
-            let p: Vec<_> = idx.iter().map(|&i| pred[i]).collect();
-            let t: Vec<_> = idx.iter().map(|&i| truth[i]).collect();
-            let mm = metrics(&p, &t, mean);
+        for (r, mm) in region_metrics(&scene.regions, &pts, &pred, &truth, mean) {
             reg += &format!(" {}:{:.2}/{}", r.name, mm.rel_rmse, mm.leaks);
         }
         if top {

@@ -16,7 +16,8 @@ use clap::Args;
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::placement::eval::{
-    mean_luminance, metrics, reference, sample_points, EvalPoint, Metrics, Predictor,
+    mean_luminance, metrics, reference, region_metrics, sample_points, EvalPoint, Metrics,
+    Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, predict_file, settings_from_metadata, sweep, SWEEP_METHODS,
@@ -173,14 +174,8 @@ fn figures(
     let mut out = to_json(&metrics(pred, truth, mean));
     out["probes"] = probes.into();
     let mut regions = serde_json::Map::new();
-    for r in &scene.regions {
-        let bb = r.aabb();
-        let idx: Vec<usize> = (0..pts.len())
-            .filter(|&i| bb.contains(pts[i].position))
-            .collect();
-        let p: Vec<_> = idx.iter().map(|&i| pred[i]).collect();
-        let t: Vec<_> = idx.iter().map(|&i| truth[i]).collect();
-        regions.insert(r.name.clone(), to_json(&metrics(&p, &t, mean)));
+    for (r, m) in region_metrics(&scene.regions, pts, pred, truth, mean) {
+        regions.insert(r.name.clone(), to_json(&m));
     }
     out["regions"] = regions.into();
     out

@@ -13,7 +13,7 @@
 use super::is_free;
 use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
 use crate::bake::{BakeError, Baker, ReferenceSettings};
-use crate::scene::Aabb;
+use crate::scene::{Aabb, Region};
 use crate::trace::Tracer;
 use glam::{Vec2, Vec3};
 use probekit_runtime::cloud::{TetMesh, WalkState};
@@ -169,6 +169,31 @@ pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
         p95_rel_error: rel[k],
         leaks,
     }
+}
+
+/// [`metrics`] of the points inside each region, in the regions' order;
+/// the leak threshold still uses `mean_truth_lum`, the mean over all points,
+/// so a region's leaks are the overall leaks that fall inside it.
+pub fn region_metrics<'r>(
+    regions: &'r [Region],
+    points: &[EvalPoint],
+    pred: &[Vec3],
+    truth: &[Vec3],
+    mean_truth_lum: f32,
+) -> Vec<(&'r Region, Metrics)> {
+    regions
+        .iter()
+        .map(|r| {
+            let bb = r.aabb();
+            let (p, t): (Vec<Vec3>, Vec<Vec3>) = points
+                .iter()
+                .zip(pred.iter().zip(truth))
+                .filter(|(pt, _)| bb.contains(pt.position))
+                .map(|(_, (&p, &t))| (p, t))
+                .unzip();
+            (r, metrics(&p, &t, mean_truth_lum))
+        })
+        .collect()
 }
 
 /// Mean luminance of `truth`.

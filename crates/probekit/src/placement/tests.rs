@@ -221,3 +221,39 @@ fn reference_cache_round_trips_and_rejects_a_wrong_length() {
     assert_eq!(std::fs::read(&path).unwrap().len(), 12 * pts.len());
     assert_eq!(reference_cached(&baker, &pts, &path).unwrap(), computed);
 }
+
+/// `region_metrics` gives, per region, the metrics of exactly the points
+/// inside its box (filtered here by hand), with the overall mean for the
+/// leak threshold.
+#[test]
+fn region_metrics_match_hand_filtered_points() {
+    use crate::scene::Region;
+    let pts: Vec<EvalPoint> = (0..6)
+        .map(|i| EvalPoint {
+            position: Vec3::new(i as f32, 0.5, 0.5),
+            normal: Vec3::Y,
+        })
+        .collect();
+    let truth: Vec<Vec3> = (0..6).map(|i| Vec3::splat(1.0 + i as f32)).collect();
+    let pred: Vec<Vec3> = [1.0, 9.0, 3.5, 4.0, 0.5, 6.0].map(Vec3::splat).to_vec();
+    let regions = vec![
+        Region {
+            name: "low".into(),
+            min: Vec3::new(-0.5, 0.0, 0.0),
+            max: Vec3::new(2.5, 1.0, 1.0),
+        },
+        Region {
+            name: "none".into(),
+            min: Vec3::splat(10.0),
+            max: Vec3::splat(11.0),
+        },
+    ];
+    let mean = mean_luminance(&truth);
+    let out = region_metrics(&regions, &pts, &pred, &truth, mean);
+    assert_eq!(out.len(), 2);
+    assert_eq!(out[0].0.name, "low");
+    assert_eq!(out[0].1, metrics(&pred[..3], &truth[..3], mean));
+    assert_eq!(out[0].1.points, 3);
+    assert_eq!(out[0].1.leaks, 1, "9 against a truth of 2 is a leak");
+    assert_eq!(out[1].1.points, 0);
+}
