@@ -587,6 +587,25 @@ pub const BRICK_CELLS: u32 = 4;
 /// `2^Di` texels per axis. Memory follows the octree's adaptivity instead of
 /// its finest level. A uniform volume has no octree: use [`export_ktx2`].
 pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Export, ExportError> {
+    bricks_from_plan(volume, &plan_bricks(volume)?, encoding)
+}
+
+/// Which bricks an octree's atlas holds and where: the cheap half of
+/// [`export_bricks`] (no sampling), enough to size the atlas.
+struct BrickPlan {
+    /// Indirection texels per axis (`2^Di`).
+    cells: u32,
+    /// Per brick: (level, node coordinates at depth `Di − level`).
+    bricks: Vec<(u32, [u32; 3])>,
+    /// Per indirection cell (x fastest): (brick, level).
+    cell_brick: Vec<(u32, u32)>,
+    /// Atlas size in bricks.
+    atlas: [usize; 3],
+    /// Atlas size in texels.
+    res: [u32; 3],
+}
+
+fn plan_bricks(volume: &Volume) -> Result<BrickPlan, ExportError> {
     if volume.grid_resolution().is_some() {
         return Err(ExportError::NotAnOctree);
     }
@@ -629,6 +648,32 @@ pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Expo
     if res.iter().map(|&x| x as u64).product::<u64>() > 1 << 26 {
         return Err(ExportError::TooLarge(res));
     }
+    Ok(BrickPlan {
+        cells,
+        bricks,
+        cell_brick,
+        atlas: [ax, ay, az],
+        res,
+    })
+}
+
+/// Samples and encodes the atlas of `plan` (see [`export_bricks`]).
+fn bricks_from_plan(
+    volume: &Volume,
+    plan: &BrickPlan,
+    encoding: Ktx2Encoding,
+) -> Result<Ktx2Export, ExportError> {
+    let BrickPlan {
+        cells,
+        ref bricks,
+        ref cell_brick,
+        atlas: [ax, ay, az],
+        res,
+    } = *plan;
+    let nb = bricks.len();
+    let (min, max) = volume.bounds();
+    let size = max - min;
+    let t = BRICK_CELLS as usize + 1;
     let (rx, ry) = (res[0] as usize, res[1] as usize);
     let mut pts = vec![min; rx * ry * res[2] as usize];
     for (b, &(level, node)) in bricks.iter().enumerate() {
@@ -650,7 +695,7 @@ pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Expo
     volume.sample_sh_batch(&pts, Interp::Trilinear, &mut sh)?;
     let (mut textures, bounds) = encode_sh_textures(&sh, n, res, encoding)?;
     let mut ind = Vec::with_capacity(cell_brick.len() * 4);
-    for &(b, level) in &cell_brick {
+    for &(b, level) in cell_brick {
         let b = b as usize;
         ind.extend_from_slice(&[
             (b % ax) as u8,
@@ -703,13 +748,11 @@ pub fn export_auto(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Export
     if volume.grid_resolution().is_some() {
         return export_ktx2(volume, encoding, None);
     }
-    let bricks = export_bricks(volume, encoding)?;
-    let atlas: u64 = bricks.sidecar["atlas_resolution"]
-        .as_array()
-        .map_or(u64::MAX, |r| r.iter().filter_map(|x| x.as_u64()).product());
+    let plan = plan_bricks(volume)?;
+    let atlas: u64 = plan.res.iter().map(|&r| r as u64).product();
     let dense = ((1u64 << volume.max_depth().min(10)) + 1).pow(3);
     if atlas < dense {
-        Ok(bricks)
+        bricks_from_plan(volume, &plan, encoding)
     } else {
         export_ktx2(volume, encoding, None)
     }
