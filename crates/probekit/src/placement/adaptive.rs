@@ -254,6 +254,20 @@ struct Pool {
     probe: Vec<Option<usize>>,
 }
 
+impl Pool {
+    /// A pool of captured points, none of them a probe yet; `w` are the
+    /// band weights of [`energy`].
+    fn new(pos: Vec<Vec3>, sh: Vec<ShRgb>, w: &[f32]) -> Self {
+        let n = pos.len();
+        Pool {
+            energy: sh.iter().map(|s| energy(w, s)).collect(),
+            pos,
+            sh,
+            probe: vec![None; n],
+        }
+    }
+}
+
 /// Adaptive state: the placement state plus, per probe, its pool index.
 struct Adaptive<'s, 'a, 'b> {
     st: &'s mut State<'a, 'b>,
@@ -650,13 +664,12 @@ pub(super) fn adaptive(
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<(), PlacementError> {
     let tracer = st.baker.tracer();
-    let raw = jittered(
+    let mut raw = jittered(
         bbox,
         (POOL_FACTOR * budget).clamp(512, 60_000),
         st.settings.seed,
         BOUNDARY_SNAP,
     );
-    let mut raw = raw;
     // Shells reach out to where the uniform pool is about as dense.
     let size = bbox.size();
     let spacing = (size.x * size.y * size.z / raw.len().max(1) as f32).cbrt();
@@ -684,7 +697,6 @@ pub(super) fn adaptive(
         .into_iter()
         .filter(|(p, _)| bbox.contains(*p))
         .unzip();
-    let energy = sh.iter().map(|s| energy(&w, s)).collect();
     let floor =
         0.01 * sh.iter().map(mean_irradiance_luminance).sum::<f32>() / sh.len().max(1) as f32;
     let n = pos.len();
@@ -695,12 +707,7 @@ pub(super) fn adaptive(
     }
     let mut a = Adaptive {
         st,
-        pool: Pool {
-            pos,
-            sh,
-            energy,
-            probe: vec![None; n],
-        },
+        pool: Pool::new(pos, sh, &w),
         origin: Vec::new(),
         w,
         bbox: *bbox,
@@ -944,16 +951,9 @@ mod tests {
         pos.push(origin + Vec3::new(0.1, 0.5, 0.5));
         sh.push(constant(2000.0));
         let w = band_weights(3);
-        let energy = sh.iter().map(|s| energy(&w, s)).collect();
-        let n = pos.len();
         let mut a = Adaptive {
             st: &mut st,
-            pool: Pool {
-                pos,
-                sh,
-                energy,
-                probe: vec![None; n],
-            },
+            pool: Pool::new(pos, sh, &w),
             origin: Vec::new(),
             w,
             bbox: scene.bake_box(),
@@ -1004,12 +1004,7 @@ mod tests {
         let n = parents.len();
         let mut a = Adaptive {
             st: &mut st,
-            pool: Pool {
-                pos: parents.to_vec(),
-                sh: vec![ShRgb::zeros(3); n],
-                energy: vec![0.0; n],
-                probe: vec![None; n],
-            },
+            pool: Pool::new(parents.to_vec(), vec![ShRgb::zeros(3); n], &band_weights(3)),
             origin: Vec::new(),
             w: band_weights(3),
             bbox: scene.bake_box(),
