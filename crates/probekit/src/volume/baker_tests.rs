@@ -290,20 +290,10 @@ fn adaptive_baker_build_captures_shared_corners_once_and_is_deterministic() {
         inner: &src,
         seen: Mutex::new(Vec::new()),
     };
-    let s = AdaptiveSettings {
-        common: common(Vec3::splat(-1.0), Vec3::ONE, &src, GradientMode::None),
-        min_depth: 1,
-        max_depth: 3,
-        geometry: true,
-        depth_factor: None,
-        gradient_threshold: None,
-        prediction_tolerance: None,
-        prune_tolerance: None,
-        relative_floor: 0.0,
-        geometry_depth: u32::MAX,
-        noise_k: 0.0,
-        balance: false,
-    };
+    let s = super::tests::geometry_only(
+        common(Vec3::splat(-1.0), Vec3::ONE, &src, GradientMode::None),
+        3,
+    );
     let (file, stats) = build_adaptive(&rec, &s).unwrap();
     let seen = rec.seen.into_inner().unwrap();
     let mut keys: Vec<[u32; 3]> = seen

@@ -44,6 +44,26 @@ fn common(min: Vec3, max: Vec3, gradients: GradientMode) -> CommonSettings {
     }
 }
 
+/// Octree settings with only the geometry heuristic on, depths 1 to
+/// `max_depth`: no depth, gradient, prediction or prune test, no noise
+/// discount, no balance.
+pub(super) fn geometry_only(common: CommonSettings, max_depth: u32) -> AdaptiveSettings {
+    AdaptiveSettings {
+        common,
+        min_depth: 1,
+        max_depth,
+        geometry: true,
+        depth_factor: None,
+        gradient_threshold: None,
+        prediction_tolerance: None,
+        prune_tolerance: None,
+        relative_floor: 0.0,
+        geometry_depth: u32::MAX,
+        noise_k: 0.0,
+        balance: false,
+    }
+}
+
 /// Deterministic pseudo-random numbers in [0, 1) (xorshift).
 struct Rng(u64);
 impl Rng {
@@ -598,20 +618,7 @@ mod props {
         V.get_or_init(|| {
             let (file, _) = build_adaptive(
                 &ConstantWithWall,
-                &AdaptiveSettings {
-                    common: common(Vec3::ZERO, Vec3::ONE, GradientMode::Analytic),
-                    min_depth: 1,
-                    max_depth: 5,
-                    geometry: true,
-                    depth_factor: None,
-                    gradient_threshold: None,
-                    prediction_tolerance: None,
-                    prune_tolerance: None,
-                    relative_floor: 0.0,
-                    geometry_depth: u32::MAX,
-                    noise_k: 0.0,
-                    balance: false,
-                },
+                &geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::Analytic), 5),
             )
             .unwrap();
             assert!(file
@@ -705,20 +712,7 @@ fn brick_atlas_reproduces_the_octree_query() {
     }
     let (file, _) = build_adaptive(
         &WavyWithWall,
-        &AdaptiveSettings {
-            common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
-            min_depth: 1,
-            max_depth: 5,
-            geometry: true,
-            depth_factor: None,
-            gradient_threshold: None,
-            prediction_tolerance: None,
-            prune_tolerance: None,
-            relative_floor: 0.0,
-            geometry_depth: u32::MAX,
-            noise_k: 0.0,
-            balance: false,
-        },
+        &geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 5),
     )
     .unwrap();
     let v = Volume::from_file(&file).unwrap();
