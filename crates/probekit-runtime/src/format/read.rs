@@ -235,15 +235,18 @@ impl<'a> Sec<'a> {
         &self,
         sizes: [Option<usize>; N],
     ) -> Result<[&'a [u8]; N], FormatError> {
-        self.arrays_at(SECTION_HEADER_LEN, sizes, true)
+        Ok(self.arrays_at(SECTION_HEADER_LEN, sizes, true)?.0)
     }
 
+    /// The arrays of [`Self::arrays`] starting at `start` (a record inside
+    /// the section when not `exact`), and the offset where the last one's
+    /// padding ends (the next record's start).
     fn arrays_at<const N: usize>(
         &self,
         start: usize,
         sizes: [Option<usize>; N],
         exact: bool,
-    ) -> Result<[&'a [u8]; N], FormatError> {
+    ) -> Result<([&'a [u8]; N], usize), FormatError> {
         let mut offsets = [(0usize, 0usize); N];
         let mut pos = start;
         for (k, size) in sizes.into_iter().enumerate() {
@@ -265,7 +268,14 @@ impl<'a> Sec<'a> {
         for (k, (o, s)) in offsets.into_iter().enumerate() {
             out[k] = &self.bytes[o..o + s];
         }
-        Ok(out)
+        Ok((out, pos))
+    }
+
+    /// A record's name as UTF-8.
+    fn name(&self, bytes: &[u8]) -> Result<String, FormatError> {
+        core::str::from_utf8(bytes)
+            .map(|n| n.to_string())
+            .map_err(|_| FormatError::InvalidUtf8(self.id))
     }
 }
 
@@ -516,14 +526,8 @@ fn parse_rigs(s: &Sec<'_>) -> Result<Vec<Rig>, FormatError> {
             bytes_for(params, 4).and_then(|p| p.checked_mul(samples as usize)),
             bytes_for(transitions, 8),
         ];
-        let [name, pts, fit, tr] = s.arrays_at(start, sizes, false)?;
-        let end = [name, pts, fit, tr]
-            .iter()
-            .try_fold(start, |p, a| pad16(a.len()).and_then(|l| p.checked_add(l)))
-            .ok_or(FormatError::CountOverflow(s.id))?;
-        let name = core::str::from_utf8(name)
-            .map_err(|_| FormatError::InvalidUtf8(s.id))?
-            .to_string();
+        let ([name, pts, fit, tr], end) = s.arrays_at(start, sizes, false)?;
+        let name = s.name(name)?;
         rigs.push(Rig {
             name,
             model,
@@ -577,14 +581,8 @@ fn parse_groups(s: &Sec<'_>) -> Result<Vec<LightGroup>, FormatError> {
         let codec = codec_for(codec, order, stride)?;
         let start = pos + GROUP_HEADER_LEN;
         let sizes = [Some(name_len as usize), bytes_for(probes, stride as usize)];
-        let [name, data] = s.arrays_at(start, sizes, false)?;
-        let end = [name, data]
-            .iter()
-            .try_fold(start, |p, a| pad16(a.len()).and_then(|l| p.checked_add(l)))
-            .ok_or(FormatError::CountOverflow(s.id))?;
-        let name = core::str::from_utf8(name)
-            .map_err(|_| FormatError::InvalidUtf8(s.id))?
-            .to_string();
+        let ([name, data], end) = s.arrays_at(start, sizes, false)?;
+        let name = s.name(name)?;
         groups.push(LightGroup {
             name,
             coefficients: Coefficients {
