@@ -123,7 +123,11 @@ fn octree() -> Volume {
             &mut pos,
         );
     }
-    let o = Octree { nodes, samples };
+    let o = Octree {
+        nodes,
+        samples,
+        roots: [1, 1, 1],
+    };
     Volume::from_file(&file(pos, None, Some(o))).unwrap()
 }
 

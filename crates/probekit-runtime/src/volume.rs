@@ -37,6 +37,13 @@
 //! through the volume (tested on random lines). Points outside the box are
 //! clamped to it.
 //!
+//! An octree may be a **forest** (format 1.3, [`Volume::root_grid`]): the
+//! box is first cut into a grid of near-cubic root cells, each the root of
+//! an octree, so leaves stay near-cubic in a long room instead of copying
+//! the box's aspect ratio. A query finds its root cell by position, then
+//! descends; kernels reach across root cells exactly as across octants, so
+//! the blend above is unchanged.
+//!
 //! Stored and returned SH is **radiance** SH (crate conventions);
 //! [`Volume::irradiance`] applies the clamped-cosine convolution.
 
@@ -135,6 +142,11 @@ enum Layout {
         kernels: Vec<Kernel>,
         leaf_kernels: Vec<u32>,
         depths: Vec<u32>,
+        /// Root grid (the first `rx·ry·rz` nodes are the roots).
+        roots: [u32; 3],
+        /// Box of the whole forest.
+        bmin: Vec3,
+        bmax: Vec3,
     },
 }
 
@@ -249,13 +261,17 @@ impl Volume {
     pub fn leaf_depth_at(&self, p: Vec3) -> u32 {
         match &self.layout {
             Layout::Grid { .. } => 0,
-            Layout::Tree { nodes, depths, .. } => {
-                let (bmin, bmax) = self.bounds();
-                depths
-                    .get(find_leaf(nodes, p.clamp(bmin, bmax)))
-                    .copied()
-                    .unwrap_or(0)
-            }
+            Layout::Tree {
+                nodes,
+                depths,
+                roots,
+                bmin,
+                bmax,
+                ..
+            } => depths
+                .get(find_leaf(nodes, *roots, p.clamp(*bmin, *bmax)))
+                .copied()
+                .unwrap_or(0),
         }
     }
 
@@ -276,7 +292,7 @@ impl Volume {
     pub fn bounds(&self) -> (Vec3, Vec3) {
         match &self.layout {
             Layout::Grid { min, max, .. } => (*min, *max),
-            Layout::Tree { nodes, .. } => (nodes[0].min, nodes[0].max),
+            Layout::Tree { bmin, bmax, .. } => (*bmin, *bmax),
         }
     }
 
@@ -354,9 +370,10 @@ impl Volume {
                 nodes,
                 kernels,
                 leaf_kernels,
+                roots,
                 ..
             } => {
-                let leaf = &nodes[find_leaf(nodes, p)];
+                let leaf = &nodes[find_leaf(nodes, *roots, p)];
                 match interp {
                     Interp::InverseDistance => {
                         for &s in &leaf.corners {
@@ -492,9 +509,49 @@ impl Volume {
     }
 }
 
+impl Volume {
+    /// Root cells per axis of an octree volume (`[1, 1, 1]` for a single
+    /// octree); `None` for a uniform grid. Leaves at depth `d` are the
+    /// cells of a `roots · 2^d` lattice over [`Self::bounds`].
+    pub fn root_grid(&self) -> Option<[u32; 3]> {
+        match &self.layout {
+            Layout::Grid { .. } => None,
+            Layout::Tree { roots, .. } => Some(*roots),
+        }
+    }
+}
+
+/// Root index along axis `a` (0-based, along the grid's first row) of the
+/// root cell containing coordinate `x` (ties go to the upper cell; outside
+/// clamps to the border cells).
+fn root_along(nodes: &[Node], roots: [u32; 3], a: usize, x: f32) -> usize {
+    let r = roots[a] as usize;
+    if r <= 1 {
+        return 0;
+    }
+    let st = [1, roots[0] as usize, (roots[0] * roots[1]) as usize][a];
+    let (lo, hi) = (nodes[0].min[a], nodes[st * (r - 1)].max[a]);
+    let t = (x - lo) / (hi - lo) * r as f32;
+    // NaN and negatives go to 0 (`max` returns the non-NaN operand).
+    let mut i = (math::floor(t).max(0.0) as usize).min(r - 1);
+    while i > 0 && x < nodes[st * i].min[a] {
+        i -= 1;
+    }
+    while i + 1 < r && x >= nodes[st * (i + 1)].min[a] {
+        i += 1;
+    }
+    i
+}
+
+/// Index of the root cell containing `p`.
+fn find_root(nodes: &[Node], roots: [u32; 3], p: Vec3) -> usize {
+    let i = [0, 1, 2].map(|a| root_along(nodes, roots, a, p[a]));
+    i[0] + roots[0] as usize * (i[1] + roots[1] as usize * i[2])
+}
+
 /// Index of the leaf containing `p` (ties go to the upper child).
-fn find_leaf(nodes: &[Node], p: Vec3) -> usize {
-    let mut k = 0usize;
+fn find_leaf(nodes: &[Node], roots: [u32; 3], p: Vec3) -> usize {
+    let mut k = find_root(nodes, roots, p);
     // Depth is bounded by the node count; the loop cannot run forever on a
     // validated tree (children come after parents).
     for _ in 0..nodes.len() {
@@ -513,6 +570,11 @@ fn find_leaf(nodes: &[Node], p: Vec3) -> usize {
 fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, VolumeError> {
     if o.nodes.is_empty() {
         return Err(VolumeError::NotAVolume("empty octree"));
+    }
+    if o.roots.contains(&0) || o.root_count() > o.nodes.len() {
+        return Err(VolumeError::NotAVolume(
+            "octree root grid empty or larger than the node count",
+        ));
     }
     let mut nodes: Vec<Node> = Vec::with_capacity(o.nodes.len());
     for on in &o.nodes {
@@ -556,11 +618,27 @@ fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, V
     // Per leaf: kernels whose open support box overlaps the leaf's box.
     let mut per_leaf: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
     let mut stack = Vec::new();
+    let root_count = o.root_count();
+    let [rx, ry, _] = o.roots.map(|r| r as usize);
     for (ki, k) in kernels.iter().enumerate() {
         let c = positions[k.sample as usize];
         let (lo, hi) = (c - k.h, c + k.h);
         stack.clear();
-        stack.push(0usize);
+        // The roots the kernel's box can touch (the overlap test below
+        // decides), found through the root grid, not by scanning all roots.
+        let range = [0, 1, 2].map(|a| {
+            (
+                root_along(&nodes, o.roots, a, lo[a]),
+                root_along(&nodes, o.roots, a, hi[a]),
+            )
+        });
+        for z in range[2].0..=range[2].1 {
+            for y in range[1].0..=range[1].1 {
+                for x in range[0].0..=range[0].1 {
+                    stack.push(x + rx * (y + ry * z));
+                }
+            }
+        }
         while let Some(i) = stack.pop() {
             let nd = &nodes[i];
             let overlaps = (0..3).all(|a| nd.min[a] < hi[a] && nd.max[a] > lo[a]);
@@ -580,11 +658,15 @@ fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, V
         nodes[i].kern_count = list.len() as u32;
         leaf_kernels.extend(list);
     }
+    let (bmin, bmax) = (nodes[0].min, nodes[root_count - 1].max);
     Ok(Layout::Tree {
         nodes,
         kernels,
         leaf_kernels,
         depths: o.nodes.iter().map(|n| n.depth).collect(),
+        roots: o.roots,
+        bmin,
+        bmax,
     })
 }
 

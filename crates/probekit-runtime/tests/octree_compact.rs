@@ -86,7 +86,11 @@ fn regular_volume() -> ProbeFile {
         .collect();
     let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
     f.kind = ProbeFileKind::Volume;
-    f.octree = Some(Octree { nodes, samples });
+    f.octree = Some(Octree {
+        nodes,
+        samples,
+        roots: [1, 1, 1],
+    });
     f
 }
 
@@ -148,8 +152,14 @@ fn irregular_octree_falls_back_to_octr() {
 /// An `OCTC` section written from the documented layout, without the
 /// writer: header (N, D, 0, 0), f32[6] box padded to 32, child bits.
 fn octc_bytes(nodes: u32, depth: u32, min: Vec3, max: Vec3, bits: &[u8]) -> Vec<u8> {
+    octc_forest_bytes([nodes, depth, 0, 0], min, max, bits)
+}
+
+/// [`octc_bytes`] with all four header words (`w2`, `w3`: the root grid,
+/// format 1.3).
+fn octc_forest_bytes(words: [u32; 4], min: Vec3, max: Vec3, bits: &[u8]) -> Vec<u8> {
     let mut s = Vec::new();
-    for w in [nodes, depth, 0, 0] {
+    for w in words {
         s.extend_from_slice(&w.to_le_bytes());
     }
     for v in min.to_array().into_iter().chain(max.to_array()) {
@@ -321,4 +331,119 @@ fn hostile_compact_sections_give_typed_errors() {
         matches!(e, FormatError::InvalidValue { id, .. } if id == compact),
         "{e:?}"
     );
+}
+
+/// A forest written from the documented layout (format 1.3): root grid
+/// 3 × 1 × 1 over [0, 3] × [0, 1] × [0, 1] in `w2 = (rx − 1) | (ry − 1) << 16`,
+/// `w3 = rz − 1`, max depth 1, root 1 split. Boxes and corners are checked
+/// against unit cubes and halves computed here.
+#[test]
+fn documented_bytes_decode_to_a_forest() {
+    let (min, max) = (Vec3::ZERO, Vec3::new(3.0, 1.0, 1.0));
+    // Every point of the depth-1 lattice (spacing 0.5), 7 × 3 × 3.
+    let mut positions = Vec::new();
+    for k in 0..3 {
+        for j in 0..3 {
+            for i in 0..7 {
+                positions.push(Vec3::new(i as f32, j as f32, k as f32) * 0.5);
+            }
+        }
+    }
+    let forest = |w2: u32, w3: u32, nodes: u32| {
+        file_with(
+            positions.clone(),
+            vec![(
+                SectionId::OCTREE_COMPACT,
+                octc_forest_bytes([nodes, 1, w2, w3], min, max, &[0b0000_0010, 0]),
+            )],
+        )
+    };
+    let f = ProbeFile::from_bytes(&forest(2, 0, 11)).unwrap();
+    let o = f.octree.as_ref().unwrap();
+    assert_eq!(o.roots, [3, 1, 1]);
+    assert_eq!(o.nodes.len(), 11);
+    for i in 0..3usize {
+        let n = &o.nodes[i];
+        assert_eq!(n.depth, 0);
+        let lo = Vec3::new(i as f32, 0.0, 0.0);
+        assert_eq!((n.min, n.max), (lo, lo + Vec3::ONE));
+        assert_eq!(n.first_child, if i == 1 { 3 } else { NONE });
+    }
+    for k in 0..8usize {
+        let n = &o.nodes[3 + k];
+        let lo = Vec3::new(
+            1.0 + 0.5 * (k & 1) as f32,
+            0.5 * ((k >> 1) & 1) as f32,
+            0.5 * ((k >> 2) & 1) as f32,
+        );
+        assert_eq!((n.min, n.max, n.depth), (lo, lo + Vec3::splat(0.5), 1));
+        let list = &o.samples[n.sample_offset as usize..][..8];
+        for (c, &s) in list.iter().enumerate() {
+            let want = Vec3::new(
+                if c & 1 == 1 { n.max.x } else { n.min.x },
+                if c & 2 == 2 { n.max.y } else { n.min.y },
+                if c & 4 == 4 { n.max.z } else { n.min.z },
+            );
+            assert_eq!(f.positions[s as usize], want);
+        }
+    }
+    // Writing it again keeps the root grid and asks for minor 3.
+    let bytes = f.to_bytes().unwrap();
+    assert_eq!(minor_of(&bytes), layout::MINOR_FOREST);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    // A root grid that does not match the node count, or out of range.
+    for (w2, w3, nodes) in [
+        (3, 0, 11),
+        (2, 1, 11),
+        (2, 0, 12),
+        (2, 65536, 11),
+        (u32::MAX, 0, 11),
+    ] {
+        assert!(
+            ProbeFile::from_bytes(&forest(w2, w3, nodes)).is_err(),
+            "w2 {w2} w3 {w3} nodes {nodes}"
+        );
+    }
+}
+
+/// An explicit (`OCTR`) forest keeps its root grid too, and a root listed
+/// as somebody's child is refused.
+#[test]
+fn explicit_forest_round_trips_and_roots_have_no_parent() {
+    let f = ProbeFile::from_bytes(&{
+        let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0));
+        let mut positions = Vec::new();
+        for k in 0..2 {
+            for j in 0..2 {
+                for i in 0..3 {
+                    positions.push(Vec3::new(i as f32, j as f32, k as f32));
+                }
+            }
+        }
+        file_with(
+            positions,
+            vec![(
+                SectionId::OCTREE_COMPACT,
+                octc_forest_bytes([2, 0, 1, 0], min, max, &[0]),
+            )],
+        )
+    })
+    .unwrap();
+    let mut g = f.clone();
+    // A 9th sample makes the tree irregular: written as OCTR.
+    let o = g.octree.as_mut().unwrap();
+    o.samples.push(0);
+    o.nodes[1].sample_count = 9;
+    let bytes = g.to_bytes().unwrap();
+    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
+    assert_eq!(minor_of(&bytes), layout::MINOR_FOREST);
+    let back = ProbeFile::from_bytes(&bytes).unwrap();
+    assert_eq!(back.octree.as_ref().unwrap().roots, [2, 1, 1]);
+    assert_eq!(back, g);
+    let mut h = f.clone();
+    h.octree.as_mut().unwrap().roots = [3, 1, 1];
+    assert!(h.validate().is_err(), "3 roots, 2 nodes");
+    let mut h = f;
+    h.octree.as_mut().unwrap().roots = [1, 1, 1];
+    assert!(h.validate().is_err(), "node 1 unreachable");
 }

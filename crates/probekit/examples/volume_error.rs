@@ -71,6 +71,7 @@ fn main() {
             geometry_depth: u32::MAX,
             noise_k: 0.0,
             balance: false,
+            roots: None,
         };
         let (f, _) = build_adaptive(&demo, &st).unwrap();
         rows.push((format!("adaptive {a}..{b} tol {tol}"), f));

@@ -1,6 +1,6 @@
 //! `probekit volume SCENE -o OUT.probes (--uniform (--cell SIZE | --resolution X,Y,Z)
-//! | --adaptive --min-depth A --max-depth B [--tolerance T] [--noise-k K]
-//! [--geometry-depth G]) [--gradients central|analytic]
+//! | --adaptive --min-depth A --max-depth B [--roots X,Y,Z] [--tolerance T]
+//! [--noise-k K] [--geometry-depth G] [--balance]) [--gradients central|analytic]
 //! [--box MINX,MINY,MINZ,MAXX,MAXY,MAXZ] [--order N] [--samples N] [--bounces B]
 //! [--seed S] [--plot FILE.png] [--json]`.
 //!
@@ -49,9 +49,16 @@ pub struct VolumeArgs {
     /// Cells shallower than this always subdivide (adaptive).
     #[arg(long, default_value_t = 1)]
     pub min_depth: u32,
-    /// Deepest level (adaptive, ≤ 20).
+    /// Deepest level below the root cells (adaptive, ≤ 20).
     #[arg(long, default_value_t = 4)]
     pub max_depth: u32,
+    /// Root cells per axis `X,Y,Z` (adaptive): the box is cut into this
+    /// grid and each root cell is an octree; depths count from the root
+    /// cells. Default: the coarsest near-cubic grid (`1,1,1` = one octree
+    /// over the whole box, the seed's layout, whose cells copy the box's
+    /// aspect ratio).
+    #[arg(long, value_delimiter = ',')]
+    pub roots: Option<Vec<u32>>,
     /// Relative trilinear-prediction tolerance for subdivision (adaptive).
     #[arg(long, default_value_t = 0.25)]
     pub tolerance: f32,
@@ -238,6 +245,11 @@ fn build_and_write(
                 geometry_depth: a.geometry_depth.unwrap_or(a.max_depth),
                 noise_k: a.noise_k,
                 balance: a.balance,
+                roots: match a.roots.as_deref() {
+                    None => None,
+                    Some(&[x, y, z]) => Some([x, y, z]),
+                    Some(_) => bail!("{}: --roots needs X,Y,Z", a.scene),
+                },
             },
         )
     } else if a.uniform {

@@ -14,7 +14,26 @@ pub const VERSION_MAJOR: u16 = 1;
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 2;
+pub const VERSION_MINOR: u16 = 3;
+
+/// Minor version that introduced octree forests (root grids other than
+/// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
+pub const MINOR_FOREST: u16 = 3;
+
+/// Octree root grid `[rx, ry, rz]` as the `OCTR`/`OCTC` header words
+/// `w2 = (rx − 1) | (ry − 1) << 16`, `w3 = rz − 1` (so the zeros of files
+/// before 1.3 read as one root). `None` if an axis is outside `1..=65536`.
+pub fn pack_roots(r: [u32; 3]) -> Option<[u32; 2]> {
+    if r.iter().any(|&v| v == 0 || v > 65536) {
+        return None;
+    }
+    Some([(r[0] - 1) | ((r[1] - 1) << 16), r[2] - 1])
+}
+
+/// Inverse of [`pack_roots`]; `None` if `w3 ≥ 65536`.
+pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
+    (w3 < 65536).then(|| [(w2 & 0xffff) + 1, (w2 >> 16) + 1, w3 + 1])
+}
 
 /// The lowest minor version whose section set includes every id in `ids`:
 /// 2 if `OCTC` ([`SectionId::OCTREE_COMPACT`]) is present, else 1 if `LGRP`

@@ -32,6 +32,7 @@ pub use crc::{crc32, Crc32};
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
+pub use octree_compact::lattice_step;
 pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use write::{assemble_file, SectionBuilder};
 
@@ -145,14 +146,50 @@ pub struct OctreeNode {
     pub sample_count: u32,
 }
 
-/// An adaptive volume's octree: nodes (root first) and the sample lists
-/// they index (probe indices).
-#[derive(Clone, Debug, Default, PartialEq)]
+/// An adaptive volume's octree — or a forest of octrees whose roots tile the
+/// volume's box as a grid — : nodes (roots first) and the sample lists they
+/// index (probe indices).
+///
+/// A single root cell copies the box's aspect ratio into every cell of the
+/// tree (an 8 × 3 × 4 m room gives cells 2.7× longer in x than in y); a
+/// grid of near-cubic roots keeps cells near-cubic at every depth, which is
+/// what interpolation error and the seed's cell-size heuristics assume
+/// (format 1.3; see `docs/file-format.md`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Octree {
-    /// Nodes; node 0 is the root.
+    /// Nodes; nodes `0..roots[0]·roots[1]·roots[2]` are the roots (depth 0),
+    /// root `(i, j, k)` at index `i + rx·(j + ry·k)`, in the same box order
+    /// as [`VolumeGrid`] cells.
     pub nodes: Vec<OctreeNode>,
     /// Concatenated per-node sample lists: probe indices.
     pub samples: Vec<u32>,
+    /// Root cells per axis (x, y, z), each ≥ 1; `[1, 1, 1]` is a single
+    /// octree (every file before format 1.3).
+    pub roots: [u32; 3],
+}
+
+impl Default for Octree {
+    fn default() -> Self {
+        Self {
+            nodes: Vec::new(),
+            samples: Vec::new(),
+            roots: [1, 1, 1],
+        }
+    }
+}
+
+impl Octree {
+    /// Number of root nodes, `rx·ry·rz` (saturating).
+    pub fn root_count(&self) -> usize {
+        self.roots
+            .iter()
+            .fold(1usize, |a, &r| a.saturating_mul(r as usize))
+    }
+
+    /// Whether this is a forest (more than one root), which needs format 1.3.
+    pub fn is_forest(&self) -> bool {
+        self.roots != [1, 1, 1]
+    }
 }
 
 /// A uniform volume's grid: probes at the corners of `resolution − 1` cells

@@ -1,5 +1,5 @@
-//! The compact octree section `OCTC` (format 1.2): an adaptive volume's
-//! octree as one bit per node, its corners found by position.
+//! The compact octree section `OCTC` (format 1.2; forests 1.3): an adaptive
+//! volume's octree as one bit per node, its corners found by position.
 //!
 //! The explicit `OCTR` section spends 40 bytes per node plus 8 `u32` corner
 //! indices per leaf (~72 bytes per leaf, a third of an adaptive volume file).
@@ -16,9 +16,15 @@
 //! the choice never changes what a reader sees.
 //!
 //! Layout (`docs/file-format.md`, *`OCTC`*): header `w0` node count `N`,
-//! `w1` max depth `D ≤ 20`; arrays: `f32[6]` root min and max; `ceil(N/8)`
-//! bytes of child bits, bit `i % 8` of byte `i / 8` set when node `i` has
-//! children.
+//! `w1` max depth `D ≤ 20`, `w2`/`w3` the root grid (format 1.3,
+//! [`super::layout::pack_roots`]); arrays: `f32[6]` box min and max;
+//! `ceil(N/8)` bytes of child bits, bit `i % 8` of byte `i / 8` set when
+//! node `i` has children.
+//!
+//! A forest of `R = rx·ry·rz` roots is the same thing on a lattice of
+//! `r_a·2^D` cells per axis: the first `R` nodes are the roots, root
+//! `(i, j, k)` (index `i + rx·(j + ry·k)`) at lattice corner
+//! `(i, j, k)·2^D`, and `N = R + 8 × (nodes with children)`.
 
 use super::error::FormatError;
 use super::layout::{SectionId, NONE};
@@ -41,6 +47,8 @@ pub(crate) struct Compact {
     pub max_depth: u32,
     /// Node count.
     pub nodes: u32,
+    /// Root grid (x, y, z), each ≥ 1.
+    pub roots: [u32; 3],
     /// Child bits, LSB first.
     pub bits: Vec<u8>,
 }
@@ -59,6 +67,11 @@ fn topology(element: usize, reason: &'static str) -> FormatError {
         element: element as u64,
         reason,
     }
+}
+
+/// Lattice step `(max − min) / cells` per axis, the builder's formula.
+pub fn lattice_step(min: Vec3, max: Vec3, cells: [u32; 3]) -> Vec3 {
+    (max - min) / Vec3::new(cells[0] as f32, cells[1] as f32, cells[2] as f32)
 }
 
 /// Lattice position `min + q·step`, the builder's formula.
@@ -90,14 +103,35 @@ impl Compact {
         }
         let bit = |i: usize| (self.bits[i / 8] >> (i % 8)) & 1 == 1;
         let parents = (0..n).filter(|&i| bit(i)).count();
-        if parents.checked_mul(8).and_then(|c| c.checked_add(1)) != Some(n) {
-            return Err(invalid(0, "node count is not 1 + 8 × nodes with children"));
+        let [rx, ry, rz] = self.roots;
+        let root_count = (rx as usize)
+            .checked_mul(ry as usize)
+            .and_then(|v| v.checked_mul(rz as usize))
+            .filter(|&r| r >= 1 && r <= n)
+            .ok_or(invalid(0, "root grid empty or larger than the node count"))?;
+        if parents
+            .checked_mul(8)
+            .and_then(|c| c.checked_add(root_count))
+            != Some(n)
+        {
+            return Err(invalid(
+                0,
+                "node count is not roots + 8 × nodes with children",
+            ));
         }
         if (n..self.bits.len() * 8).any(bit) {
             return Err(invalid(n, "child bit set past the last node"));
         }
-        let full = 1u32 << self.max_depth;
-        let step = (self.max - self.min) / full as f32;
+        let side = 1u32 << self.max_depth;
+        // Lattice cells per axis (< 2^36 with 65536 roots and depth 20).
+        let cells = self.roots.map(|r| r as u64 * side as u64);
+        if cells.iter().any(|&c| c > 1 << 24) {
+            return Err(invalid(
+                0,
+                "root grid × 2^depth exceeds 2^24 cells per axis",
+            ));
+        }
+        let step = lattice_step(self.min, self.max, cells.map(|c| c as u32));
         let mut index: BTreeMap<[u32; 3], u32> = BTreeMap::new();
         for (i, p) in positions.iter().enumerate().rev() {
             index.insert(key(*p), i as u32);
@@ -105,15 +139,23 @@ impl Compact {
         // Lattice corner and depth of each node, filled as parents are met.
         let mut lo = vec![[0u32; 3]; n];
         let mut depth = vec![0u32; n];
+        for (r, l) in lo.iter_mut().enumerate().take(root_count) {
+            let (i, j, k) = (
+                r % rx as usize,
+                (r / rx as usize) % ry as usize,
+                r / (rx * ry) as usize,
+            );
+            *l = [i as u32 * side, j as u32 * side, k as u32 * side];
+        }
         let mut nodes = Vec::with_capacity(n);
         let mut samples = Vec::new();
-        let mut next = 1usize;
+        let mut next = root_count;
         for i in 0..n {
-            if i > 0 && i >= next {
+            if i >= next {
                 // No earlier node claimed it: children must follow parents.
                 return Err(topology(i, "octree node unreachable from the root"));
             }
-            let size = full >> depth[i];
+            let size = side >> depth[i];
             let hi = lo[i].map(|v| v + size);
             let mut node = OctreeNode {
                 min: lattice_pos(self.min, step, lo[i]),
@@ -157,7 +199,11 @@ impl Compact {
             }
             nodes.push(node);
         }
-        Ok(Octree { nodes, samples })
+        Ok(Octree {
+            nodes,
+            samples,
+            roots: self.roots,
+        })
     }
 }
 
@@ -165,6 +211,7 @@ impl Compact {
 /// `o` with these `positions` (see the module docs); `None` otherwise.
 pub(crate) fn encode(o: &Octree, positions: &[Vec3]) -> Option<Compact> {
     let root = o.nodes.first()?;
+    let last_root = o.nodes.get(o.root_count().checked_sub(1)?)?;
     if root.depth != 0 || u32::try_from(o.nodes.len()).is_err() {
         return None;
     }
@@ -180,9 +227,10 @@ pub(crate) fn encode(o: &Octree, positions: &[Vec3]) -> Option<Compact> {
     }
     let c = Compact {
         min: root.min,
-        max: root.max,
+        max: last_root.max,
         max_depth,
         nodes: o.nodes.len() as u32,
+        roots: o.roots,
         bits,
     };
     match c.expand(positions) {

@@ -380,8 +380,18 @@ fn parse_outer(s: &Sec<'_>) -> Result<OuterCells, FormatError> {
     })
 }
 
+/// The root grid of an `OCTR`/`OCTC` header (`w2`, `w3`).
+fn parse_roots(id: SectionId, w2: u32, w3: u32) -> Result<[u32; 3], FormatError> {
+    super::layout::unpack_roots(w2, w3).ok_or(FormatError::InvalidValue {
+        id,
+        element: 0,
+        reason: "octree root grid axis outside 1..=65536",
+    })
+}
+
 fn parse_octree(s: &Sec<'_>) -> Result<Octree, FormatError> {
-    let [nodes, samples, ..] = s.header()?;
+    let [nodes, samples, w2, w3] = s.header()?;
+    let roots = parse_roots(SectionId::OCTREE, w2, w3)?;
     let [n, sm] = s.arrays([bytes_for(nodes, OCTREE_NODE_LEN), bytes_for(samples, 4)])?;
     let nodes = pod_vec::<[u32; 10]>(n)
         .into_iter()
@@ -400,11 +410,13 @@ fn parse_octree(s: &Sec<'_>) -> Result<Octree, FormatError> {
     Ok(Octree {
         nodes,
         samples: pod_vec(sm),
+        roots,
     })
 }
 
 fn parse_octree_compact(s: &Sec<'_>) -> Result<super::octree_compact::Compact, FormatError> {
-    let [nodes, max_depth, ..] = s.header()?;
+    let [nodes, max_depth, w2, w3] = s.header()?;
+    let roots = parse_roots(SectionId::OCTREE_COMPACT, w2, w3)?;
     let bits_len = (nodes as usize).div_ceil(8);
     let [b, bits] = s.arrays([Some(24), Some(bits_len)])?;
     let b = pod_vec::<[f32; 6]>(b);
@@ -414,6 +426,7 @@ fn parse_octree_compact(s: &Sec<'_>) -> Result<super::octree_compact::Compact, F
         max: Vec3::new(b[3], b[4], b[5]),
         max_depth,
         nodes,
+        roots,
         bits: bits.to_vec(),
     })
 }

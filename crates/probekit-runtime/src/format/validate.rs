@@ -193,6 +193,14 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
                 reason: "octree without a root node",
             });
         }
+        let roots = o.root_count();
+        if o.roots.contains(&0) || roots > n {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: 0,
+                reason: "octree root grid empty or larger than the node count",
+            });
+        }
         let mut has_parent = vec![false; n];
         for (k, node) in o.nodes.iter().enumerate() {
             check_box(id, k, node.min, node.max)?;
@@ -230,8 +238,15 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
                 ));
             }
         }
-        if let Some(k) = has_parent.iter().skip(1).position(|p| !p) {
-            return Err(topology(id, k + 1, "octree node unreachable from the root"));
+        if let Some(k) = has_parent[..roots].iter().position(|p| *p) {
+            return Err(topology(id, k, "octree root node has a parent"));
+        }
+        if let Some(k) = has_parent.iter().skip(roots).position(|p| !p) {
+            return Err(topology(
+                id,
+                k + roots,
+                "octree node unreachable from the root",
+            ));
         }
     }
 

@@ -176,16 +176,18 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         .and_then(|o| super::octree_compact::encode(o, &f.positions))
     {
         // Regular octree (every builder-made one): 1 bit per node.
-        let mut s = SectionBuilder::new([c.nodes, c.max_depth, 0, 0]);
+        let [w2, w3] = roots_words(c.roots)?;
+        let mut s = SectionBuilder::new([c.nodes, c.max_depth, w2, w3]);
         s.vec3s([&c.min, &c.max]).pad();
         s.bytes(&c.bits);
         out.push((SectionId::OCTREE_COMPACT, s.finish()));
     } else if let Some(o) = &f.octree {
+        let [w2, w3] = roots_words(o.roots)?;
         let mut s = SectionBuilder::new([
             count(o.nodes.len(), "octree nodes")?,
             count(o.samples.len(), "octree samples")?,
-            0,
-            0,
+            w2,
+            w3,
         ]);
         for n in &o.nodes {
             s.vec3s([&n.min, &n.max]);
@@ -272,16 +274,31 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     Ok(out)
 }
 
+/// Header words `w2`, `w3` of `OCTR`/`OCTC` for a root grid.
+fn roots_words(r: [u32; 3]) -> Result<[u32; 2], FormatError> {
+    layout::pack_roots(r).ok_or(FormatError::InvalidValue {
+        id: SectionId::OCTREE,
+        element: 0,
+        reason: "octree root grid axis outside 1..=65536",
+    })
+}
+
 impl ProbeFile {
     /// Serializes the file (after [`ProbeFile::validate`]). Deterministic:
     /// equal contents give equal bytes. The header's minor version is the
     /// lowest that holds the sections present
     /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
-    /// (1) or a regular octree, written compactly as `OCTC` (2).
+    /// (1) or a regular octree, written compactly as `OCTC` (2), or an
+    /// octree forest ([`layout::MINOR_FOREST`], 3).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
-        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id));
+        let forest = self.octree.as_ref().is_some_and(|o| o.is_forest());
+        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id)).max(if forest {
+            layout::MINOR_FOREST
+        } else {
+            0
+        });
         debug_assert!(minor <= VERSION_MINOR);
         Ok(assemble_file(self.kind.id(), minor, 0, &sections))
     }

@@ -90,6 +90,7 @@ pub fn full_file() -> ProbeFile {
     f.octree = Some(Octree {
         nodes,
         samples: (0..65).map(|i| i % 5).collect(),
+        roots: [1, 1, 1],
     });
     f.grid = Some(VolumeGrid {
         min: Vec3::splat(-1.0),
@@ -804,7 +805,11 @@ pub fn compact_volume_file() -> ProbeFile {
     let coeffs: Vec<Vec3> = (0..27 * 4).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
     let mut f = ProbeFile::cloud(positions, 2, &coeffs).unwrap();
     f.kind = ProbeFileKind::Volume;
-    f.octree = Some(Octree { nodes, samples });
+    f.octree = Some(Octree {
+        nodes,
+        samples,
+        roots: [1, 1, 1],
+    });
     f.metadata = "{}".into();
     f
 }

@@ -445,6 +445,7 @@ fn depth_rows_partition_leaves_samples_and_volume() {
         geometry_depth: u32::MAX,
         noise_k: 0.0,
         balance: false,
+        roots: Some([1, 1, 1]),
     };
     let (file, stats) = build_adaptive(&src, &s).unwrap();
     let rows = depth_rows(&file);

@@ -2,6 +2,7 @@
 
 use super::source::{Captured, VolumeSource};
 use super::VolumeBuildError;
+use crate::format::lattice_step;
 use crate::format::{
     layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET},
     Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeFileKind, Validity, VolumeGrid,
@@ -87,6 +88,39 @@ pub struct AdaptiveSettings {
     /// leaf next to much finer ones smears its far-away samples over them;
     /// balance bounds that reach to twice the fine size.
     pub balance: bool,
+    /// Root cells per axis: the box is first cut into this grid and each
+    /// root cell is an octree (a forest, format 1.3); depths count from the
+    /// root cells. `None` = [`near_cubic_roots`] of the box; `Some([1, 1,
+    /// 1])` = the seed's single octree over the whole box, whose cells copy
+    /// the box's aspect ratio.
+    pub roots: Option<[u32; 3]>,
+}
+
+/// The coarsest grid of root cells that keeps them near-cubic: for `m` =
+/// 1, 2, 3, 4 the cell edge `e = (smallest extent) / m`, `r_a =
+/// max(1, round(extent_a / e))` roots per axis; the first `m` whose cells'
+/// longest / shortest edge is at most 1.25 wins, else the most cubic of the
+/// four. An 8 × 3 × 4 m room gets 5 × 2 × 3 roots of 1.6 × 1.5 × 1.33 m
+/// (a single root's cells there are 2.7 : 1); a cube gets one root.
+pub fn near_cubic_roots(min: Vec3, max: Vec3) -> Result<[u32; 3], VolumeBuildError> {
+    check_box(min, max)?;
+    let ext = max - min;
+    let mut best = ([1u32; 3], f32::INFINITY);
+    for m in 1..=4u32 {
+        let e = ext.min_element() / m as f32;
+        let r = ext
+            .to_array()
+            .map(|x| ((x / e).round() as u32).clamp(1, 4096));
+        let cell = ext / Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32);
+        let aspect = cell.max_element() / cell.min_element();
+        if aspect <= 1.25 {
+            return Ok(r);
+        }
+        if aspect < best.1 {
+            best = (r, aspect);
+        }
+    }
+    Ok(best.0)
 }
 
 /// Counters of a build.
@@ -236,6 +270,8 @@ struct Lattice<'a> {
     src: &'a dyn VolumeSource,
     min: Vec3,
     step: Vec3,
+    /// Lattice cells per axis (`roots · 2^max_depth`).
+    cells: [u32; 3],
     index: HashMap<[u32; 3], usize>,
     keys: Vec<[u32; 3]>,
     caps: Vec<Captured>,
@@ -398,22 +434,45 @@ pub fn build_adaptive(
         return Err(VolumeBuildError::BadDepth(s.min_depth, s.max_depth));
     }
     let n = src.order() * src.order();
+    let roots = match s.roots {
+        Some(r) => r,
+        None => near_cubic_roots(common.min, common.max)?,
+    };
+    // Edge of a depth-0 (root) cell in lattice units.
     let full = 1u32 << s.max_depth;
+    let lattice_cells: Vec<u64> = roots.iter().map(|&r| r as u64 * full as u64).collect();
+    let root_total: u64 = roots.iter().map(|&r| r as u64).product();
+    if roots.iter().any(|&r| r == 0 || r > 65536)
+        || root_total > 1 << 20
+        || lattice_cells.iter().any(|&c| c > 1 << 24)
+    {
+        return Err(VolumeBuildError::BadRoots(roots));
+    }
+    let lattice_cells = [0, 1, 2].map(|a| lattice_cells[a] as u32);
     let mut lat = Lattice {
         src,
         min: common.min,
-        step: (common.max - common.min) / full as f32,
+        step: lattice_step(common.min, common.max, lattice_cells),
+        cells: lattice_cells,
         index: HashMap::new(),
         keys: Vec::new(),
         caps: Vec::new(),
         captures: 0,
     };
-    let mut cells = vec![Cell {
-        lo: [0; 3],
-        depth: 0,
-        first_child: NO_CHILD,
-    }];
-    let mut frontier = vec![0usize];
+    let mut cells = Vec::new();
+    for k in 0..roots[2] {
+        for j in 0..roots[1] {
+            for i in 0..roots[0] {
+                cells.push(Cell {
+                    lo: [i * full, j * full, k * full],
+                    depth: 0,
+                    first_child: NO_CHILD,
+                });
+            }
+        }
+    }
+    let root_count = cells.len();
+    let mut frontier: Vec<usize> = (0..root_count).collect();
     let mut depth_cache: HashMap<[u32; 3], f32> = HashMap::new();
     let mut scale = MissScale::new(src.order(), s.noise_k.max(0.0));
     while !frontier.is_empty() {
@@ -535,8 +594,9 @@ pub fn build_adaptive(
     if s.balance {
         balance_cells(&mut cells, &mut lat, full);
     }
-    // Emit reachable nodes breadth-first; keep only samples used by leaves.
-    let mut order = vec![0usize];
+    // Emit reachable nodes breadth-first (roots first); keep only samples
+    // used by leaves.
+    let mut order: Vec<usize> = (0..root_count).collect();
     let mut new_first = Vec::new();
     let mut i = 0;
     while i < order.len() {
@@ -608,6 +668,7 @@ pub fn build_adaptive(
         f.octree = Some(Octree {
             nodes,
             samples: lists,
+            roots,
         })
     })?;
     Ok((file, stats))
@@ -637,7 +698,7 @@ fn balance_cells(cells: &mut Vec<Cell>, lat: &mut Lattice, full: u32) {
                         let lo: Option<Vec<u32>> = (0..3)
                             .map(|a| {
                                 let v = c.lo[a] as i64 + q[a] * size as i64;
-                                (v >= 0 && v < full as i64).then_some(v as u32)
+                                (v >= 0 && v < lat.cells[a] as i64).then_some(v as u32)
                             })
                             .collect();
                         let Some(lo) = lo else { continue };

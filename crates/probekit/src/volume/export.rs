@@ -15,7 +15,8 @@
 //! Texel `(i, j, k)` is the volume's radiance SH at `min + (i, j, k) /
 //! (R − 1) · (max − min)` (cell corners, as the volume's samples). A uniform
 //! volume is written at its own resolution. An octree is resampled onto the
-//! uniform lattice of its finest level (`2^depth + 1` texels per axis) with
+//! uniform lattice of its finest level (`roots·2^depth + 1` texels per axis,
+//! `roots` the octree's root grid, [`Volume::root_grid`]) with
 //! the runtime's continuous trilinear query — simple, but memory grows like
 //! the finest level (`--layout dense`); [`export_bricks`] keeps the
 //! octree's adaptivity instead, and [`export_auto`] (the CLI's default)
@@ -24,7 +25,7 @@
 //! # Brick atlas ([`export_bricks`])
 //! The usual GPU form of an adaptive volume (a two-level sparse grid, as in
 //! brick maps and Unreal's volumetric lightmaps): an **indirection texture**
-//! of `N = 2^Di` texels per axis over the box, `Di = max_depth − 2`, and an
+//! of `N = roots·2^Di` texels per axis over the box, `Di = max_depth − 2`, and an
 //! **atlas** of bricks of `(BRICK_CELLS + 1)³ = 5³` texels. A brick covers
 //! one octree node: a node at depth `Di` whose leaves are finer (then its 5
 //! texels per axis are exactly the finest lattice), or a leaf shallower than
@@ -372,7 +373,18 @@ pub struct Ktx2Export {
 
 fn lattice_resolution(v: &Volume, finest: Option<u32>) -> Result<[u32; 3], ExportError> {
     let r = match finest {
-        Some(d) => [(1u32 << d.min(10)) + 1; 3],
+        Some(d) => {
+            let roots = v.root_grid().unwrap_or([1; 3]);
+            let mut r = [0u32; 3];
+            for a in 0..3 {
+                let cells = (roots[a] as u64) << d.min(10);
+                if cells >= 1 << 26 {
+                    return Err(ExportError::TooLarge([cells as u32; 3]));
+                }
+                r[a] = cells as u32 + 1;
+            }
+            r
+        }
         None => v.grid_resolution().unwrap_or([2; 3]),
     };
     if r.iter().map(|&x| x as u64).product::<u64>() > 1 << 26 {
@@ -584,7 +596,7 @@ pub const BRICK_CELLS: u32 = 4;
 /// the indirection depth `Di = max_depth − 2` that has finer leaves and one
 /// per shallower leaf, packed into atlas textures (encoded as
 /// [`export_ktx2`] does), plus an `R8G8B8A8_UINT` indirection texture of
-/// `2^Di` texels per axis. Memory follows the octree's adaptivity instead of
+/// `roots·2^Di` texels per axis. Memory follows the octree's adaptivity instead of
 /// its finest level. A uniform volume has no octree: use [`export_ktx2`].
 pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Export, ExportError> {
     bricks_from_plan(volume, &plan_bricks(volume)?, encoding)
@@ -593,8 +605,8 @@ pub fn export_bricks(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Expo
 /// Which bricks an octree's atlas holds and where: the cheap half of
 /// [`export_bricks`] (no sampling), enough to size the atlas.
 struct BrickPlan {
-    /// Indirection texels per axis (`2^Di`).
-    cells: u32,
+    /// Indirection texels per axis (`roots · 2^Di`).
+    cells: [u32; 3],
     /// Per brick: (level, node coordinates at depth `Di − level`).
     bricks: Vec<(u32, [u32; 3])>,
     /// Per indirection cell (x fastest): (brick, level).
@@ -611,21 +623,30 @@ fn plan_bricks(volume: &Volume) -> Result<BrickPlan, ExportError> {
     }
     let depth = volume.max_depth();
     let di = depth.saturating_sub(BRICK_CELLS.trailing_zeros()).min(8);
-    let cells = 1u32 << di;
+    let roots = volume.root_grid().unwrap_or([1; 3]);
+    if roots.iter().any(|&r| r > 1 << 12) {
+        return Err(ExportError::TooLarge(roots));
+    }
+    let cells = roots.map(|r| r << di);
     let (min, max) = volume.bounds();
     let size = max - min;
     // Which brick each indirection cell uses: (level, node coordinates at
     // depth di − level), numbered in first-use order (deterministic).
     let mut index: std::collections::BTreeMap<(u32, [u32; 3]), u32> = Default::default();
     let mut bricks: Vec<(u32, [u32; 3])> = Vec::new();
-    let mut cell_brick = Vec::with_capacity((cells as usize).pow(3));
-    for k in 0..cells {
-        for j in 0..cells {
-            for i in 0..cells {
+    let total: u64 = cells.iter().map(|&c| c as u64).product();
+    if total > 1 << 24 {
+        return Err(ExportError::TooLarge(cells));
+    }
+    let mut cell_brick = Vec::with_capacity(total as usize);
+    for k in 0..cells[2] {
+        for j in 0..cells[1] {
+            for i in 0..cells[0] {
                 let q = [i, j, k];
                 let c = min
-                    + Vec3::from_array(std::array::from_fn(|a| (q[a] as f32 + 0.5) / cells as f32))
-                        * size;
+                    + Vec3::from_array(std::array::from_fn(|a| {
+                        (q[a] as f32 + 0.5) / cells[a] as f32
+                    })) * size;
                 let level = di - volume.leaf_depth_at(c).min(di);
                 let node = q.map(|x| x >> level);
                 let b = *index.entry((level, node)).or_insert_with(|| {
@@ -678,7 +699,8 @@ fn bricks_from_plan(
     let mut pts = vec![min; rx * ry * res[2] as usize];
     for (b, &(level, node)) in bricks.iter().enumerate() {
         let (bx, by, bz) = (b % ax, (b / ax) % ay, b / (ax * ay));
-        let extent = size * ((1u32 << level) as f32 / cells as f32);
+        let n = Vec3::from_array(cells.map(|c| c as f32));
+        let extent = size * ((1u32 << level) as f32 / n);
         let origin = min + Vec3::from_array(node.map(|x| x as f32)) * extent;
         for w in 0..t {
             for v in 0..t {
@@ -710,7 +732,7 @@ fn bricks_from_plan(
             "indirection_rgba8ui.ktx2".to_string(),
             Ktx2 {
                 format: TexelFormat::Rgba8Uint,
-                size: [cells; 3],
+                size: cells,
                 kvd: vec![("KTXwriter".to_string(), "probekit".to_string())],
                 data: ind,
             },
@@ -722,7 +744,7 @@ fn bricks_from_plan(
         "box": {"min": min.to_array(), "max": max.to_array()},
         "indirection": {
             "file": "indirection_rgba8ui.ktx2",
-            "resolution": [cells, cells, cells],
+            "resolution": cells,
             "texel": "r,g,b = brick coordinates in the atlas (in bricks), a = level: the brick covers 2^level indirection cells per axis",
         },
         "brick_cells": BRICK_CELLS,
@@ -750,7 +772,11 @@ pub fn export_auto(volume: &Volume, encoding: Ktx2Encoding) -> Result<Ktx2Export
     }
     let plan = plan_bricks(volume)?;
     let atlas: u64 = plan.res.iter().map(|&r| r as u64).product();
-    let dense = ((1u64 << volume.max_depth().min(10)) + 1).pow(3);
+    let roots = volume.root_grid().unwrap_or([1; 3]);
+    let dense: u64 = roots
+        .iter()
+        .map(|&r| ((r as u64) << volume.max_depth().min(10)) + 1)
+        .product();
     if atlas < dense {
         bricks_from_plan(volume, &plan, encoding)
     } else {

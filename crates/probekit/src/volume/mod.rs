@@ -18,8 +18,8 @@ mod tests;
 
 pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress};
 pub use build::{
-    build_adaptive, build_uniform, dilate, relative_difference, resolution_for_cell,
-    AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
+    build_adaptive, build_uniform, dilate, near_cubic_roots, relative_difference,
+    resolution_for_cell, AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
 };
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
 pub use report::{depth_rows, plot_depths, DepthRow};
@@ -42,6 +42,10 @@ pub enum VolumeBuildError {
     /// Depth limits out of order or above 20.
     #[error("depths min {0} / max {1}: need min <= max <= 20")]
     BadDepth(u32, u32),
+    /// A root grid axis outside 1..=65536, more than 2^20 roots, or roots ×
+    /// 2^max_depth above 2^24 cells per axis.
+    #[error("root grid {0:?}: need 1..=65536 roots per axis, at most 2^20 in all, and roots × 2^max-depth <= 2^24")]
+    BadRoots([u32; 3]),
     /// Too many samples requested.
     #[error("{0} samples per axis or in total is too many")]
     TooLarge(u64),

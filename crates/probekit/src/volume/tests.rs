@@ -61,6 +61,7 @@ pub(super) fn geometry_only(common: CommonSettings, max_depth: u32) -> AdaptiveS
         geometry_depth: u32::MAX,
         noise_k: 0.0,
         balance: false,
+        roots: Some([1, 1, 1]),
     }
 }
 
@@ -258,6 +259,7 @@ fn adaptive(
             geometry_depth: u32::MAX,
             noise_k: 0.0,
             balance: false,
+            roots: Some([1, 1, 1]),
         },
     )
     .unwrap()
@@ -328,6 +330,28 @@ fn max_jump(v: &Volume, a: Vec3, b: Vec3, step: f32, interp: Interp) -> f32 {
     worst
 }
 
+/// Largest steps along `a → b` at a coarse (finest cell / 4) and a fine
+/// (finest cell / 64) sampling step.
+fn jumps(v: &Volume, a: Vec3, b: Vec3, finest: f32, interp: Interp) -> (f32, f32) {
+    (
+        max_jump(v, a, b, finest / 4.0, interp),
+        max_jump(v, a, b, finest / 64.0, interp),
+    )
+}
+
+/// Continuous, piecewise smooth along `a → b` for the three seam-free
+/// schemes: the largest step shrinks with the step (ratio ≈ 1/16); a jump
+/// would keep it ≈ 1.
+fn assert_continuous_on_line(v: &Volume, a: Vec3, b: Vec3, finest: f32) {
+    for interp in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic] {
+        let (jc, jf) = jumps(v, a, b, finest, interp);
+        assert!(
+            jf <= 0.35 * jc + 1e-6,
+            "{interp:?} {a}→{b}: {jf} at fine step vs {jc}"
+        );
+    }
+}
+
 #[test]
 fn lighting_is_continuous_along_random_lines_across_levels() {
     let demo = LightsDemo::demo(2);
@@ -335,23 +359,12 @@ fn lighting_is_continuous_along_random_lines_across_levels() {
     let v = Volume::from_file(&file).unwrap();
     let (min, max) = LightsDemo::demo_box();
     let finest = (max.x - min.x) / 16.0;
-    let (coarse, fine) = (finest / 4.0, finest / 64.0);
     let mut rng = Rng(99);
     let mut naive_jumps = 0;
     for _ in 0..24 {
         let (a, b) = (rng.point(min, max), rng.point(min, max));
-        for interp in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic] {
-            let jc = max_jump(&v, a, b, coarse, interp);
-            let jf = max_jump(&v, a, b, fine, interp);
-            // Continuous, piecewise smooth: the largest step shrinks with the
-            // step (ratio ≈ 1/16); a jump would keep it ≈ 1.
-            assert!(
-                jf <= 0.35 * jc + 1e-6,
-                "{interp:?} {a}→{b}: {jf} at fine step vs {jc}"
-            );
-        }
-        let jc = max_jump(&v, a, b, coarse, Interp::LeafTrilinear);
-        let jf = max_jump(&v, a, b, fine, Interp::LeafTrilinear);
+        assert_continuous_on_line(&v, a, b, finest);
+        let (jc, jf) = jumps(&v, a, b, finest, Interp::LeafTrilinear);
         if jf > 0.35 * jc {
             naive_jumps += 1;
         }
@@ -853,6 +866,7 @@ fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
         relative_floor: 0.0,
         noise_k,
         balance: false,
+        roots: Some([1, 1, 1]),
     }
 }
 
@@ -930,6 +944,7 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
                 relative_floor: 0.0,
                 noise_k: 2.0,
                 balance: false,
+                roots: Some([1, 1, 1]),
             },
         )
         .unwrap();
@@ -1003,5 +1018,164 @@ fn balance_limits_neighbouring_leaves_to_one_level() {
     for (i, p) in bal.positions.iter().enumerate() {
         let want = if p.x < 0.3 { 1.0 } else { 6.0 };
         assert_eq!(c[i], Vec3::splat(want));
+    }
+}
+
+/// Forests of near-cubic root octrees (format 1.3).
+mod forest {
+    use super::*;
+
+    #[test]
+    fn near_cubic_roots_of_boxes() {
+        let r = |x: f32, y: f32, z: f32| near_cubic_roots(Vec3::ZERO, Vec3::new(x, y, z)).unwrap();
+        assert_eq!(r(8.0, 3.0, 4.0), [5, 2, 3]);
+        assert_eq!(r(2.0, 2.0, 2.0), [1, 1, 1]);
+        assert_eq!(r(1.0, 1.0, 10.0), [1, 1, 10]);
+        assert_eq!(r(1.0, 1.0, 2.5), [1, 1, 3]);
+        // Whatever the box, the root cells' aspect is what the rule says.
+        let mut rng = Rng(5);
+        for _ in 0..200 {
+            let ext = Vec3::new(
+                0.5 + 10.0 * rng.next(),
+                0.5 + 10.0 * rng.next(),
+                0.5 + 10.0 * rng.next(),
+            );
+            let roots = near_cubic_roots(Vec3::ZERO, ext).unwrap();
+            let cell = ext / Vec3::from_array(roots.map(|v| v as f32));
+            let aspect = cell.max_element() / cell.min_element();
+            // m = 4 alone bounds the aspect by (1 + 1/8) / (1 − 1/8) · …;
+            // 1.6 is a generous envelope of the four tries.
+            assert!(aspect < 1.6, "{ext} → {roots:?}: aspect {aspect}");
+        }
+        assert!(near_cubic_roots(Vec3::ONE, Vec3::ONE).is_err());
+    }
+
+    /// A wavy field, independent of the volume code.
+    fn wavy(p: Vec3) -> Vec<Vec3> {
+        (0..4)
+            .map(|k| {
+                let k = k as f32;
+                Vec3::new(
+                    2.0 + (1.3 * p.x + k).sin() * (0.7 * p.y).cos(),
+                    1.0 + 0.1 * p.z * p.z - 0.1 * k,
+                    (0.5 * p.x * p.y + 0.3 * k).cos(),
+                )
+            })
+            .collect()
+    }
+
+    /// A forest that never splits below depth 1 is a uniform grid of
+    /// `roots·2 + 1` samples per axis: the octree query (kernels found
+    /// through the root grid) must equal the grid query (a separate code
+    /// path) everywhere.
+    #[test]
+    fn unsplit_forest_equals_the_uniform_grid() {
+        let src = FieldSource {
+            order: 2,
+            f: wavy,
+            g: |_| vec![],
+            log: Mutex::new(vec![]),
+        };
+        let (min, max) = (Vec3::new(-1.0, 0.0, 0.5), Vec3::new(3.0, 1.5, 5.0));
+        let mut s = geometry_only(common(min, max, GradientMode::None), 1);
+        s.geometry = false;
+        s.roots = Some([2, 1, 3]);
+        let (file, _) = build_adaptive(&src, &s).unwrap();
+        let o = file.octree.as_ref().unwrap();
+        assert_eq!(o.roots, [2, 1, 3]);
+        assert_eq!(o.nodes.len(), 6 + 6 * 8);
+        let tree = Volume::from_file(&file).unwrap();
+        assert_eq!(tree.root_grid(), Some([2, 1, 3]));
+        assert_eq!(tree.bounds(), (min, max));
+        let (grid_file, _) =
+            build_uniform(&src, &common(min, max, GradientMode::None), [5, 3, 7]).unwrap();
+        let grid = Volume::from_file(&grid_file).unwrap();
+        let mut rng = Rng(17);
+        for _ in 0..500 {
+            let p = rng.point(min - 0.2, max + 0.2);
+            let (a, b) = (
+                sh_at(&tree, p, Interp::Trilinear),
+                sh_at(&grid, p, Interp::Trilinear),
+            );
+            assert!(dist(&a, &b) < 1e-4, "{p}: {a:?} vs {b:?}");
+            assert_eq!(tree.leaf_depth_at(p), 1);
+        }
+    }
+
+    fn wall_forest() -> (crate::format::ProbeFile, Vec3, Vec3) {
+        // 2 × 1 × 1 box: roots 2 × 1 × 1 unit cubes; the wall refines x ≈ 0.3.
+        let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0));
+        let s = geometry_only(common(min, max, GradientMode::Analytic), 4);
+        let s = AdaptiveSettings { roots: None, ..s };
+        let (file, _) = build_adaptive(&ConstantWithWall, &s).unwrap();
+        (file, min, max)
+    }
+
+    /// Leaves of an auto-rooted forest are cubes; the file round-trips
+    /// through `OCTC` at minor 3; a constant field comes back everywhere.
+    #[test]
+    fn forest_leaves_are_cubes_and_round_trip() {
+        let (file, min, max) = wall_forest();
+        let o = file.octree.as_ref().unwrap();
+        assert_eq!(o.roots, [2, 1, 1]);
+        for n in &o.nodes {
+            let e = n.max - n.min;
+            assert!(e.max_element() / e.min_element() < 1.0 + 1e-5, "{n:?}");
+        }
+        assert!(o.nodes.iter().any(|n| n.depth == 4));
+        let bytes = file.to_bytes().unwrap();
+        let minor = crate::format::layout::header::MINOR;
+        assert_eq!(u16::from_le_bytes([bytes[minor], bytes[minor + 1]]), 3);
+        let back = crate::format::ProbeFile::from_bytes(&bytes).unwrap();
+        assert_eq!(back, file);
+        let v = Volume::from_file(&back).unwrap();
+        let want = ConstantWithWall
+            .capture(&[Vec3::ZERO])
+            .remove(0)
+            .sh
+            .into_coeffs();
+        let mut rng = Rng(23);
+        for _ in 0..300 {
+            let p = rng.point(min, max);
+            for i in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic] {
+                assert!(dist(&sh_at(&v, p, i), &want) < 1e-5, "{i:?} at {p}");
+            }
+        }
+    }
+
+    /// Lighting stays continuous along random lines that cross root cells
+    /// and levels (the same criterion as the single-root test).
+    #[test]
+    fn forest_lighting_is_continuous_along_random_lines() {
+        let demo = LightsDemo::demo(2);
+        let (min, max) = (Vec3::new(-2.0, -1.0, -2.0), Vec3::new(2.0, 1.0, 2.0));
+        let mut s = geometry_only(common(min, max, GradientMode::Analytic), 3);
+        s.roots = None;
+        s.prediction_tolerance = Some(0.25);
+        let (file, _) = build_adaptive(&demo, &s).unwrap();
+        assert_eq!(file.octree.as_ref().unwrap().roots, [2, 1, 2]);
+        let v = Volume::from_file(&file).unwrap();
+        let mut rng = Rng(7);
+        for _ in 0..16 {
+            let (a, b) = (rng.point(min, max), rng.point(min, max));
+            assert_continuous_on_line(&v, a, b, 1.0 / 8.0);
+        }
+    }
+
+    /// The dense KTX2 lattice of a forest has `roots·2^depth + 1` texels per
+    /// axis, and the brick atlas plan covers `roots·2^Di` indirection cells.
+    #[test]
+    fn forest_exports_follow_the_root_grid() {
+        use super::super::export::*;
+        let (file, _, _) = wall_forest();
+        let v = Volume::from_file(&file).unwrap();
+        let dense = export_ktx2(&v, Ktx2Encoding::F16, None).unwrap();
+        let (_, tex) = &dense.textures[0];
+        assert_eq!(tex.size, [2 * 16 + 1, 17, 17]);
+        let bricks = export_bricks(&v, Ktx2Encoding::F16).unwrap();
+        assert_eq!(
+            bricks.sidecar["indirection"]["resolution"],
+            serde_json::json!([2 * 4, 4, 4])
+        );
     }
 }
