@@ -93,6 +93,26 @@ fn volume_adaptive_and_errors() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["probes"].as_u64().unwrap() > 27 && v["probes"].as_u64().unwrap() <= 9 * 9 * 9);
+    // The lights demo's box is a cube: one root; an explicit root grid is
+    // kept and reported.
+    assert_eq!(v["roots"], serde_json::json!([1, 1, 1]));
+    let f = dir.path().join("f.probes");
+    let o = probekit(&[
+        "volume",
+        "builtin:lights-demo",
+        "-o",
+        f.to_str().unwrap(),
+        "--adaptive",
+        "--roots",
+        "2,1,3",
+        "--max-depth",
+        "1",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["roots"], serde_json::json!([2, 1, 3]));
+    assert_eq!(v["probes"], 5 * 3 * 7);
     // An octree exports as a brick atlas on request: indirection texture,
     // atlas textures and a sidecar that says so.
     let k = dir.path().join("bricks");
@@ -166,6 +186,24 @@ fn volume_adaptive_and_errors() {
             "bevy",
             "-o",
             "x.ktx2",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--adaptive",
+            "--roots",
+            "0,1,1",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--adaptive",
+            "--roots",
+            "2,1",
         ],
     ] {
         let o = probekit(&args);

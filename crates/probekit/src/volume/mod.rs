@@ -65,8 +65,10 @@ pub enum VolumeBuildError {
 }
 
 /// The `inspect --json` summary of a volume file:
-/// `{"probes":P,"leaves":L,"basis":"sh<order>/<codec>","gradients":bool,
-/// "bytes":B,"bytes_by_section":{...}}` (`probes` = samples, as for clouds).
+/// `{"probes":P,"leaves":L,"resolution":[x,y,z]|null,"roots":[x,y,z]|null,
+/// "max_depth":D,"basis":"sh<order>/<codec>","gradients":bool,"bytes":B,
+/// "bytes_by_section":{...}}` (`probes` = samples, as for clouds;
+/// `resolution` for a uniform grid, `roots` and `max_depth` for an octree).
 pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value, VolumeError> {
     let v = Volume::from_file(file)?;
     let by = file.bytes_by_section()?;
@@ -75,6 +77,9 @@ pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value
         "kind": "volume",
         "probes": file.positions.len(),
         "leaves": v.leaf_count(),
+        "resolution": v.grid_resolution(),
+        "roots": v.root_grid(),
+        "max_depth": v.max_depth(),
         "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
         "gradients": file.gradients.is_some(),
         "bytes": bytes,
