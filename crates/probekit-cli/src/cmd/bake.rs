@@ -28,6 +28,7 @@ use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
 };
+use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
@@ -104,6 +105,13 @@ pub struct BakeArgs {
     /// `demo.probes`.
     #[arg(long)]
     pub render: Option<PathBuf>,
+    /// Texels per side of each probe's octahedral distance-moment map
+    /// (`VISM`, visibility-aware blending at run time; 1..=64).
+    #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
+    pub visibility_res: u32,
+    /// Do not bake distance moments (the cloud blends without visibility).
+    #[arg(long)]
+    pub no_visibility: bool,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -282,6 +290,14 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     settings.groups = a.groups;
     let mut sj = settings_json(&settings, codec);
     sj["indirect_only"] = serde_json::json!(a.indirect_only);
+    // Distance moments for visibility-aware blending: whole-cloud bakes only
+    // (a shard's part file has no tetrahedra; `merge` does not add them).
+    let bb = scene.bake_box();
+    let vis = (!a.no_visibility && a.shard.is_none()).then(|| VisibilitySettings {
+        resolution: a.visibility_res,
+        ..VisibilitySettings::new(bb.size().length().max(1e-3), settings.seed)
+    });
+    sj["visibility"] = vis.map_or(serde_json::Value::Null, |v| v.to_json());
     let meta = BakeMetadata::new(
         format!("{:016x}", scene.content_hash()),
         Placement {
@@ -321,6 +337,22 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             .with_context(|| outname.clone())?;
         f.groups =
             light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
+        if let Some(v) = &vis {
+            let tracer = probekit::trace::Tracer::new(&scene);
+            let pb = ProgressBar::new(f.positions.len() as u64);
+            pb.set_style(
+                ProgressStyle::with_template(
+                    "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed",
+                )
+                .expect("static template"),
+            );
+            let m = bake_distance_moments(&tracer, &f.positions, v, &|done, _| {
+                pb.set_position(done as u64)
+            })
+            .with_context(|| format!("{}: --visibility-res", a.scene))?;
+            pb.finish_and_clear();
+            f.visibility = Some(m);
+        }
         f
     };
     file.validate().with_context(|| outname.clone())?;

@@ -50,6 +50,10 @@ pub struct EvalArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// Clouds: blend without the file's visibility (distance-moment)
+    /// weighting.
+    #[arg(long)]
+    pub no_visibility: bool,
     /// Also evaluate a uniform `grid` with the same probe count.
     #[arg(long)]
     pub compare: Option<String>,
@@ -76,8 +80,11 @@ fn to_json(m: &Metrics) -> serde_json::Value {
 pub fn run(a: &EvalArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let file = load_probes(&a.probes)?;
-    let predictor =
+    let mut predictor =
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
+    if let Predictor::Cloud(c) = &mut predictor {
+        c.set_visibility(!a.no_visibility);
+    }
     let scene = Scene::load(&a.scene).with_context(|| a.scene.display().to_string())?;
     let baker = Baker::new(&scene).with_context(|| a.scene.display().to_string())?;
     let bbox = match &a.bbox {
