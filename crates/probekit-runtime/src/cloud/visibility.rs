@@ -15,7 +15,8 @@
 //!        = (σ² / (σ² + (d − μ)²))^k           otherwise, σ² = max(μ2 − μ², σ²_min)
 //! ```
 //!
-//! floored at [`VISIBILITY_FLOOR`]. The blend weights of the enclosing
+//! with `k` = 3, then crushed below 0.2 (`v ← v³/0.2²`, as DDGI's reference
+//! code does) and floored at [`VISIBILITY_FLOOR`]. The blend weights of the enclosing
 //! tetrahedron (or outer cell) become `w_i = b_i·v_i / Σ_j b_j·v_j`. Every
 //! ingredient is continuous in `p` (the bilinear filter wraps across the
 //! octahedral map's edges, the test is continuous at `d = μ`, the weights
@@ -59,6 +60,14 @@ pub const DEFAULT_VISIBILITY_SHARPNESS: u32 = 3;
 /// standard deviation): a texel seeing one flat wall head-on has `μ2 = μ²`
 /// up to rounding, and a zero variance would make the test a hard step.
 pub const MIN_VISIBILITY_VARIANCE: f32 = 1e-4;
+
+/// Below this visibility the value is crushed towards 0 as `v³/c²`
+/// (continuous at `c`): a few percent of a bright probe's light is still
+/// clearly visible in a dark room, so tiny weights are pushed further down.
+/// The threshold 0.2 and the cubic curve are DDGI's reference
+/// implementation's (Majercik et al. 2019, supplementary GLSL; RTXGI
+/// `DDGIGetVolumeIrradiance`).
+pub const VISIBILITY_CRUSH: f32 = 0.2;
 
 /// Smallest visibility a probe gets, so the weights of a point that no probe
 /// sees never all vanish (lighting stays defined and continuous).
@@ -172,22 +181,32 @@ pub fn sample_oct_bilinear(map: &[[f32; 2]], resolution: u32, dir: Vec3) -> [f32
     out
 }
 
-/// The one-sided Chebyshev visibility of a point at distance `d` (bias
-/// already subtracted) given the moments `μ`, `μ2` (Donnelly & Lauritzen
-/// 2006; DDGI §5): 1 when `d ≤ μ`, else `σ²/(σ² + (d − μ)²)` with
-/// `σ² = max(μ2 − μ², min_variance)`, raised to `sharpness`, at least
-/// [`VISIBILITY_FLOOR`].
+/// The one-sided Chebyshev (Cantelli) bound on the fraction of a texel's
+/// rays that travel at least `d` (Donnelly & Lauritzen 2006): 1 when
+/// `d ≤ μ`, else `σ²/(σ² + (d − μ)²)` with `σ² = max(μ2 − μ², min_variance)`.
 #[inline]
-pub fn chebyshev_visibility(d: f32, mu: f32, mu2: f32, min_variance: f32, sharpness: u32) -> f32 {
+pub fn chebyshev_bound(d: f32, mu: f32, mu2: f32, min_variance: f32) -> f32 {
     if d.is_nan() || d <= mu {
         return 1.0;
     }
     let var = (mu2 - mu * mu).max(min_variance);
     let t = d - mu;
-    let c = var / (var + t * t);
+    var / (var + t * t)
+}
+
+/// The visibility of a point at distance `d` (bias already subtracted)
+/// given the moments `μ`, `μ2` (DDGI §5): [`chebyshev_bound`] raised to
+/// `sharpness`, crushed below [`VISIBILITY_CRUSH`] (`v ← v³/c²`), at least
+/// [`VISIBILITY_FLOOR`]. Continuous and non-increasing in `d`.
+#[inline]
+pub fn chebyshev_visibility(d: f32, mu: f32, mu2: f32, min_variance: f32, sharpness: u32) -> f32 {
+    let c = chebyshev_bound(d, mu, mu2, min_variance);
     let mut v = 1.0;
     for _ in 0..sharpness {
         v *= c;
+    }
+    if v < VISIBILITY_CRUSH {
+        v *= v * v / (VISIBILITY_CRUSH * VISIBILITY_CRUSH);
     }
     v.max(VISIBILITY_FLOOR)
 }
@@ -406,9 +425,9 @@ mod tests {
         }
 
         /// Cantelli's inequality: for any distance distribution,
-        /// P(X ≥ μ + t) ≤ σ²/(σ² + t²); the test (sharpness 1, no variance
-        /// floor) is an upper bound on the fraction of rays reaching `d`,
-        /// counted directly from the samples.
+        /// P(X ≥ μ + t) ≤ σ²/(σ² + t²): the bound (no variance floor) is
+        /// at least the fraction of rays reaching `d`, counted directly from
+        /// the samples.
         #[test]
         fn chebyshev_bounds_the_fraction_of_unoccluded_rays(
             xs in prop::collection::vec(0.0f32..10.0, 1..40),
@@ -418,9 +437,10 @@ mod tests {
             let mu = (xs.iter().map(|&x| x as f64).sum::<f64>() / n) as f32;
             let mu2 = (xs.iter().map(|&x| (x as f64).powi(2)).sum::<f64>() / n) as f32;
             let frac = xs.iter().filter(|&&x| x >= d).count() as f32 / xs.len() as f32;
-            let v = chebyshev_visibility(d, mu, mu2, 0.0, 1);
-            prop_assert!(v + 1e-3 >= frac, "v {v} < fraction {frac}");
-            prop_assert!((VISIBILITY_FLOOR..=1.0).contains(&v));
+            let b = chebyshev_bound(d, mu, mu2, 0.0);
+            prop_assert!(b + 1e-3 >= frac, "bound {b} < fraction {frac}");
+            let v = chebyshev_visibility(d, mu, mu2, 0.0, 3);
+            prop_assert!((VISIBILITY_FLOOR..=1.0).contains(&v) && v <= b.max(VISIBILITY_FLOOR) + 1e-6);
             // Monotone: farther is never more visible.
             prop_assert!(chebyshev_visibility(d + 0.5, mu, mu2, 0.0, 3) <= chebyshev_visibility(d, mu, mu2, 0.0, 3));
         }
