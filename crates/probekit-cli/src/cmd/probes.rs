@@ -132,6 +132,11 @@ pub struct QueryArgs {
     /// weighting.
     #[arg(long)]
     pub no_visibility: bool,
+    /// Clouds: distance bias of the visibility test in metres (default
+    /// 0.05): a point this much beyond the surface a probe sees still counts
+    /// as seen.
+    #[arg(long)]
+    pub visibility_bias: Option<f32>,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
@@ -183,6 +188,12 @@ pub fn query(a: &QueryArgs) -> Result<()> {
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
     if let Predictor::Cloud(c) = &mut probes {
         c.set_visibility(!a.no_visibility);
+        if let Some(b) = a.visibility_bias {
+            if !b.is_finite() {
+                bail!("--visibility-bias {b}: expected a finite distance in metres");
+            }
+            c.set_visibility_bias(b);
+        }
     }
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
