@@ -253,6 +253,7 @@ impl ProbeCloud {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cloud::visibility::VisibilityMaps;
     use crate::cloud::HULL;
 
     /// Radiance SH that varies linearly with position: c_k(p) = a_k + B_k·p.
@@ -325,6 +326,46 @@ mod tests {
         for (k, o) in out.iter().enumerate() {
             assert!((*o - field(Vec3::ZERO, k)).abs().max_element() < 1e-5);
         }
+    }
+
+    #[test]
+    fn visibility_weights_drop_probes_behind_walls_and_renormalize() {
+        let mut c = cloud();
+        let n = c.probe_count();
+        let p = Vec3::new(0.3, 0.35, 0.3);
+        let mut st = WalkState::new();
+        let (idx, b) = c.mesh().weights_at(p, &mut st);
+        // Open space (every first hit 100 m away): weights unchanged.
+        let open = VisibilityMaps::new(2, 100.0, vec![[100.0, 10_000.0]; 4 * n]).unwrap();
+        c.set_visibility_maps(Some(open)).unwrap();
+        let (_, w) = c.weights_at(p, &mut st);
+        assert_eq!(w, b);
+        // Probe 1 (at +X) sees a surface 0.1 m away in every direction: it
+        // no longer lights p (≈ 0.8 m away); the others keep their
+        // barycentric ratios, renormalized.
+        let mut m = vec![[100.0, 10_000.0]; 4 * n];
+        for t in &mut m[4..8] {
+            *t = [0.1, 0.01];
+        }
+        c.set_visibility_maps(Some(VisibilityMaps::new(2, 100.0, m).unwrap()))
+            .unwrap();
+        let (_, w) = c.weights_at(p, &mut st);
+        let k1 = idx.iter().position(|&i| i == 1).unwrap();
+        let rest: f32 = (0..4).filter(|&k| k != k1).map(|k| b[k]).sum();
+        for k in 0..4 {
+            let want = if k == k1 { 0.0 } else { b[k] / rest };
+            assert!((w[k] - want).abs() < 1e-3, "{k}: {} vs {want}", w[k]);
+        }
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        // Switched off: barycentric again; sh_at follows the weights.
+        c.set_visibility(false);
+        assert!(!c.visibility_enabled());
+        assert_eq!(c.weights_at(p, &mut st).1, b);
+        c.set_visibility(true);
+        let mut out = [Vec3::ZERO; 9];
+        c.sh_at(p, &mut st, &mut out);
+        let want: Vec3 = (0..4).map(|k| c.probe_sh(idx[k] as usize)[0] * w[k]).sum();
+        assert!((out[0] - want).length() < 1e-5);
     }
 
     #[test]
