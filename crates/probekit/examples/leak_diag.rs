@@ -91,7 +91,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             continue;
         }
         let at = baker.capture(p.position, 9_000_000 + i as u64, &s)?;
-        let (idx, w) = cloud.mesh().weights_at(p.position, &mut ws);
+        let (idx, w) = cloud.weights_at(p.position, &mut ws);
         let verts: Vec<usize> = idx.iter().map(|&k| k as usize).collect();
         let vpos: Vec<Vec3> = verts.iter().map(|&k| file.positions[k]).collect();
         let caps = baker.capture_many(&vpos, 9_100_000 + 4 * i, &s, &|_, _| {})?;

@@ -28,6 +28,7 @@ use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
 };
+use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
@@ -104,6 +105,13 @@ pub struct BakeArgs {
     /// `demo.probes`.
     #[arg(long)]
     pub render: Option<PathBuf>,
+    /// Texels per side of each probe's octahedral distance-moment map
+    /// (`VISM`, visibility-aware blending at run time; 1..=64).
+    #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
+    pub visibility_res: u32,
+    /// Do not bake distance moments (the cloud blends without visibility).
+    #[arg(long)]
+    pub no_visibility: bool,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -282,6 +290,14 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     settings.groups = a.groups;
     let mut sj = settings_json(&settings, codec);
     sj["indirect_only"] = serde_json::json!(a.indirect_only);
+    // Distance moments for visibility-aware blending (a shard bakes its own
+    // probes' maps; `merge` concatenates them).
+    let bb = scene.bake_box();
+    let vis = (!a.no_visibility).then(|| VisibilitySettings {
+        resolution: a.visibility_res,
+        ..VisibilitySettings::new(bb.size().length().max(1e-3), settings.seed)
+    });
+    sj["visibility"] = vis.map_or(serde_json::Value::Null, |v| v.to_json());
     let meta = BakeMetadata::new(
         format!("{:016x}", scene.content_hash()),
         Placement {
@@ -310,7 +326,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     let validity: Vec<Validity> = out.validity.iter().map(file_validity).collect();
     let invalid = out.validity.iter().filter(|v| !v.valid).count();
     let outname = a.output.display().to_string();
-    let file = if a.shard.is_some() {
+    let mut file = if a.shard.is_some() {
         let mut f = part_file(&out, &sh, validity, &meta, shard, shards, points.len())
             .with_context(|| outname.clone())?;
         f.groups = light_groups(&groups, out.settings.order, Codec::F32)
@@ -323,6 +339,22 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
         f
     };
+    if let Some(v) = &vis {
+        let tracer = probekit::trace::Tracer::new(&scene);
+        let pb = ProgressBar::new(file.positions.len() as u64);
+        pb.set_style(
+            ProgressStyle::with_template(
+                "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed",
+            )
+            .expect("static template"),
+        );
+        let m = bake_distance_moments(&tracer, &file.positions, v, &|done, _| {
+            pb.set_position(done as u64)
+        })
+        .with_context(|| format!("{}: --visibility-res", a.scene))?;
+        pb.finish_and_clear();
+        file.visibility = Some(m);
+    }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
     let default_demo = a.scene == probekit::scene::BUILTIN_DEMO
@@ -473,6 +505,12 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let mut positions = Vec::new();
     let mut sh = Vec::new();
     let mut validity = Vec::new();
+    // Distance moments: every part has them (same settings, as the equal
+    // metadata says) or none does.
+    let mut moments = head.file.visibility.clone().map(|mut v| {
+        v.data.clear();
+        v
+    });
     let mut groups: Vec<(String, Vec<ShRgb>)> = Vec::new();
     for (k, p) in parts.iter().enumerate() {
         let g = decode_light_groups(&p.file).with_context(|| p.name.clone())?;
@@ -497,12 +535,22 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
                 .map(|ch| ShRgb::from_coeffs(ch.to_vec()).expect("order² coefficients")),
         );
         validity.extend(p.file.validity.clone().unwrap_or_default());
+        match (&mut moments, &p.file.visibility) {
+            (None, None) => {}
+            (Some(m), Some(v))
+                if m.resolution == v.resolution && m.max_distance == v.max_distance =>
+            {
+                m.data.extend_from_slice(&v.data)
+            }
+            _ => bail!("{} and {}: different visibility maps", head.name, p.name),
+        }
     }
     let out = a.output.display().to_string();
     let mut file =
         cloud_file(&positions, &sh, &validity, codec, &head.meta).with_context(|| out.clone())?;
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec).with_context(|| out.clone())?;
+    file.visibility = moments;
     file.validate().with_context(|| out.clone())?;
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;
     println!(

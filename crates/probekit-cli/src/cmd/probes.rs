@@ -128,6 +128,15 @@ pub struct QueryArgs {
     /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
     #[arg(long)]
     pub group_scale: Vec<String>,
+    /// Clouds: blend without the file's visibility (distance-moment)
+    /// weighting.
+    #[arg(long)]
+    pub no_visibility: bool,
+    /// Clouds: distance bias of the visibility test in metres (default
+    /// 0.05): a point this much beyond the surface a probe sees still counts
+    /// as seen.
+    #[arg(long)]
+    pub visibility_bias: Option<f32>,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
@@ -175,8 +184,17 @@ pub fn query(a: &QueryArgs) -> Result<()> {
             format!("{name}: --group-scale (groups: {})", names.join(", "))
         })?;
     }
-    let probes =
+    let mut probes =
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
+    if let Predictor::Cloud(c) = &mut probes {
+        c.set_visibility(!a.no_visibility);
+        if let Some(b) = a.visibility_bias {
+            if !b.is_finite() {
+                bail!("--visibility-bias {b}: expected a finite distance in metres");
+            }
+            c.set_visibility_bias(b);
+        }
+    }
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
         (Some(at), None) => {
@@ -221,7 +239,8 @@ pub struct InspectArgs {
 }
 
 /// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra",
-/// "basis","invalid","bytes","bytes_by_section","placement","scene_hash"}`;
+/// "basis","invalid","bytes","bytes_by_section","visibility","placement","scene_hash"}`
+/// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -250,6 +269,10 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             "bytes": bytes,
             "bytes_by_section": by,
             "groups": file.group_names().collect::<Vec<_>>(),
+            "visibility": file.visibility.as_ref().map(|v| serde_json::json!({
+                "resolution": v.resolution,
+                "max_distance": v.max_distance,
+            })),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
             "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),
             "part": part,

@@ -47,7 +47,9 @@ use glam::{DVec3, Vec3};
 use thiserror::Error;
 
 pub mod probes;
+pub mod visibility;
 pub use probes::{ProbeCloud, ProbeCloudError};
+pub use visibility::VisibilityMaps;
 
 /// Neighbour marker for a face on the convex hull, as in the baker's output.
 pub const HULL: u32 = u32::MAX;

@@ -1,8 +1,13 @@
 //! [`ProbeCloud`]: a loaded probe cloud answering "radiance SH / irradiance
 //! at this point" by blending the four probes of the enclosing tetrahedron
 //! with their barycentric weights (seed 003, after Cupisz, GDC 2012), or the
-//! closest hull triangle's probes outside the hull (see [`super`]).
+//! closest hull triangle's probes outside the hull (see [`super`]). When the
+//! file holds distance moments (`VISM`), each weight is multiplied by the
+//! probe's Chebyshev visibility of the point and the four renormalized
+//! ([`super::visibility`]; DDGI, Majercik et al. 2019), so probes behind a
+//! wall stop leaking their light.
 
+use super::visibility::VisibilityMaps;
 use super::{CloudError, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
 use crate::prelude::*;
@@ -16,6 +21,14 @@ pub enum ProbeCloudError {
     /// The file has no `TETS` section (e.g. a volume, or a shard part).
     #[error("the file has no tetrahedra (not a probe cloud, or an unmerged shard part)")]
     NoTetrahedra,
+    /// The distance moments do not match the probes.
+    #[error("the visibility maps cover {maps} probes, the cloud has {probes}")]
+    VisibilityMismatch {
+        /// Probes with a map.
+        maps: usize,
+        /// Probes of the cloud.
+        probes: usize,
+    },
     /// The coefficients could not be decoded.
     #[error(transparent)]
     Format(#[from] FormatError),
@@ -24,18 +37,22 @@ pub enum ProbeCloudError {
     Cloud(#[from] CloudError),
 }
 
-/// Probe positions, tetrahedra and decoded radiance SH (linear RGB, f32).
+/// Probe positions, tetrahedra and decoded radiance SH (linear RGB, f32),
+/// and optionally per-probe [`VisibilityMaps`] that weight the blend.
 #[derive(Debug, Clone)]
 pub struct ProbeCloud {
     mesh: TetMesh,
     coeffs: Vec<Vec3>,
     order: u32,
+    visibility: Option<VisibilityMaps>,
+    visibility_on: bool,
 }
 
 impl ProbeCloud {
     /// Builds a cloud from a loaded file: its positions, its `TETS` vertices
     /// and neighbours (via [`TetMesh::new`], which validates them) and its
-    /// coefficients decoded to f32 (`order²` per probe).
+    /// coefficients decoded to f32 (`order²` per probe), and its distance
+    /// moments (`VISM`) when present, which switch visibility weighting on.
     pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
         let tets = file
             .tetrahedra
@@ -46,7 +63,16 @@ impl ProbeCloud {
             tets.vertices.clone(),
             tets.neighbours.clone(),
         )?;
-        Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)
+        let mut cloud = Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)?;
+        if let Some(m) = &file.visibility {
+            let maps = VisibilityMaps::from_moments(m).ok_or(FormatError::InvalidValue {
+                id: crate::format::SectionId::VISIBILITY,
+                element: 0,
+                reason: "visibility map resolution is zero",
+            })?;
+            cloud.set_visibility_maps(Some(maps))?;
+        }
+        Ok(cloud)
     }
 
     /// Builds a cloud from a mesh and `order²` radiance SH coefficients per
@@ -63,7 +89,84 @@ impl ProbeCloud {
             mesh,
             coeffs,
             order,
+            visibility: None,
+            visibility_on: true,
         })
+    }
+
+    /// Attaches (or with `None` removes) per-probe visibility maps; they
+    /// must cover exactly the cloud's probes.
+    pub fn set_visibility_maps(
+        &mut self,
+        maps: Option<VisibilityMaps>,
+    ) -> Result<(), ProbeCloudError> {
+        if let Some(m) = &maps {
+            if m.probe_count() != self.probe_count() {
+                return Err(ProbeCloudError::VisibilityMismatch {
+                    maps: m.probe_count(),
+                    probes: self.probe_count(),
+                });
+            }
+        }
+        self.visibility = maps;
+        Ok(())
+    }
+
+    /// The visibility maps, if the cloud has them (whether or not weighting
+    /// is switched on).
+    pub fn visibility_maps(&self) -> Option<&VisibilityMaps> {
+        self.visibility.as_ref()
+    }
+
+    /// The visibility maps, writable (to tune bias, sharpness, variance).
+    pub fn visibility_maps_mut(&mut self) -> Option<&mut VisibilityMaps> {
+        self.visibility.as_mut()
+    }
+
+    /// Switches visibility weighting on (the default) or off for every
+    /// query; without maps it has no effect.
+    pub fn set_visibility(&mut self, on: bool) {
+        self.visibility_on = on;
+    }
+
+    /// True when queries apply visibility weighting (maps present and on).
+    pub fn visibility_enabled(&self) -> bool {
+        self.visibility_on && self.visibility.is_some()
+    }
+
+    /// Sets the distance bias of the visibility test in metres (default
+    /// [`super::visibility::DEFAULT_VISIBILITY_BIAS`]); no effect without maps.
+    pub fn set_visibility_bias(&mut self, bias: f32) {
+        if let Some(m) = &mut self.visibility {
+            m.set_bias(bias);
+        }
+    }
+
+    /// Blend weights at `p`: the barycentric weights `b_i` of
+    /// [`TetMesh::weights_at`] (tetrahedron or outer cell), and with
+    /// visibility on `b_i·v_i(p) / Σ_j b_j·v_j(p)` ([`super::visibility`]).
+    /// Unused slots have weight 0. No allocation.
+    pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
+        let (probes, mut weights) = self.mesh.weights_at(p, state);
+        let Some(maps) = self.visibility.as_ref().filter(|_| self.visibility_on) else {
+            return (probes, weights);
+        };
+        let original = weights;
+        let mut sum = 0.0;
+        let pos = self.mesh.positions();
+        for (w, &i) in weights.iter_mut().zip(&probes) {
+            if *w != 0.0 {
+                *w *= maps.visibility(i as usize, pos[i as usize], p);
+                sum += *w;
+            }
+        }
+        if sum.is_nan() || sum <= 0.0 || !sum.is_finite() {
+            return (probes, original);
+        }
+        for w in &mut weights {
+            *w /= sum;
+        }
+        (probes, weights)
     }
 
     /// The tetrahedral mesh.
@@ -100,13 +203,13 @@ impl ProbeCloud {
     }
 
     /// Interpolated radiance SH at `p` into `out` (its first
-    /// `min(out.len(), order²)` coefficients): the barycentric blend of
-    /// [`TetMesh::weights_at`]. No allocation.
+    /// `min(out.len(), order²)` coefficients): the blend of
+    /// [`ProbeCloud::weights_at`] (visibility-weighted when on). No allocation.
     pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
         let n = self.coeffs_per_probe();
         let m = out.len().min(n);
         out.iter_mut().for_each(|c| *c = Vec3::ZERO);
-        let (probes, weights) = self.mesh.weights_at(p, state);
+        let (probes, weights) = self.weights_at(p, state);
         for (&i, &w) in probes.iter().zip(&weights) {
             if w == 0.0 {
                 continue;
@@ -150,6 +253,7 @@ impl ProbeCloud {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cloud::visibility::VisibilityMaps;
     use crate::cloud::HULL;
 
     /// Radiance SH that varies linearly with position: c_k(p) = a_k + B_k·p.
@@ -222,6 +326,46 @@ mod tests {
         for (k, o) in out.iter().enumerate() {
             assert!((*o - field(Vec3::ZERO, k)).abs().max_element() < 1e-5);
         }
+    }
+
+    #[test]
+    fn visibility_weights_drop_probes_behind_walls_and_renormalize() {
+        let mut c = cloud();
+        let n = c.probe_count();
+        let p = Vec3::new(0.3, 0.35, 0.3);
+        let mut st = WalkState::new();
+        let (idx, b) = c.mesh().weights_at(p, &mut st);
+        // Open space (every first hit 100 m away): weights unchanged.
+        let open = VisibilityMaps::new(2, 100.0, vec![[100.0, 10_000.0]; 4 * n]).unwrap();
+        c.set_visibility_maps(Some(open)).unwrap();
+        let (_, w) = c.weights_at(p, &mut st);
+        assert_eq!(w, b);
+        // Probe 1 (at +X) sees a surface 0.1 m away in every direction: it
+        // no longer lights p (≈ 0.8 m away); the others keep their
+        // barycentric ratios, renormalized.
+        let mut m = vec![[100.0, 10_000.0]; 4 * n];
+        for t in &mut m[4..8] {
+            *t = [0.1, 0.01];
+        }
+        c.set_visibility_maps(Some(VisibilityMaps::new(2, 100.0, m).unwrap()))
+            .unwrap();
+        let (_, w) = c.weights_at(p, &mut st);
+        let k1 = idx.iter().position(|&i| i == 1).unwrap();
+        let rest: f32 = (0..4).filter(|&k| k != k1).map(|k| b[k]).sum();
+        for k in 0..4 {
+            let want = if k == k1 { 0.0 } else { b[k] / rest };
+            assert!((w[k] - want).abs() < 1e-3, "{k}: {} vs {want}", w[k]);
+        }
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        // Switched off: barycentric again; sh_at follows the weights.
+        c.set_visibility(false);
+        assert!(!c.visibility_enabled());
+        assert_eq!(c.weights_at(p, &mut st).1, b);
+        c.set_visibility(true);
+        let mut out = [Vec3::ZERO; 9];
+        c.sh_at(p, &mut st, &mut out);
+        let want: Vec3 = (0..4).map(|k| c.probe_sh(idx[k] as usize)[0] * w[k]).sum();
+        assert!((out[0] - want).length() < 1e-5);
     }
 
     #[test]

@@ -10,7 +10,8 @@ pub const MAGIC: [u8; 8] = *b"PROBEKIT";
 /// Major version written and read. A file with a larger major is refused.
 pub const VERSION_MAJOR: u16 = 1;
 /// Newest minor version this reader knows (1.1 added `LGRP`, light
-/// groups; 1.2 added `OCTC`, the compact octree). Files with a larger minor load; their unknown sections are
+/// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
+/// distance moments for visibility-aware blending). Files with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
@@ -36,11 +37,13 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 }
 
 /// The lowest minor version whose section set includes every id in `ids`:
-/// 2 if `OCTC` ([`SectionId::OCTREE_COMPACT`]) is present, else 1 if `LGRP`
+/// 3 if `VISM` ([`SectionId::VISIBILITY`]) is present, else 2 if `OCTC`
+/// ([`SectionId::OCTREE_COMPACT`]) is, else 1 if `LGRP`
 /// ([`SectionId::LIGHT_GROUPS`]) is, else 0.
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
     ids.into_iter()
         .map(|id| match id {
+            SectionId::VISIBILITY => 3,
             SectionId::OCTREE_COMPACT => 2,
             SectionId::LIGHT_GROUPS => 1,
             _ => 0,
@@ -112,11 +115,14 @@ impl SectionId {
     pub const METADATA: Self = Self::from_fourcc(*b"META");
     /// Per-light-group radiance SH, for run-time relighting (format 1.1).
     pub const LIGHT_GROUPS: Self = Self::from_fourcc(*b"LGRP");
+    /// Per-probe distance moments on an octahedral map, for
+    /// visibility-aware blending of a probe cloud (format 1.3).
+    pub const VISIBILITY: Self = Self::from_fourcc(*b"VISM");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 12] = [
+    pub const KNOWN: [Self; 13] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -128,6 +134,7 @@ impl SectionId {
         Self::GRADIENTS,
         Self::RIGS,
         Self::LIGHT_GROUPS,
+        Self::VISIBILITY,
         Self::METADATA,
     ];
 
@@ -157,6 +164,7 @@ impl SectionId {
             Self::RIGS => "rigs",
             Self::METADATA => "metadata",
             Self::LIGHT_GROUPS => "light_groups",
+            Self::VISIBILITY => "visibility",
             Self::HEADER => "header",
             _ => return None,
         })

@@ -25,6 +25,7 @@ pub mod layout;
 mod octree_compact;
 mod read;
 mod validate;
+mod visibility;
 mod write;
 
 pub use codec::{f16_is_non_finite, f16_to_f32, Codec, Coefficients};
@@ -34,6 +35,7 @@ pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
 pub use octree_compact::lattice_step;
 pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
+pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
 pub use write::{assemble_file, SectionBuilder};
 
 use crate::prelude::*;
@@ -326,6 +328,9 @@ pub struct ProbeFile {
     /// order of `positions`, at the order of `coefficients`; names unique.
     /// See [`ProbeFile::relit`] and [`Relighter`].
     pub groups: Vec<LightGroup>,
+    /// Per-probe distance moments for visibility-aware blending (`VISM`,
+    /// format 1.3; `None`: no section, clouds blend without visibility).
+    pub visibility: Option<DistanceMoments>,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -355,6 +360,7 @@ impl ProbeFile {
             gradients: None,
             rigs: Vec::new(),
             groups: Vec::new(),
+            visibility: None,
             metadata: String::new(),
         }
     }

@@ -612,6 +612,27 @@ fn parse_groups(s: &Sec<'_>) -> Result<Vec<LightGroup>, FormatError> {
     Ok(groups)
 }
 
+fn parse_visibility(s: &Sec<'_>) -> Result<super::DistanceMoments, FormatError> {
+    let [count, resolution, max_bits, _] = s.header()?;
+    if resolution == 0 || resolution > super::MAX_VISIBILITY_RESOLUTION {
+        return Err(FormatError::InvalidValue {
+            id: s.id,
+            element: 0,
+            reason: "visibility map resolution outside 1..=64",
+        });
+    }
+    let per_probe = 4 * (resolution as usize) * (resolution as usize);
+    let [data] = s.arrays([bytes_for(count, per_probe)])?;
+    Ok(super::DistanceMoments {
+        resolution,
+        max_distance: f32::from_bits(max_bits),
+        data: data
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect(),
+    })
+}
+
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
@@ -645,6 +666,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::GRADIENTS => file.gradients = Some(parse_gradients(&s)?),
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
             SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
+            SectionId::VISIBILITY => file.visibility = Some(parse_visibility(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.

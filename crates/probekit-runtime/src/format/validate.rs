@@ -383,6 +383,11 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         })?;
     }
 
+    // Distance moments (1.3): one octahedral map per probe.
+    if let Some(v) = &f.visibility {
+        v.validate(probes)?;
+    }
+
     match f.kind {
         ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
             Err(FormatError::MissingSection(SectionId::GRID))

@@ -264,6 +264,19 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::LIGHT_GROUPS, s.finish()));
     }
 
+    if let Some(v) = &f.visibility {
+        let mut s = SectionBuilder::new([
+            count(v.probe_count(), "visibility maps")?,
+            v.resolution,
+            v.max_distance.to_bits(),
+            0,
+        ]);
+        for h in &v.data {
+            s.bytes(&h.to_le_bytes());
+        }
+        out.push((SectionId::VISIBILITY, s.finish()));
+    }
+
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
     s.bytes(f.metadata.as_bytes());
     out.push((SectionId::METADATA, s.finish()));
@@ -288,8 +301,8 @@ impl ProbeFile {
     /// equal contents give equal bytes. The header's minor version is the
     /// lowest that holds the sections present
     /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
-    /// (1) or a regular octree, written compactly as `OCTC` (2), or an
-    /// octree forest ([`layout::MINOR_FOREST`], 3).
+    /// (1), a regular octree, written compactly as `OCTC` (2), or distance
+    /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;

@@ -30,6 +30,7 @@
 
 pub mod file;
 pub mod predicates;
+pub mod visibility;
 
 use glam::Vec3;
 use predicates::{InSphere, Orientation, P3};

@@ -818,6 +818,7 @@ fn finish(
         }),
         rigs: Vec::new(),
         groups: Vec::new(),
+        visibility: None,
         metadata: String::new(),
     };
     structure(&mut file);
