@@ -49,8 +49,10 @@ pub struct VolumeArgs {
     /// Cells shallower than this always subdivide (adaptive).
     #[arg(long, default_value_t = 1)]
     pub min_depth: u32,
-    /// Deepest level below the root cells (adaptive, ≤ 20).
-    #[arg(long, default_value_t = 4)]
+    /// Deepest level below the root cells (adaptive, ≤ 20). Root cells are
+    /// near-cubic (an 8 × 3 × 4 m room gets 1.5 m roots), so the default 3
+    /// gives finest cells of about 0.2 m there.
+    #[arg(long, default_value_t = 3)]
     pub max_depth: u32,
     /// Root cells per axis `X,Y,Z` (adaptive): the box is cut into this
     /// grid and each root cell is an octree; depths count from the root
@@ -59,8 +61,9 @@ pub struct VolumeArgs {
     /// aspect ratio).
     #[arg(long, value_delimiter = ',')]
     pub roots: Option<Vec<u32>>,
-    /// Relative trilinear-prediction tolerance for subdivision (adaptive).
-    #[arg(long, default_value_t = 0.25)]
+    /// Relative trilinear-prediction tolerance for subdivision (adaptive;
+    /// see BENCHMARKS.md for the error / memory trade-off of 0.25–1.5).
+    #[arg(long, default_value_t = 1.0)]
     pub tolerance: f32,
     /// Relative tolerance under which children are pruned (adaptive).
     #[arg(long, default_value_t = 0.1)]
@@ -75,17 +78,20 @@ pub struct VolumeArgs {
     pub geometry: bool,
     /// Geometry alone splits cells only above this depth; deeper cells
     /// touching geometry split only on a significant prediction miss
-    /// (adaptive; default: down to --max-depth, the seed's rule).
-    #[arg(long)]
-    pub geometry_depth: Option<u32>,
+    /// (adaptive; `--geometry-depth` = `--max-depth` is the seed's rule,
+    /// which spends most samples on walls).
+    #[arg(long, default_value_t = 2)]
+    pub geometry_depth: u32,
     /// A prediction miss counts only by what it exceeds this many standard
     /// errors of the capture noise (batch means over 256-sample chunks;
     /// adaptive; 0 = raw misses, the old criterion).
     #[arg(long, default_value_t = 2.0)]
     pub noise_k: f32,
     /// 2:1-balance the octree (leaves sharing a point differ by at most one
-    /// level) so coarse leaves do not blend into much finer ones (adaptive).
-    #[arg(long)]
+    /// level) so coarse leaves do not blend into much finer ones (adaptive;
+    /// on by default, `--balance false` to turn off).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set,
+          num_args = 0..=1, default_missing_value = "true")]
     pub balance: bool,
     /// Subdivide when the cell's edge exceeds this × the harmonic mean of
     /// scene depth at its corners (adaptive; 0, the default, disables: at 1
@@ -242,7 +248,7 @@ fn build_and_write(
                 prediction_tolerance: Some(a.tolerance),
                 prune_tolerance: Some(a.prune),
                 relative_floor: a.relative_floor,
-                geometry_depth: a.geometry_depth.unwrap_or(a.max_depth),
+                geometry_depth: a.geometry_depth,
                 noise_k: a.noise_k,
                 balance: a.balance,
                 roots: match a.roots.as_deref() {
