@@ -86,6 +86,24 @@ fn bake_inspect_query_with_and_without_visibility() {
         ],
         "visibility-bias",
     );
+    fails_one_line(
+        d,
+        &[
+            "query",
+            "v.probes",
+            "--points",
+            "pts.csv",
+            "--visibility-sharpness",
+            "17",
+            "--json",
+        ],
+        "visibility-sharpness",
+    );
+    // Sharpness 0 switches the test off: the plain barycentric blend.
+    assert_eq!(
+        q("v.probes", &["--visibility-sharpness", "0"]),
+        q("n.probes", &[])
+    );
     assert!(run(d, &["query", "v.probes", "--at", "1,1,1", "--json"])
         .status
         .success());

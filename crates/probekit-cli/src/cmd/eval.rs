@@ -50,15 +50,9 @@ pub struct EvalArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-    /// Clouds: blend without the file's visibility (distance-moment)
-    /// weighting.
-    #[arg(long)]
-    pub no_visibility: bool,
-    /// Clouds: distance bias of the visibility test in metres (default
-    /// 0.05): a point this much beyond the surface a probe sees still counts
-    /// as seen.
-    #[arg(long)]
-    pub visibility_bias: Option<f32>,
+    /// Clouds: query-time visibility weighting.
+    #[command(flatten)]
+    pub visibility: super::util::VisibilityArgs,
     /// Also evaluate a uniform `grid` with the same probe count.
     #[arg(long)]
     pub compare: Option<String>,
@@ -87,15 +81,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let file = load_probes(&a.probes)?;
     let mut predictor =
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
-    if let Predictor::Cloud(c) = &mut predictor {
-        c.set_visibility(!a.no_visibility);
-        if let Some(b) = a.visibility_bias {
-            if !b.is_finite() {
-                bail!("--visibility-bias {b}: expected a finite distance in metres");
-            }
-            c.set_visibility_bias(b);
-        }
-    }
+    a.visibility.apply(&mut predictor)?;
     let scene = Scene::load(&a.scene).with_context(|| a.scene.display().to_string())?;
     let baker = Baker::new(&scene).with_context(|| a.scene.display().to_string())?;
     let bbox = match &a.bbox {

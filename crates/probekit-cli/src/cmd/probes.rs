@@ -128,15 +128,9 @@ pub struct QueryArgs {
     /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
     #[arg(long)]
     pub group_scale: Vec<String>,
-    /// Clouds: blend without the file's visibility (distance-moment)
-    /// weighting.
-    #[arg(long)]
-    pub no_visibility: bool,
-    /// Clouds: distance bias of the visibility test in metres (default
-    /// 0.05): a point this much beyond the surface a probe sees still counts
-    /// as seen.
-    #[arg(long)]
-    pub visibility_bias: Option<f32>,
+    /// Clouds: query-time visibility weighting.
+    #[command(flatten)]
+    pub visibility: super::util::VisibilityArgs,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
@@ -186,15 +180,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
     }
     let mut probes =
         Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
-    if let Predictor::Cloud(c) = &mut probes {
-        c.set_visibility(!a.no_visibility);
-        if let Some(b) = a.visibility_bias {
-            if !b.is_finite() {
-                bail!("--visibility-bias {b}: expected a finite distance in metres");
-            }
-            c.set_visibility_bias(b);
-        }
-    }
+    a.visibility.apply(&mut probes)?;
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
         (Some(at), None) => {

@@ -81,3 +81,46 @@ pub fn parse_interp(s: &str) -> Result<probekit_runtime::Interp> {
         o => bail!("--interp {o}: expected trilinear, taylor or tricubic"),
     })
 }
+
+/// Query-time visibility settings of a probe cloud, shared by `query` and
+/// `eval` (`#[command(flatten)]`).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct VisibilityArgs {
+    /// Clouds: blend without the file's visibility (distance-moment)
+    /// weighting.
+    #[arg(long)]
+    pub no_visibility: bool,
+    /// Clouds: distance bias of the visibility test in metres (default
+    /// 0.05): a point this much beyond the surface a probe sees still counts
+    /// as seen.
+    #[arg(long)]
+    pub visibility_bias: Option<f32>,
+    /// Clouds: exponent of the Chebyshev visibility (default 3, as DDGI;
+    /// at most 16): higher drops partly hidden probes faster.
+    #[arg(long)]
+    pub visibility_sharpness: Option<u32>,
+}
+
+impl VisibilityArgs {
+    /// Applies the settings to a cloud predictor (volumes ignore them).
+    pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
+        if let probekit::placement::eval::Predictor::Cloud(c) = p {
+            c.set_visibility(!self.no_visibility);
+            if let Some(b) = self.visibility_bias {
+                if !b.is_finite() {
+                    bail!("--visibility-bias {b}: expected a finite distance in metres");
+                }
+                c.set_visibility_bias(b);
+            }
+            if let Some(k) = self.visibility_sharpness {
+                if k > 16 {
+                    bail!("--visibility-sharpness {k}: expected 0 to 16");
+                }
+                if let Some(m) = c.visibility_maps_mut() {
+                    m.set_sharpness(k);
+                }
+            }
+        }
+        Ok(())
+    }
+}
