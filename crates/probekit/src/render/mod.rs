@@ -5,7 +5,12 @@
 //! 1. **probes** — primary rays through the [`Tracer`]; every scene surface
 //!    is shaded `emission + albedo/π · E_probes(p, n)` (irradiance from the
 //!    probes at the hit point, moved 1 cm along the facing normal, for the
-//!    facing shading normal), so the probes' lighting shows on the walls too;
+//!    facing shading normal), so the probes' lighting shows on the walls too
+//!    (walls without a cloud's visibility weighting: 1 cm from a wall, the
+//!    wall itself fills the probes' distance texels at grazing angles and
+//!    the Chebyshev test would drop probes that do see the point — the
+//!    runtime applies no DDGI-style normal bias yet; static geometry is lit
+//!    by lightmaps in an engine, the test object keeps the weighting);
 //!    the test object (albedo [`RenderSettings::albedo`]) is lit only by the
 //!    probes.
 //! 2. **path traced** — the same, with the test object's irradiance from
@@ -379,6 +384,10 @@ pub fn render(
         return Err(RenderError::BadSettings("albedo must be ≥ 0".into()));
     }
     let source = Source::from_file(file)?;
+    let mut wall_source = Source::from_file(file)?;
+    if let Source::Cloud(c) = &mut wall_source {
+        c.set_visibility(false);
+    }
     let sky = Sky::new(scene)?;
     let baker = Baker::new(scene)?;
     let tracer = baker.tracer();
@@ -477,7 +486,7 @@ pub fn render(
                             &ray,
                             tracer,
                             scene,
-                            &source,
+                            (&source, &wall_source),
                             &sky,
                             &object,
                             overlay.as_ref().map(|o| (o, &row_glyphs[y as usize][..])),
@@ -577,7 +586,7 @@ fn shade_pixel(
     ray: &Ray,
     tracer: &Tracer,
     scene: &Scene,
-    source: &Source,
+    (source, wall_source): (&Source, &Source),
     sky: &Sky,
     object: &TestObject,
     overlay: Option<(&Overlay, &[u32])>,
@@ -626,7 +635,7 @@ fn shade_pixel(
         } else {
             hit.shading_normal
         };
-        let e = source.irradiance(hit.point + 0.01 * nf, ns, ws);
+        let e = wall_source.irradiance(hit.point + 0.01 * nf, ns, ws);
         let c =
             scene.emission(hit.material, hit.uv) + scene.albedo(hit.material, hit.uv) * inv_pi * e;
         col += trans * hit.opacity * c;
