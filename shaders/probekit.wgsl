@@ -243,8 +243,10 @@ fn pk_irradiance_ambient_cube(cube: PkAmbientCube, n: vec3<f32>) -> vec3<f32> {
 
 // --- blending -----------------------------------------------------------------
 
-/// Σ w_k·sh_k over four L1 probes (barycentric blending in a tetrahedron:
-/// weights sum to 1).
+/// Σ w_k·sh_k over four L1 probes (blending in a tetrahedron: weights sum
+/// to 1; take them from the runtime's `ProbeCloud::weights_at` or the C
+/// ABI's `pk_cloud_weights`, which include per-probe visibility when the
+/// file stores distance moments).
 fn pk_blend_l1(a: PkShL1, b: PkShL1, c: PkShL1, d: PkShL1, w: vec4<f32>) -> PkShL1 {
     var out: PkShL1;
     for (var i = 0u; i < 4u; i = i + 1u) {
@@ -253,8 +255,10 @@ fn pk_blend_l1(a: PkShL1, b: PkShL1, c: PkShL1, d: PkShL1, w: vec4<f32>) -> PkSh
     return out;
 }
 
-/// Σ w_k·sh_k over four L2 probes (barycentric blending in a tetrahedron:
-/// weights sum to 1).
+/// Σ w_k·sh_k over four L2 probes (blending in a tetrahedron: weights sum
+/// to 1; take them from the runtime's `ProbeCloud::weights_at` or the C
+/// ABI's `pk_cloud_weights`, which include per-probe visibility when the
+/// file stores distance moments).
 fn pk_blend_l2(a: PkShL2, b: PkShL2, c: PkShL2, d: PkShL2, w: vec4<f32>) -> PkShL2 {
     var out: PkShL2;
     for (var i = 0u; i < 9u; i = i + 1u) {

@@ -160,6 +160,15 @@ PkStatus pk_sh(const PkProbes *probes, PkWalkState *state,
 PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
                     const float *positions, float *out, size_t out_len);
 
+/* A probe cloud's blend at position[3]: 4 probe indices into out_indices[4]
+ * and their weights (sum 1, unused slots 0) into out_weights[4]; barycentric
+ * times each probe's visibility when the file stores distance moments. The
+ * weights the shaders' pk_blend_l1 / pk_blend_l2 take. PK_ERR_WRONG_KIND if the
+ * handle is not a cloud. */
+PkStatus pk_cloud_weights(const PkProbes *probes, PkWalkState *state,
+                          const float *position, uint32_t *out_indices,
+                          float *out_weights);
+
 /* ---- volumes ----------------------------------------------------------- */
 
 /* Sets the interpolation mode (PK_INTERP_*). Taylor and tricubic need

@@ -659,6 +659,43 @@ pub unsafe extern "C" fn pk_sh_many(
     })
 }
 
+// ----------------------------------------------------------------- cloud --
+
+/// The blend a probe cloud uses at `position[3]`: its 4 probe indices into
+/// `out_indices[4]` and their weights into `out_weights[4]` (summing to 1;
+/// unused slots weight 0, index any) — barycentric in the enclosing
+/// tetrahedron or outer cell, times each probe's Chebyshev visibility when
+/// the file stores distance moments (`VISM`). These are the weights the
+/// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
+/// probes equals [`pk_sh`]. Not a cloud: [`PkStatus::WrongKind`]. `state`
+/// as in [`pk_irradiance`]. No allocation.
+#[no_mangle]
+pub unsafe extern "C" fn pk_cloud_weights(
+    probes: *const PkProbes,
+    state: *mut PkWalkState,
+    position: *const f32,
+    out_indices: *mut u32,
+    out_weights: *mut f32,
+) -> PkStatus {
+    run(|| {
+        let h = handle(probes)?;
+        let Body::Cloud(c) = &h.body else {
+            return Err(Error::new(PkStatus::WrongKind, "not a probe cloud"));
+        };
+        let p = vec3_in(position, "position")?;
+        if out_indices.is_null() {
+            return Err(Error::null("out_indices"));
+        }
+        let weights = floats_out(out_weights, 4, "out_weights")?;
+        let mut cold = WalkState::new();
+        let (idx, w) = c.weights_at(p, walk_state(state).unwrap_or(&mut cold));
+        // SAFETY: non-null; the header requires 4 writable u32.
+        unsafe { std::slice::from_raw_parts_mut(out_indices, 4) }.copy_from_slice(&idx);
+        weights.copy_from_slice(&w);
+        Ok(())
+    })
+}
+
 // ---------------------------------------------------------------- volume --
 
 /// Sets a volume's interpolation mode (`PK_INTERP_*`: 0 trilinear, 1 Taylor,

@@ -113,6 +113,11 @@ fn queries_do_not_allocate() {
                 pk_irradiance(cloud, null_mut(), p.as_ptr(), nn.as_ptr(), out.as_mut_ptr()),
                 PkStatus::Ok
             );
+            let (mut idx, mut w) = ([0u32; 4], [0.0f32; 4]);
+            assert_eq!(
+                pk_cloud_weights(cloud, ws, p.as_ptr(), idx.as_mut_ptr(), w.as_mut_ptr()),
+                PkStatus::Ok
+            );
         }
         for mode in 0..5 {
             assert_eq!(pk_volume_set_interp(volume, mode), PkStatus::Ok);
