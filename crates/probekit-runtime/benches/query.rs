@@ -2,12 +2,13 @@
 //! of a 47³ probe grid (103 823 probes, 584 K tetrahedra, maximally
 //! co-spherical). Cold random queries (fresh `WalkState` each: start grid +
 //! walk), coherent queries (one object moving in small steps, warm state),
-//! and batched queries outside the hull (closest-hull-point outer cells).
+//! and batched queries outside the hull (closest-hull-point outer cells);
+//! and the cost of visibility weighting (`cloud_visibility`).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
-use probekit_runtime::cloud::{face_neighbors, TetMesh, WalkState};
+use probekit_runtime::cloud::{face_neighbors, ProbeCloud, TetMesh, VisibilityMaps, WalkState};
 use std::hint::black_box;
 
 fn kuhn_grid(k: u32) -> TetMesh {
@@ -100,5 +101,63 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// Cost of visibility-weighted blending: `ProbeCloud::irradiance` (L2 SH)
+/// on a 20³ Kuhn grid (8 000 probes, 8×8 distance-moment maps of random
+/// plausible moments), coherent queries (one object moving in small steps),
+/// weighting on and off.
+fn visibility(c: &mut Criterion) {
+    let k = 20;
+    let mesh = kuhn_grid(k);
+    let probes = mesh.positions().len();
+    let coeffs = (0..probes * 9)
+        .map(|i| Vec3::splat((i % 7) as f32 * 0.1))
+        .collect();
+    let mut cloud = ProbeCloud::new(mesh, 3, coeffs).unwrap();
+    let mut s = 1u64;
+    let moments: Vec<[f32; 2]> = (0..probes * 64)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let mu = 0.3 + 2.0 * ((s >> 40) as f32 / (1u64 << 24) as f32);
+            [mu, mu * mu * 1.05]
+        })
+        .collect();
+    cloud
+        .set_visibility_maps(Some(VisibilityMaps::new(8, 40.0, moments).unwrap()))
+        .unwrap();
+    let path: Vec<Vec3> = (0..10_000)
+        .map(|i| {
+            let t = i as f32 * 1e-3;
+            Vec3::new(
+                2.0 + 15.0 * t,
+                9.0 + 5.0 * (3.0 * t).sin(),
+                9.0 + 5.0 * (2.0 * t).cos(),
+            )
+        })
+        .collect();
+    let mut g = c.benchmark_group("cloud_visibility");
+    g.throughput(Throughput::Elements(path.len() as u64));
+    for on in [false, true] {
+        cloud.set_visibility(on);
+        let name = if on {
+            "irradiance_visibility_on"
+        } else {
+            "irradiance_visibility_off"
+        };
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut st = WalkState::new();
+                let mut acc = Vec3::ZERO;
+                for &p in &path {
+                    acc += cloud.irradiance(p, Vec3::Y, &mut st);
+                }
+                black_box(acc)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, visibility);
 criterion_main!(benches);
