@@ -17,7 +17,8 @@
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
 use probekit::placement::eval::{
-    mean_luminance, reference_cache_path, reference_cached, sample_points, Predictor,
+    is_leak, leak_threshold, mean_luminance, reference_cache_path, reference_cached, sample_points,
+    Predictor,
 };
 use probekit::scene::Scene;
 use probekit::trace::Ray;
@@ -26,16 +27,11 @@ use probekit_runtime::{Interp, ProbeFile};
 use probekit_sh::ShRgb;
 use std::error::Error;
 
-fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
+mod common;
+use common::arg;
 
 fn lum(v: Vec3) -> f32 {
-    0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z
+    probekit_sh::LUMINANCE.dot(v)
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -78,7 +74,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     );
     for (i, p) in pts.iter().enumerate() {
         let (t, e) = (truth[i], predicted[i]);
-        if lum(e) <= 4.0 * lum(t) + 0.01 * mean {
+        if !is_leak(e, t, mean) {
             continue;
         }
         let regions: Vec<&str> = scene
@@ -112,7 +108,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             lum(e),
             lum(c),
             lum(dd),
-            4.0 * lum(t) + 0.01 * mean
+            leak_threshold(t, mean)
         );
         for k in 0..4 {
             if w[k] == 0.0 {

@@ -129,7 +129,20 @@ pub struct Metrics {
 }
 
 fn lum(v: Vec3) -> f32 {
-    0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z
+    probekit_sh::LUMINANCE.dot(v)
+}
+
+/// The luminance above which an interpolated irradiance counts as a leak
+/// (module docs): 4× the true luminance of `truth` plus 1 % of
+/// `mean_truth_lum`, the mean true luminance over the evaluated points.
+pub fn leak_threshold(truth: Vec3, mean_truth_lum: f32) -> f32 {
+    4.0 * lum(truth) + 0.01 * mean_truth_lum
+}
+
+/// Whether interpolated irradiance `pred` leaks against `truth`: its
+/// luminance exceeds [`leak_threshold`].
+pub fn is_leak(pred: Vec3, truth: Vec3, mean_truth_lum: f32) -> bool {
+    lum(pred) > leak_threshold(truth, mean_truth_lum)
 }
 
 /// Metrics of `pred` against `truth`; `mean_truth_lum` is the mean true
@@ -153,7 +166,7 @@ pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
         se += (*p - *t).length_squared() as f64;
         st += t.length_squared() as f64;
         rel.push((*p - *t).length() / (t.length() + 0.01 * mean_abs as f32).max(1e-12));
-        if lum(*p) > 4.0 * lum(*t) + 0.01 * mean_truth_lum {
+        if is_leak(*p, *t, mean_truth_lum) {
             leaks += 1;
         }
     }
