@@ -384,10 +384,17 @@ pub fn render(
         return Err(RenderError::BadSettings("albedo must be ≥ 0".into()));
     }
     let source = Source::from_file(file)?;
-    let mut wall_source = Source::from_file(file)?;
-    if let Source::Cloud(c) = &mut wall_source {
-        c.set_visibility(false);
-    }
+    // Walls are shaded without visibility weighting (module docs): a second
+    // view of the cloud with it off, only when the first has it on.
+    let unweighted = match &source {
+        Source::Cloud(c) if c.visibility_enabled() => {
+            let mut c = c.clone();
+            c.set_visibility(false);
+            Some(Source::Cloud(c))
+        }
+        _ => None,
+    };
+    let wall_source = unweighted.as_ref().unwrap_or(&source);
     let sky = Sky::new(scene)?;
     let baker = Baker::new(scene)?;
     let tracer = baker.tracer();
@@ -486,7 +493,7 @@ pub fn render(
                             &ray,
                             tracer,
                             scene,
-                            (&source, &wall_source),
+                            (&source, wall_source),
                             &sky,
                             &object,
                             overlay.as_ref().map(|o| (o, &row_glyphs[y as usize][..])),

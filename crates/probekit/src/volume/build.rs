@@ -440,7 +440,7 @@ pub fn build_adaptive(
     };
     // Edge of a depth-0 (root) cell in lattice units.
     let full = 1u32 << s.max_depth;
-    let lattice_cells: Vec<u64> = roots.iter().map(|&r| r as u64 * full as u64).collect();
+    let lattice_cells = roots.map(|r| r as u64 * full as u64);
     let root_total: u64 = roots.iter().map(|&r| r as u64).product();
     if roots.iter().any(|&r| r == 0 || r > 65536)
         || root_total > 1 << 20
@@ -448,7 +448,7 @@ pub fn build_adaptive(
     {
         return Err(VolumeBuildError::BadRoots(roots));
     }
-    let lattice_cells = [0, 1, 2].map(|a| lattice_cells[a] as u32);
+    let lattice_cells = lattice_cells.map(|c| c as u32);
     let mut lat = Lattice {
         src,
         min: common.min,
