@@ -427,25 +427,15 @@ proptest! {
 fn depth_rows_partition_leaves_samples_and_volume() {
     let src = LightsDemo::demo(2);
     let (min, max) = LightsDemo::demo_box();
+    let common = CommonSettings {
+        min,
+        max,
+        gradients: GradientMode::None,
+        validity_threshold: 0.5,
+    };
     let s = AdaptiveSettings {
-        common: CommonSettings {
-            min,
-            max,
-            gradients: GradientMode::None,
-            validity_threshold: 0.5,
-        },
-        min_depth: 1,
-        max_depth: 3,
-        geometry: true,
-        depth_factor: None,
-        gradient_threshold: None,
         prediction_tolerance: Some(0.25),
-        prune_tolerance: None,
-        relative_floor: 0.0,
-        geometry_depth: u32::MAX,
-        noise_k: 0.0,
-        balance: false,
-        roots: Some([1, 1, 1]),
+        ..super::tests::geometry_only(common, 3)
     };
     let (file, stats) = build_adaptive(&src, &s).unwrap();
     let rows = depth_rows(&file);

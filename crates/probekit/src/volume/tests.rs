@@ -247,19 +247,10 @@ fn adaptive(
     build_adaptive(
         src,
         &AdaptiveSettings {
-            common: common(min, max, gradients),
-            min_depth: 1,
-            max_depth: 4,
-            geometry: true,
             depth_factor: Some(1.0),
-            gradient_threshold: None,
             prediction_tolerance: Some(0.25),
             prune_tolerance: Some(0.1),
-            relative_floor: 0.0,
-            geometry_depth: u32::MAX,
-            noise_k: 0.0,
-            balance: false,
-            roots: Some([1, 1, 1]),
+            ..geometry_only(common(min, max, gradients), 4)
         },
     )
     .unwrap()
@@ -854,19 +845,11 @@ impl<F: Fn(Vec3) -> f32 + Sync> VolumeSource for NoisySource<F> {
 
 fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
     AdaptiveSettings {
-        common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
-        min_depth: 1,
-        max_depth: 4,
         geometry: false,
         geometry_depth: 0,
-        depth_factor: None,
-        gradient_threshold: None,
         prediction_tolerance: Some(0.1),
-        prune_tolerance: None,
-        relative_floor: 0.0,
         noise_k,
-        balance: false,
-        roots: Some([1, 1, 1]),
+        ..geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 4)
     }
 }
 
@@ -932,19 +915,10 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
         let (file, _) = build_adaptive(
             &ConstantWithWall,
             &AdaptiveSettings {
-                common: common(Vec3::ZERO, Vec3::ONE, GradientMode::None),
-                min_depth: 1,
-                max_depth: 4,
-                geometry: true,
                 geometry_depth: g,
-                depth_factor: None,
-                gradient_threshold: None,
                 prediction_tolerance: Some(0.1),
-                prune_tolerance: None,
-                relative_floor: 0.0,
                 noise_k: 2.0,
-                balance: false,
-                roots: Some([1, 1, 1]),
+                ..geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 4)
             },
         )
         .unwrap();
