@@ -15,14 +15,14 @@
 
 use probekit::bake::Baker;
 use probekit::format::ProbeFile;
-use probekit::placement::eval::{
-    mean_luminance, metrics, reference_cache_path, reference_cached, sample_points, Predictor,
-};
+use probekit::placement::eval::{metrics, Predictor};
 use probekit::scene::Scene;
 use probekit::volume::Interp;
 use std::error::Error;
 use std::path::Path;
 
+mod common;
+use common::{eval_set, EvalSet};
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene = None;
@@ -45,19 +45,17 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = scene.ok_or("usage: eval_many SCENE [--points N] [--seed S] FILE...")?;
     let scene = Scene::load(Path::new(&scene))?;
     let baker = Baker::new(&scene)?;
-    let pts = sample_points(baker.tracer(), &scene.bake_box(), points, seed);
     let t = std::time::Instant::now();
-    let truth = reference_cached(
-        &baker,
-        &pts,
-        &reference_cache_path(scene.content_hash(), points, seed),
-    )?;
+    let EvalSet {
+        points: pts,
+        truth,
+        mean,
+    } = eval_set(&baker, &scene, points, seed)?;
     eprintln!(
         "reference at {} points in {:.1} s",
         pts.len(),
         t.elapsed().as_secs_f32()
     );
-    let mean = mean_luminance(&truth);
     for f in &files {
         let file = ProbeFile::load(f)?;
         let pred = Predictor::from_file(&file, interp)?.predict(&pts)?;

@@ -16,10 +16,7 @@
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
-use probekit::placement::eval::{
-    is_leak, leak_threshold, mean_luminance, reference_cache_path, reference_cached, sample_points,
-    Predictor,
-};
+use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
 use probekit::scene::Scene;
 use probekit::trace::Ray;
 use probekit_runtime::cloud::WalkState;
@@ -28,7 +25,7 @@ use probekit_sh::ShRgb;
 use std::error::Error;
 
 mod common;
-use common::arg;
+use common::{arg, eval_set, EvalSet};
 
 fn lum(v: Vec3) -> f32 {
     probekit_sh::LUMINANCE.dot(v)
@@ -55,13 +52,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let Predictor::Cloud(cloud) = &pred else {
         return Err("not a cloud".into());
     };
-    let pts = sample_points(baker.tracer(), &scene.bake_box(), npts, 1);
-    let truth = reference_cached(
-        &baker,
-        &pts,
-        &reference_cache_path(scene.content_hash(), npts, 1),
-    )?;
-    let mean = mean_luminance(&truth);
+    let EvalSet {
+        points: pts,
+        truth,
+        mean,
+    } = eval_set(&baker, &scene, npts, 1)?;
     let predicted = pred.predict(&pts)?;
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = hi;

@@ -16,17 +16,14 @@
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
 use probekit::cloud::tetrahedralize;
-use probekit::placement::eval::{
-    interpolate_cloud, mean_luminance, metrics, reference_cache_path, reference_cached,
-    region_metrics, sample_points,
-};
+use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
 use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
 use std::error::Error;
 
 mod common;
-use common::arg;
+use common::{arg, eval_set, EvalSet};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -47,13 +44,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let shells = args.iter().any(|a| a == "--light-shells");
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
-    let pts = sample_points(baker.tracer(), &bbox, npts, 1);
-    let truth = reference_cached(
-        &baker,
-        &pts,
-        &reference_cache_path(scene.content_hash(), npts, 1),
-    )?;
-    let mean = mean_luminance(&truth);
+    let EvalSet {
+        points: pts,
+        truth,
+        mean,
+    } = eval_set(&baker, &scene, npts, 1)?;
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {

@@ -1,4 +1,14 @@
-//! Helpers shared by the measurement examples (`mod common;` in each).
+//! Helpers shared by the measurement examples (`mod common;` in each; not
+//! every example uses every helper).
+#![allow(dead_code)]
+
+use glam::Vec3;
+use probekit::bake::Baker;
+use probekit::placement::eval::{
+    mean_luminance, reference_cache_path, reference_cached, sample_points, EvalPoint,
+};
+use probekit::scene::Scene;
+use std::error::Error;
 
 /// The value after `name` in `args`, parsed, or `default` when it is
 /// missing or does not parse.
@@ -8,4 +18,37 @@ pub fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
         .and_then(|i| args.get(i + 1))
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
+}
+
+/// `probekit eval`'s points with their ground truth.
+pub struct EvalSet {
+    /// The points.
+    pub points: Vec<EvalPoint>,
+    /// Reference irradiance at each point (for its normal).
+    pub truth: Vec<Vec3>,
+    /// Mean luminance of `truth` (the leak floor's scale).
+    pub mean: f32,
+}
+
+/// `probekit eval`'s `n` points of `seed` in the scene's bake box and their
+/// reference irradiance (cached in the temp folder, keyed by scene, count
+/// and seed).
+pub fn eval_set(
+    baker: &Baker,
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+) -> Result<EvalSet, Box<dyn Error>> {
+    let pts = sample_points(baker.tracer(), &scene.bake_box(), n, seed);
+    let truth = reference_cached(
+        baker,
+        &pts,
+        &reference_cache_path(scene.content_hash(), n, seed),
+    )?;
+    let mean = mean_luminance(&truth);
+    Ok(EvalSet {
+        points: pts,
+        truth,
+        mean,
+    })
 }
