@@ -20,18 +20,20 @@ impl<F: Fn(Vec3) -> Vec<Vec3> + Sync, G: Fn(Vec3) -> Vec<Vec3> + Sync> VolumeSou
     }
     fn capture(&self, points: &[Vec3]) -> Vec<Captured> {
         self.log.lock().unwrap().extend_from_slice(points);
-        points
-            .iter()
-            .map(|p| Captured {
-                sh: ShRgb::from_coeffs((self.f)(*p)).unwrap(),
-                validity: 1.0,
-                virtual_offset: false,
-                std_error: None,
-            })
-            .collect()
+        points.iter().map(|p| exact((self.f)(*p))).collect()
     }
     fn analytic_gradients(&self, points: &[Vec3]) -> Option<Vec<Vec3>> {
         Some(points.iter().flat_map(|p| (self.g)(*p)).collect())
+    }
+}
+
+/// A fully valid capture of exact (noise-free) radiance SH `coeffs`.
+fn exact(coeffs: Vec<Vec3>) -> Captured {
+    Captured {
+        sh: ShRgb::from_coeffs(coeffs).unwrap(),
+        validity: 1.0,
+        virtual_offset: false,
+        std_error: None,
     }
 }
 
@@ -591,17 +593,13 @@ impl VolumeSource for ConstantWithWall {
     }
     fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
         p.iter()
-            .map(|_| Captured {
-                sh: ShRgb::from_coeffs(vec![
+            .map(|_| {
+                exact(vec![
                     Vec3::new(1.0, 2.0, 3.0),
                     Vec3::splat(0.5),
                     Vec3::splat(-0.25),
                     Vec3::ZERO,
                 ])
-                .unwrap(),
-                validity: 1.0,
-                virtual_offset: false,
-                std_error: None,
             })
             .collect()
     }
@@ -690,8 +688,8 @@ fn brick_atlas_reproduces_the_octree_query() {
         }
         fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
             p.iter()
-                .map(|p| Captured {
-                    sh: ShRgb::from_coeffs(
+                .map(|p| {
+                    exact(
                         (0..9)
                             .map(|k| {
                                 let k = k as f32;
@@ -703,10 +701,6 @@ fn brick_atlas_reproduces_the_octree_query() {
                             })
                             .collect(),
                     )
-                    .unwrap(),
-                    validity: 1.0,
-                    virtual_offset: false,
-                    std_error: None,
                 })
                 .collect()
         }
