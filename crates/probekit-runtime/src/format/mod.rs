@@ -33,7 +33,7 @@ pub use crc::{crc32, Crc32};
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
-pub use octree_compact::lattice_step;
+pub use octree_compact::{lattice_pos, lattice_step};
 pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
 pub use write::{assemble_file, SectionBuilder};

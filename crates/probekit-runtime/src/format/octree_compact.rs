@@ -5,10 +5,10 @@
 //! indices per leaf (~72 bytes per leaf, a third of an adaptive volume file).
 //! The octrees the builder writes are regular: breadth-first node order with
 //! the 8 children of a node consecutive, every node box an octant of its
-//! parent on a lattice of `2^max_depth` cells per axis over the root box,
+//! parent on a lattice of `roots·2^max_depth` cells per axis over the box,
 //! leaves listing exactly their 8 corner samples, and each corner sample at
-//! the lattice position `min + q·step` (`step = (max − min) / 2^max_depth`,
-//! computed in `f32` exactly as here). Such a tree is fully described by the
+//! the lattice position `min + q·step` ([`lattice_pos`], [`lattice_step`]:
+//! computed in `f32` exactly as the builder does, by calling them). Such a tree is fully described by the
 //! root box, `max_depth` and one "has children" bit per node; the reader
 //! rebuilds the boxes and finds each leaf corner by its position's bits among
 //! the probe positions. The writer uses `OCTC` only when decoding its
@@ -75,7 +75,7 @@ pub fn lattice_step(min: Vec3, max: Vec3, cells: [u32; 3]) -> Vec3 {
 }
 
 /// Lattice position `min + q·step`, the builder's formula.
-fn lattice_pos(min: Vec3, step: Vec3, q: [u32; 3]) -> Vec3 {
+pub fn lattice_pos(min: Vec3, step: Vec3, q: [u32; 3]) -> Vec3 {
     min + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * step
 }
 

@@ -2,7 +2,7 @@
 
 use super::source::{Captured, VolumeSource};
 use super::VolumeBuildError;
-use crate::format::lattice_step;
+use crate::format::{lattice_pos, lattice_step};
 use crate::format::{
     layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET},
     Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeFileKind, Validity, VolumeGrid,
@@ -280,7 +280,7 @@ struct Lattice<'a> {
 
 impl Lattice<'_> {
     fn pos(&self, q: [u32; 3]) -> Vec3 {
-        self.min + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * self.step
+        lattice_pos(self.min, self.step, q)
     }
 
     /// Captures every not yet captured point of `qs` in one batch.
