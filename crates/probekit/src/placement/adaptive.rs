@@ -124,7 +124,7 @@ fn leak_normals() -> Vec<Vec3> {
 
 /// Relative luminance (Rec. 709 weights), as `probekit eval` uses it.
 fn luminance(v: Vec3) -> f32 {
-    0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z
+    probekit_sh::LUMINANCE.dot(v)
 }
 
 /// Mean over all unit normals of the irradiance luminance of radiance SH

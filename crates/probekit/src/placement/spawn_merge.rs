@@ -93,10 +93,7 @@ impl Directions {
 /// `dirs` (E not divided by π).
 pub fn sampled_irradiance(sh: &ShRgb, dirs: &[Vec3]) -> Vec<f32> {
     dirs.iter()
-        .map(|d| {
-            let e = sh.irradiance(*d);
-            0.2126 * e.x + 0.7152 * e.y + 0.0722 * e.z
-        })
+        .map(|d| probekit_sh::LUMINANCE.dot(sh.irradiance(*d)))
         .collect()
 }
 

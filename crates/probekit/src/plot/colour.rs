@@ -51,7 +51,7 @@ mod tests {
         assert_eq!(to_srgb(Vec3::splat(f32::NAN)).0, [0, 0, 0]);
         assert_eq!(heat(0.0), Vec3::ZERO);
         assert_eq!(heat(1.0), Vec3::ONE);
-        let lum = |v: Vec3| v.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        let lum = |v: Vec3| v.dot(probekit_sh::LUMINANCE);
         let mut prev = -1.0;
         for k in 0..=20 {
             let l = lum(heat(k as f32 / 20.0));

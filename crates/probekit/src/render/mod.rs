@@ -60,8 +60,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Relative error drawn as the top of the heat map (white) in the error panel.
 pub const ERROR_SCALE: f32 = 0.5;
-/// Luminance weights (Rec. 709).
-const LUMA: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
 /// Largest panel side, pixels.
 pub const MAX_SIDE: u32 = 8192;
 
@@ -534,7 +532,7 @@ pub fn render(
     // Exposure from the reference panel's 95th percentile luminance.
     let mut lums: Vec<f32> = px
         .iter()
-        .map(|p| p.reference.dot(LUMA))
+        .map(|p| p.reference.dot(probekit_sh::LUMINANCE))
         .filter(|l| l.is_finite())
         .collect();
     lums.sort_by(f32::total_cmp);
@@ -726,7 +724,11 @@ fn compose(
             img.put_pixel(w + GAP + x, top + y, to_srgb(p.reference * exposure));
             let e = match error[i] {
                 Some(r) => heat(r / ERROR_SCALE),
-                None => Vec3::splat(0.35 * (p.reference * exposure).dot(LUMA).clamp(0.0, 1.0)),
+                None => Vec3::splat(
+                    0.35 * (p.reference * exposure)
+                        .dot(probekit_sh::LUMINANCE)
+                        .clamp(0.0, 1.0),
+                ),
             };
             img.put_pixel(2 * (w + GAP) + x, top + y, to_srgb(e));
         }
