@@ -37,12 +37,42 @@ fn sharded_bake_merges_to_the_unsharded_file() {
             "p1.probes",
             "-o",
             "m.probes",
+            "--scene",
+            "builtin:demo",
         ],
     );
-    assert!(m.status.success());
+    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
     let a = std::fs::read(d.join("full.probes")).unwrap();
     let b = std::fs::read(d.join("m.probes")).unwrap();
     assert!(a == b, "merged file differs from the unsharded bake");
+    // Cell visibility spans every probe: merge bakes it, from the same scene.
+    std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    fails_one_line(
+        d,
+        &[
+            "merge",
+            "p0.probes",
+            "p1.probes",
+            "p2.probes",
+            "-o",
+            "x.probes",
+        ],
+        "--scene",
+    );
+    fails_one_line(
+        d,
+        &[
+            "merge",
+            "p0.probes",
+            "p1.probes",
+            "p2.probes",
+            "-o",
+            "x.probes",
+            "--scene",
+            "tri.obj",
+        ],
+        "not the scene",
+    );
     // A gap, an overlap and a different setting are refused.
     fails_one_line(
         d,

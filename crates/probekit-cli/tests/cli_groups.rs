@@ -52,6 +52,8 @@ fn sharded_bake_with_groups_merges_to_the_unsharded_file() {
             "p0.probes",
             "-o",
             "m.probes",
+            "--scene",
+            "builtin:demo",
         ],
     );
     assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));

@@ -36,6 +36,8 @@ fn bake_inspect_query_with_and_without_visibility() {
         v["bytes_by_section"]["visibility"].as_u64().unwrap(),
         16 + (probes * 64).div_ceil(16) * 16
     );
+    assert_eq!(v["cell_visibility"]["subdivision"], 3);
+    assert!(n["cell_visibility"].is_null());
     assert!(n["visibility"].is_null());
     assert!(n["bytes_by_section"].get("visibility").is_none());
     // The same probes and SH: only the moments differ.
@@ -63,6 +65,9 @@ fn bake_inspect_query_with_and_without_visibility() {
         q("n.probes", &["--visibility-bias", "0.2"])
     );
     assert_ne!(q("v.probes", &[]), q("n.probes", &[]));
+    // Each weighting alone differs from both together.
+    assert_ne!(q("v.probes", &["--no-cell-visibility"]), q("v.probes", &[]));
+    assert_ne!(q("v.probes", &["--no-cell-visibility"]), q("n.probes", &[]));
     assert_ne!(
         q("v.probes", &["--visibility-bias", "0.01"]),
         q("n.probes", &[])
@@ -99,9 +104,13 @@ fn bake_inspect_query_with_and_without_visibility() {
         ],
         "visibility-sharpness",
     );
-    // Sharpness 0 switches the test off: the plain barycentric blend.
+    // Sharpness 0 switches the moments' test off: with cell visibility off
+    // too, the plain barycentric blend.
     assert_eq!(
-        q("v.probes", &["--visibility-sharpness", "0"]),
+        q(
+            "v.probes",
+            &["--visibility-sharpness", "0", "--no-cell-visibility"]
+        ),
         q("n.probes", &[])
     );
     assert!(run(d, &["query", "v.probes", "--at", "1,1,1", "--json"])

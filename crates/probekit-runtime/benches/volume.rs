@@ -42,6 +42,7 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
         rigs: Vec::new(),
         groups: Vec::new(),
         visibility: None,
+        cell_visibility: None,
         metadata: String::new(),
     }
 }

@@ -83,6 +83,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         }
         let at = baker.capture(p.position, 9_000_000 + i as u64, &s)?;
         let (idx, w) = cloud.weights_at(p.position, &mut ws);
+        // The same cell's barycentric (or outer-cell) weights before visibility.
+        let (_, bary) = cloud.mesh().weights_at(p.position, &mut ws);
         let verts: Vec<usize> = idx.iter().map(|&k| k as usize).collect();
         let vpos: Vec<Vec3> = verts.iter().map(|&k| file.positions[k]).collect();
         let caps = baker.capture_many(&vpos, 9_100_000 + 4 * i, &s, &|_, _| {})?;
@@ -116,11 +118,16 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .tracer()
                 .closest_hit(&Ray::new(p.position, dir / len), len)
                 .is_some();
+            let vis = cloud
+                .visibility_maps()
+                .map_or(1.0, |m| m.visibility(verts[k], q, p.position));
             println!(
-                "    v{} {:.3?} w={:.3} dist={:.2} E_file={:.4} E_hi={:.4} blocked={}",
+                "    v{} {:.3?} w={:.3} (bary {:.3} vis {:.2e}) dist={:.2} E_file={:.4} E_hi={:.4} blocked={}",
                 verts[k],
                 q,
                 w[k],
+                bary[k],
+                vis,
                 len,
                 lum(sh_of(verts[k]).irradiance(p.normal)),
                 lum(caps[k].sh.irradiance(p.normal)),

@@ -5,8 +5,12 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells]
+//!     [--light-shells] [--visibility]
 //! ```
+//!
+//! `--visibility`: every cloud (grid and adaptive alike) blends with what
+//! `probekit bake` stores by default — distance moments (`VISM`) and cell
+//! visibility (`CVIS`) — as `probekit eval` does on such a file.
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and point count. Prints one line
@@ -15,10 +19,14 @@
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
+use probekit::cloud::cell_visibility::bake_cell_visibility;
 use probekit::cloud::tetrahedralize;
+use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
 use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
 use probekit::scene::Scene;
+use probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION;
+use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
 use std::error::Error;
 
@@ -42,6 +50,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
     let shells = args.iter().any(|a| a == "--light-shells");
+    let visibility = args.iter().any(|a| a == "--visibility");
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let EvalSet {
@@ -58,7 +67,27 @@ fn main() -> Result<(), Box<dyn Error>> {
             .map(|r| r.sh)
             .collect();
         let mesh = tetrahedralize(pos)?.to_tet_mesh(pos)?;
-        let pred = interpolate_cloud(&mesh, &sh, &pts);
+        let pred = if visibility {
+            let order = sh.first().map_or(1, |s| s.order());
+            let coeffs: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().to_vec()).collect();
+            let tracer = baker.tracer();
+            let moments = bake_distance_moments(
+                tracer,
+                pos,
+                &VisibilitySettings::new(bbox.size().length(), s.seed),
+                &|_, _| {},
+            )?;
+            let cells = bake_cell_visibility(tracer, &mesh, DEFAULT_CELL_SUBDIVISION, &|_, _| {})?;
+            let mut cloud = ProbeCloud::new(mesh, order as u32, coeffs)?;
+            cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
+            cloud.set_cell_visibility_bits(Some(cells))?;
+            let mut ws = WalkState::new();
+            pts.iter()
+                .map(|p| cloud.irradiance(p.position, p.normal, &mut ws))
+                .collect()
+        } else {
+            interpolate_cloud(&mesh, &sh, &pts)
+        };
         let m = metrics(&pred, &truth, mean);
         let mut reg = String::new();
         for (r, mm) in region_metrics(&scene.regions, &pts, &pred, &truth, mean) {

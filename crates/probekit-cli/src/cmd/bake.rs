@@ -109,7 +109,13 @@ pub struct BakeArgs {
     /// (`VISM`, visibility-aware blending at run time; 1..=64).
     #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
     pub visibility_res: u32,
-    /// Do not bake distance moments (the cloud blends without visibility).
+    /// Lattice subdivision of the per-cell visibility bits (`CVIS`, 1..=8;
+    /// 0: none): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
+    /// points of the cell.
+    #[arg(long, default_value_t = probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION)]
+    pub cell_visibility: u32,
+    /// Do not bake distance moments or cell visibility (the cloud blends
+    /// without visibility).
     #[arg(long)]
     pub no_visibility: bool,
     /// Print a JSON summary.
@@ -129,6 +135,11 @@ pub struct MergeArgs {
     /// Output probe file.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// The scene the parts were baked from (file or `builtin:NAME`):
+    /// needed when they were baked with cell visibility, which depends on
+    /// all probes and is baked here.
+    #[arg(long)]
+    pub scene: Option<String>,
 }
 
 /// Grid over `scene.bake_box()`: cell centres of a grid with about `n`
@@ -298,6 +309,13 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         ..VisibilitySettings::new(bb.size().length().max(1e-3), settings.seed)
     });
     sj["visibility"] = vis.map_or(serde_json::Value::Null, |v| v.to_json());
+    let cells = (!a.no_visibility && a.cell_visibility > 0).then_some(a.cell_visibility);
+    if let Some(k) = cells {
+        if k > probekit_runtime::cloud::cell_visibility::MAX_CELL_SUBDIVISION {
+            bail!("--cell-visibility {k}: expected 0 (none) to 8");
+        }
+    }
+    sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, |k| serde_json::json!(k));
     let meta = BakeMetadata::new(
         format!("{:016x}", scene.content_hash()),
         Placement {
@@ -354,6 +372,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         .with_context(|| format!("{}: --visibility-res", a.scene))?;
         pb.finish_and_clear();
         file.visibility = Some(m);
+    }
+    // Cell visibility needs every probe's tetrahedra: not in shard parts
+    // (`merge --scene` bakes it).
+    if let (Some(k), None) = (cells, &a.shard) {
+        let tracer = probekit::trace::Tracer::new(&scene);
+        file.cell_visibility = Some(cell_visibility_of(&tracer, &file, k, &outname)?);
     }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
@@ -425,6 +449,31 @@ fn part_file(
 }
 
 /// Runs `probekit merge`.
+/// Bakes the `CVIS` section of a cloud file with a progress bar.
+fn cell_visibility_of(
+    tracer: &probekit::trace::Tracer,
+    file: &ProbeFile,
+    k: u32,
+    name: &str,
+) -> Result<probekit_runtime::cloud::CellVisibility> {
+    let cells = file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len());
+    let pb = ProgressBar::new(cells as u64);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed",
+        )
+        .expect("static template"),
+    );
+    let c =
+        probekit::cloud::cell_visibility::bake_file_cell_visibility(tracer, file, k, &|d, t| {
+            pb.set_length(t as u64);
+            pb.set_position(d as u64)
+        })
+        .with_context(|| name.to_string())?;
+    pb.finish_and_clear();
+    Ok(c)
+}
+
 pub fn merge(a: &MergeArgs) -> Result<()> {
     struct Part {
         name: String,
@@ -551,6 +600,20 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec).with_context(|| out.clone())?;
     file.visibility = moments;
+    if let Some(k) = head.meta.settings["cell_visibility"].as_u64() {
+        let Some(scene_name) = &a.scene else {
+            bail!(
+                "{}: baked with cell visibility, which merge bakes over all probes: pass --scene",
+                head.name
+            );
+        };
+        let scene = super::util::load_scene(scene_name)?;
+        if format!("{:016x}", scene.content_hash()) != head.meta.scene_hash {
+            bail!("{scene_name}: not the scene {} was baked from", head.name);
+        }
+        let tracer = probekit::trace::Tracer::new(&scene);
+        file.cell_visibility = Some(cell_visibility_of(&tracer, &file, k as u32, &out)?);
+    }
     file.validate().with_context(|| out.clone())?;
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;
     println!(

@@ -225,8 +225,9 @@ pub struct InspectArgs {
 }
 
 /// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra",
-/// "basis","invalid","bytes","bytes_by_section","visibility","placement","scene_hash"}`
-/// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null);
+/// "basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","placement","scene_hash"}`
+/// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
+/// `cell_visibility`: `{"subdivision"}` of the `CVIS` section, or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -258,6 +259,9 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             "visibility": file.visibility.as_ref().map(|v| serde_json::json!({
                 "resolution": v.resolution,
                 "max_distance": v.max_distance,
+            })),
+            "cell_visibility": file.cell_visibility.as_ref().map(|c| serde_json::json!({
+                "subdivision": c.subdivision(),
             })),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
             "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),

@@ -86,10 +86,13 @@ pub fn parse_interp(s: &str) -> Result<probekit_runtime::Interp> {
 /// `eval` (`#[command(flatten)]`).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct VisibilityArgs {
-    /// Clouds: blend without the file's visibility (distance-moment)
-    /// weighting.
+    /// Clouds: blend without any of the file's visibility weighting
+    /// (distance moments and cell visibility).
     #[arg(long)]
     pub no_visibility: bool,
+    /// Clouds: blend without the file's cell visibility (`CVIS`) weighting.
+    #[arg(long)]
+    pub no_cell_visibility: bool,
     /// Clouds: distance bias of the visibility test in metres (default
     /// 0.05): a point this much beyond the surface a probe sees still counts
     /// as seen.
@@ -106,6 +109,7 @@ impl VisibilityArgs {
     pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
         if let probekit::placement::eval::Predictor::Cloud(c) = p {
             c.set_visibility(!self.no_visibility);
+            c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
             if let Some(b) = self.visibility_bias {
                 if !b.is_finite() {
                     bail!("--visibility-bias {b}: expected a finite distance in metres");

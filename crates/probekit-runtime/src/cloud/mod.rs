@@ -46,8 +46,10 @@ use crate::prelude::*;
 use glam::{DVec3, Vec3};
 use thiserror::Error;
 
+pub mod cell_visibility;
 pub mod probes;
 pub mod visibility;
+pub use cell_visibility::CellVisibility;
 pub use probes::{ProbeCloud, ProbeCloudError};
 pub use visibility::VisibilityMaps;
 
@@ -532,6 +534,12 @@ impl TetMesh {
     /// Number of triangles on the convex hull.
     pub fn hull_face_count(&self) -> usize {
         self.hull.len()
+    }
+
+    /// The three probes of hull face `face` (the order of the weights
+    /// [`Location::Outside`] gives for it), `None` if out of range.
+    pub fn hull_face_probes(&self, face: u32) -> Option<[u32; 3]> {
+        self.hull.get(face as usize).map(|h| h.probes)
     }
 
     /// The tetrahedron walk. Returns `(tet, coords, exit_face)`: `exit_face`

@@ -7,8 +7,9 @@
 //! ([`super::visibility`]; DDGI, Majercik et al. 2019), so probes behind a
 //! wall stop leaking their light.
 
+use super::cell_visibility::CellVisibility;
 use super::visibility::VisibilityMaps;
-use super::{CloudError, TetMesh, WalkState};
+use super::{CloudError, Location, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
 use crate::prelude::*;
 use glam::Vec3;
@@ -29,6 +30,21 @@ pub enum ProbeCloudError {
         /// Probes of the cloud.
         probes: usize,
     },
+    /// The cell visibility bits do not match the tetrahedral mesh.
+    #[error(
+        "the cell visibility covers {tets} tetrahedra and {hull_faces} hull faces, \
+         the mesh has {mesh_tets} and {mesh_hull_faces}"
+    )]
+    CellVisibilityMismatch {
+        /// Tetrahedra with a record.
+        tets: usize,
+        /// Hull faces with a record.
+        hull_faces: usize,
+        /// Tetrahedra of the mesh.
+        mesh_tets: usize,
+        /// Hull faces of the mesh.
+        mesh_hull_faces: usize,
+    },
     /// The coefficients could not be decoded.
     #[error(transparent)]
     Format(#[from] FormatError),
@@ -46,6 +62,8 @@ pub struct ProbeCloud {
     order: u32,
     visibility: Option<VisibilityMaps>,
     visibility_on: bool,
+    cells: Option<CellVisibility>,
+    cells_on: bool,
 }
 
 impl ProbeCloud {
@@ -72,6 +90,9 @@ impl ProbeCloud {
             })?;
             cloud.set_visibility_maps(Some(maps))?;
         }
+        if let Some(c) = &file.cell_visibility {
+            cloud.set_cell_visibility_bits(Some(c.clone()))?;
+        }
         Ok(cloud)
     }
 
@@ -91,6 +112,8 @@ impl ProbeCloud {
             order,
             visibility: None,
             visibility_on: true,
+            cells: None,
+            cells_on: true,
         })
     }
 
@@ -134,6 +157,46 @@ impl ProbeCloud {
         self.visibility_on && self.visibility.is_some()
     }
 
+    /// Attaches (or with `None` removes) per-cell visibility bits
+    /// ([`super::cell_visibility`]); they must cover exactly the mesh's
+    /// tetrahedra and hull faces, in its order.
+    pub fn set_cell_visibility_bits(
+        &mut self,
+        cells: Option<CellVisibility>,
+    ) -> Result<(), ProbeCloudError> {
+        if let Some(c) = &cells {
+            if c.tet_count() != self.mesh.tets().len()
+                || c.hull_face_count() != self.mesh.hull_face_count()
+            {
+                return Err(ProbeCloudError::CellVisibilityMismatch {
+                    tets: c.tet_count(),
+                    hull_faces: c.hull_face_count(),
+                    mesh_tets: self.mesh.tets().len(),
+                    mesh_hull_faces: self.mesh.hull_face_count(),
+                });
+            }
+        }
+        self.cells = cells;
+        Ok(())
+    }
+
+    /// The cell visibility bits, if the cloud has them (whether or not
+    /// weighting by them is switched on).
+    pub fn cell_visibility_bits(&self) -> Option<&CellVisibility> {
+        self.cells.as_ref()
+    }
+
+    /// Switches cell-visibility weighting on (the default) or off; without
+    /// bits it has no effect. Independent of [`ProbeCloud::set_visibility`].
+    pub fn set_cell_visibility(&mut self, on: bool) {
+        self.cells_on = on;
+    }
+
+    /// True when queries apply cell-visibility weighting (bits present and on).
+    pub fn cell_visibility_enabled(&self) -> bool {
+        self.cells_on && self.cells.is_some()
+    }
+
     /// Sets the distance bias of the visibility test in metres (default
     /// [`super::visibility::DEFAULT_VISIBILITY_BIAS`]); no effect without maps.
     pub fn set_visibility_bias(&mut self, bias: f32) {
@@ -143,30 +206,56 @@ impl ProbeCloud {
     }
 
     /// Blend weights at `p`: the barycentric weights `b_i` of
-    /// [`TetMesh::weights_at`] (tetrahedron or outer cell), and with
-    /// visibility on `b_i·v_i(p) / Σ_j b_j·v_j(p)` ([`super::visibility`]).
-    /// Unused slots have weight 0. No allocation.
+    /// [`TetMesh::weights_at`] (tetrahedron or outer cell), times each
+    /// probe's cell visibility `c_i(p)` ([`super::cell_visibility`]) and
+    /// Chebyshev visibility `v_i(p)` ([`super::visibility`]) where present
+    /// and on, renormalized: `b_i·c_i·v_i / Σ_j b_j·c_j·v_j`. Where no probe
+    /// of the cell sees `p` (the sum is 0) it falls back to `b_i·v_i`, then
+    /// to `b_i`. Unused slots have weight 0. No allocation.
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
-        let (probes, mut weights) = self.mesh.weights_at(p, state);
-        let Some(maps) = self.visibility.as_ref().filter(|_| self.visibility_on) else {
-            return (probes, weights);
+        let maps = self.visibility.as_ref().filter(|_| self.visibility_on);
+        let cells = self.cells.as_ref().filter(|_| self.cells_on);
+        if maps.is_none() && cells.is_none() {
+            return self.mesh.weights_at(p, state);
+        }
+        let (probes, bary, c) = match self.mesh.locate(p, state) {
+            Location::Inside { tet, weights } => (
+                self.mesh.tets()[tet as usize],
+                weights,
+                cells.map_or([1.0; 4], |c| c.tet(tet, &weights)),
+            ),
+            Location::Outside {
+                hull_face,
+                probes,
+                weights,
+                ..
+            } => (
+                [probes[0], probes[1], probes[2], 0],
+                [weights[0], weights[1], weights[2], 0.0],
+                cells.map_or([1.0; 4], |c| {
+                    let v = c.hull_face(hull_face, &weights);
+                    [v[0], v[1], v[2], 1.0]
+                }),
+            ),
         };
-        let original = weights;
-        let mut sum = 0.0;
-        let pos = self.mesh.positions();
-        for (w, &i) in weights.iter_mut().zip(&probes) {
-            if *w != 0.0 {
-                *w *= maps.visibility(i as usize, pos[i as usize], p);
-                sum += *w;
+        let mut v = [1.0f32; 4];
+        if let Some(maps) = maps {
+            let pos = self.mesh.positions();
+            for k in 0..4 {
+                if bary[k] != 0.0 {
+                    let i = probes[k] as usize;
+                    v[k] = maps.visibility(i, pos[i], p);
+                }
             }
         }
-        if sum.is_nan() || sum <= 0.0 || !sum.is_finite() {
-            return (probes, original);
-        }
-        for w in &mut weights {
-            *w /= sum;
-        }
-        (probes, weights)
+        let normalized = |w: [f32; 4]| {
+            let sum: f32 = w.iter().sum();
+            (sum.is_finite() && sum > 0.0).then(|| w.map(|x| x / sum))
+        };
+        let bcv = core::array::from_fn(|k| bary[k] * c[k] * v[k]);
+        let bv = core::array::from_fn(|k| bary[k] * v[k]);
+        let w = normalized(bcv).or_else(|| normalized(bv)).unwrap_or(bary);
+        (probes, w)
     }
 
     /// The tetrahedral mesh.

@@ -11,11 +11,12 @@ pub const MAGIC: [u8; 8] = *b"PROBEKIT";
 pub const VERSION_MAJOR: u16 = 1;
 /// Newest minor version this reader knows (1.1 added `LGRP`, light
 /// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
-/// distance moments for visibility-aware blending). Files with a larger minor load; their unknown sections are
+/// distance moments for visibility-aware blending; 1.4 added `CVIS`, per-cell
+/// lattice visibility). Files with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 3;
+pub const VERSION_MINOR: u16 = 4;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
@@ -37,12 +38,14 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 }
 
 /// The lowest minor version whose section set includes every id in `ids`:
+/// 4 if `CVIS` ([`SectionId::CELL_VISIBILITY`]) is present, else
 /// 3 if `VISM` ([`SectionId::VISIBILITY`]) is present, else 2 if `OCTC`
 /// ([`SectionId::OCTREE_COMPACT`]) is, else 1 if `LGRP`
 /// ([`SectionId::LIGHT_GROUPS`]) is, else 0.
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
     ids.into_iter()
         .map(|id| match id {
+            SectionId::CELL_VISIBILITY => 4,
             SectionId::VISIBILITY => 3,
             SectionId::OCTREE_COMPACT => 2,
             SectionId::LIGHT_GROUPS => 1,
@@ -118,11 +121,14 @@ impl SectionId {
     /// Per-probe distance moments on an octahedral map, for
     /// visibility-aware blending of a probe cloud (format 1.3).
     pub const VISIBILITY: Self = Self::from_fourcc(*b"VISM");
+    /// Per-cell lattice visibility bits of a probe cloud (format 1.4;
+    /// [`crate::cloud::cell_visibility`]).
+    pub const CELL_VISIBILITY: Self = Self::from_fourcc(*b"CVIS");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 13] = [
+    pub const KNOWN: [Self; 14] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -135,6 +141,7 @@ impl SectionId {
         Self::RIGS,
         Self::LIGHT_GROUPS,
         Self::VISIBILITY,
+        Self::CELL_VISIBILITY,
         Self::METADATA,
     ];
 
@@ -165,6 +172,7 @@ impl SectionId {
             Self::METADATA => "metadata",
             Self::LIGHT_GROUPS => "light_groups",
             Self::VISIBILITY => "visibility",
+            Self::CELL_VISIBILITY => "cell_visibility",
             Self::HEADER => "header",
             _ => return None,
         })

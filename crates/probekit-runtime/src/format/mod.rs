@@ -38,6 +38,7 @@ pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
 pub use write::{assemble_file, SectionBuilder};
 
+use crate::cloud::CellVisibility;
 use crate::prelude::*;
 use glam::Vec3;
 #[cfg(feature = "std")]
@@ -331,6 +332,9 @@ pub struct ProbeFile {
     /// Per-probe distance moments for visibility-aware blending (`VISM`,
     /// format 1.3; `None`: no section, clouds blend without visibility).
     pub visibility: Option<DistanceMoments>,
+    /// Per-cell lattice visibility bits of a cloud's tetrahedra and hull
+    /// faces (`CVIS`, format 1.4; `None`: no section).
+    pub cell_visibility: Option<CellVisibility>,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -361,6 +365,7 @@ impl ProbeFile {
             rigs: Vec::new(),
             groups: Vec::new(),
             visibility: None,
+            cell_visibility: None,
             metadata: String::new(),
         }
     }

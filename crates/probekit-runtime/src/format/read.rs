@@ -14,6 +14,7 @@ use super::{
     AxisModel, Gradients, LightGroup, Octree, OctreeNode, OuterCells, ProbeFile, ProbeFileKind,
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
+use crate::cloud::cell_visibility::{record_bytes, CellVisibility, MAX_CELL_SUBDIVISION};
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use bytemuck::Pod;
@@ -633,6 +634,22 @@ fn parse_visibility(s: &Sec<'_>) -> Result<super::DistanceMoments, FormatError> 
     })
 }
 
+fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
+    let [tets, faces, k, _] = s.header()?;
+    if !(1..=MAX_CELL_SUBDIVISION).contains(&k) {
+        return Err(FormatError::InvalidValue {
+            id: s.id,
+            element: 0,
+            reason: "cell visibility subdivision outside 1..=8",
+        });
+    }
+    let size = bytes_for(tets, record_bytes(4, k))
+        .and_then(|a| bytes_for(faces, record_bytes(3, k)).and_then(|b| a.checked_add(b)));
+    let [data] = s.arrays([size])?;
+    CellVisibility::new(k, tets as usize, faces as usize, data.to_vec())
+        .ok_or(FormatError::CountOverflow(s.id))
+}
+
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
@@ -667,6 +684,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
             SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
             SectionId::VISIBILITY => file.visibility = Some(parse_visibility(&s)?),
+            SectionId::CELL_VISIBILITY => file.cell_visibility = Some(parse_cell_visibility(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.

@@ -388,6 +388,26 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         v.validate(probes)?;
     }
 
+    // Cell visibility (1.4): one record per tetrahedron (hull faces are
+    // counted against the mesh when a `ProbeCloud` is built).
+    if let Some(c) = &f.cell_visibility {
+        let id = SectionId::CELL_VISIBILITY;
+        let tets = f
+            .tetrahedra
+            .as_ref()
+            .ok_or(FormatError::MissingSection(SectionId::TETRAHEDRA))?;
+        if c.tet_count() != tets.vertices.len() {
+            return Err(count_mismatch(id, tets.vertices.len(), c.tet_count()));
+        }
+        if let Some(k) = c.first_nonzero_padding() {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: k as u64,
+                reason: "cell visibility record has padding bits set",
+            });
+        }
+    }
+
     match f.kind {
         ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
             Err(FormatError::MissingSection(SectionId::GRID))

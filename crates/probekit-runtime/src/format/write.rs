@@ -277,6 +277,17 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::VISIBILITY, s.finish()));
     }
 
+    if let Some(c) = &f.cell_visibility {
+        let mut s = SectionBuilder::new([
+            count(c.tet_count(), "cell visibility tetrahedra")?,
+            count(c.hull_face_count(), "cell visibility hull faces")?,
+            c.subdivision(),
+            0,
+        ]);
+        s.bytes(c.data());
+        out.push((SectionId::CELL_VISIBILITY, s.finish()));
+    }
+
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
     s.bytes(f.metadata.as_bytes());
     out.push((SectionId::METADATA, s.finish()));

@@ -256,6 +256,30 @@ pub fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
     bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
 }
 
+/// Hostile variants of a good file: every 7th truncation must fail to load,
+/// and `rounds` deterministic single-byte mutations inside section `id`
+/// (resealed, so the parser sees them) must never panic; whatever still
+/// loads writes back to bytes that load to the same file.
+pub fn hostile_section_variants(good: &[u8], id: SectionId, rounds: usize, seed: u64) {
+    for cut in (0..good.len()).step_by(7) {
+        assert!(ProbeFile::from_bytes(&good[..cut]).is_err());
+    }
+    let (off, len) = find_section(good, id);
+    let mut s = seed | 1;
+    for _ in 0..rounds {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        let mut b = good.to_vec();
+        let at = off + (s % len as u64) as usize;
+        b[at] = (s >> 32) as u8;
+        reseal(&mut b);
+        if let Ok(f) = ProbeFile::from_bytes(&b) {
+            assert_eq!(ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap(), f);
+        }
+    }
+}
+
 /// Checks an error's variant.
 pub type Expect = fn(&FormatError) -> bool;
 

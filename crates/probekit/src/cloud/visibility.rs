@@ -187,8 +187,7 @@ mod tests {
     use super::*;
     use crate::cloud::file::cloud_file;
     use crate::format::{BakeMetadata, Placement};
-    use crate::scene::demo::box_triangles;
-    use crate::scene::{Material, Scene};
+    use crate::scene::Scene;
     use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
     use probekit_runtime::format::{Codec, ProbeFile, Validity};
     use probekit_sh::ShRgb;
@@ -208,12 +207,7 @@ mod tests {
     }
 
     fn scene(boxes: &[(Vec3, Vec3)]) -> Scene {
-        let objects = boxes
-            .iter()
-            .enumerate()
-            .map(|(i, &(lo, hi))| (format!("b{i}"), box_triangles(lo, hi, 0)))
-            .collect();
-        Scene::from_triangles("vis", objects, vec![Material::default()], vec![]).unwrap()
+        crate::scene::tests_support::boxes_scene(boxes)
     }
 
     #[test]

@@ -1068,6 +1068,18 @@ impl Fnv1a {
 pub(crate) mod tests_support {
     use std::path::{Path, PathBuf};
 
+    /// A scene of closed, outward-facing boxes `(min, max)` (metres), one
+    /// object each, one default material: rooms and walls for visibility tests.
+    pub(crate) fn boxes_scene(boxes: &[(glam::Vec3, glam::Vec3)]) -> super::Scene {
+        let objects = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, &(lo, hi))| (format!("b{i}"), super::demo::box_triangles(lo, hi, 0)))
+            .collect();
+        super::Scene::from_triangles("boxes", objects, vec![super::Material::default()], vec![])
+            .expect("valid boxes")
+    }
+
     /// `$PROBEKIT_DATA_DIR` if set, else `<workspace root>/../shared/data`, or None when
     /// absent (tests that need it skip with a message).
     pub(crate) fn shared_data() -> Option<PathBuf> {

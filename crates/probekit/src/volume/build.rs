@@ -819,6 +819,7 @@ fn finish(
         rigs: Vec::new(),
         groups: Vec::new(),
         visibility: None,
+        cell_visibility: None,
         metadata: String::new(),
     };
     structure(&mut file);
