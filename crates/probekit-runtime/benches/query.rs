@@ -3,12 +3,15 @@
 //! co-spherical). Cold random queries (fresh `WalkState` each: start grid +
 //! walk), coherent queries (one object moving in small steps, warm state),
 //! and batched queries outside the hull (closest-hull-point outer cells);
-//! and the cost of visibility weighting (`cloud_visibility`).
+//! and the cost of visibility weighting (`cloud_visibility`: distance
+//! moments, cell visibility, both).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
-use probekit_runtime::cloud::{face_neighbors, ProbeCloud, TetMesh, VisibilityMaps, WalkState};
+use probekit_runtime::cloud::{
+    cell_visibility, face_neighbors, CellVisibility, ProbeCloud, TetMesh, VisibilityMaps, WalkState,
+};
 use std::hint::black_box;
 
 fn kuhn_grid(k: u32) -> TetMesh {
@@ -126,6 +129,22 @@ fn visibility(c: &mut Criterion) {
     cloud
         .set_visibility_maps(Some(VisibilityMaps::new(8, 40.0, moments).unwrap()))
         .unwrap();
+    // Cell visibility at the default k = 3, pseudo-random bits.
+    let (tets, faces) = (cloud.mesh().tets().len(), cloud.mesh().hull_face_count());
+    let k = cell_visibility::DEFAULT_CELL_SUBDIVISION;
+    let bytes =
+        tets * cell_visibility::record_bytes(4, k) + faces * cell_visibility::record_bytes(3, k);
+    let bits: Vec<u8> = (0..bytes)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 56) as u8 | 0x0f
+        })
+        .collect();
+    cloud
+        .set_cell_visibility_bits(Some(CellVisibility::new(k, tets, faces, bits).unwrap()))
+        .unwrap();
     let path: Vec<Vec3> = (0..10_000)
         .map(|i| {
             let t = i as f32 * 1e-3;
@@ -138,12 +157,14 @@ fn visibility(c: &mut Criterion) {
         .collect();
     let mut g = c.benchmark_group("cloud_visibility");
     g.throughput(Throughput::Elements(path.len() as u64));
-    for on in [false, true] {
-        cloud.set_visibility(on);
-        let name = if on {
-            "irradiance_visibility_on"
-        } else {
-            "irradiance_visibility_off"
+    for (moments, cells) in [(false, false), (true, false), (false, true), (true, true)] {
+        cloud.set_visibility(moments);
+        cloud.set_cell_visibility(cells);
+        let name = match (moments, cells) {
+            (false, false) => "irradiance_visibility_off",
+            (true, false) => "irradiance_moments",
+            (false, true) => "irradiance_cells",
+            (true, true) => "irradiance_moments_and_cells",
         };
         g.bench_function(name, |b| {
             b.iter(|| {
