@@ -12,7 +12,10 @@
 //!    The pool is both the candidate set and the validation set. Nothing
 //!    outside the bake box is ever a candidate or a probe (through a thin
 //!    outer wall a probe sees the sun and sky, and interpolation spreads that
-//!    indoors). Optionally (`light_shells`), around every positional light
+//!    indoors). Along emissive surfaces it adds layers of points 6, 12.5
+//!    and 25 cm off them ([`emitter_layers`]): next to an area light the
+//!    irradiance changes within centimetres. Optionally (`light_shells`),
+//!    around every positional light
 //!    it adds shells of candidates at geometrically growing distances
 //!    ([`light_shells`]), where the `1/d²` fall-off needs probes closer
 //!    together than a uniform pool offers.
@@ -53,7 +56,7 @@
 use super::{LeakSettings, PlacementError, State};
 use crate::bake::sampling::SampleRng;
 use crate::cloud::tetrahedralize;
-use crate::scene::{Aabb, Light, LightKind};
+use crate::scene::{Aabb, Light, LightKind, Scene};
 use crate::trace::Ray;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
@@ -241,6 +244,57 @@ fn light_shells(lights: &[Light], bbox: &Aabb, max_radius: f32) -> Vec<Vec3> {
             r *= LIGHT_SHELL_RATIO;
             shell += 1;
         }
+    }
+    out
+}
+
+/// Distances of the pool layers in front of and behind emissive surfaces,
+/// in units of [`PROBE_CLEARANCE`].
+const EMITTER_LAYERS: [f32; 3] = [1.2, 2.5, 5.0];
+
+/// Random stream of the emitter layers' sample points.
+const EMITTER_STREAM: u64 = 0x656d_6974; // "emit"
+
+/// Pool points in layers along emissive surfaces: points spread over each
+/// emissive triangle (about one per `spacing²` of area, at least one),
+/// offset along its normal on both sides by [`EMITTER_LAYERS`]. Next to an
+/// area light the irradiance changes within centimetres (a point 3 cm under
+/// the Cornell box's ceiling light gets ten times what one 30 cm below
+/// does), where a uniform pool rarely has a point; the layers let the error
+/// ranking see and fill that. At most `limit` points (evenly thinned), only
+/// inside `bbox`. Deterministic.
+fn emitter_layers(scene: &Scene, bbox: &Aabb, spacing: f32, seed: u64, limit: usize) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for et in &scene.emissive_triangles {
+        let Some(t) = scene.triangles.get(et.triangle as usize) else {
+            continue;
+        };
+        let n = t.geometric_normal_unnormalized().normalize_or_zero();
+        if n == Vec3::ZERO || spacing.is_nan() || spacing <= 0.0 {
+            continue;
+        }
+        let count = ((et.area / (spacing * spacing)).ceil() as usize).clamp(1, 256);
+        for k in 0..count {
+            let mut rng = SampleRng::new(seed, EMITTER_STREAM ^ et.triangle as u64, k as u64);
+            let u = rng.next_2d();
+            let (s, v) = (u.x.sqrt(), u.y);
+            let [a, b, c] = t.positions;
+            let p = a * (1.0 - s) + b * (s * (1.0 - v)) + c * (s * v);
+            for f in EMITTER_LAYERS {
+                for side in [1.0, -1.0] {
+                    let q = p + n * (side * f * PROBE_CLEARANCE);
+                    if bbox.contains(q) {
+                        out.push(q);
+                    }
+                }
+            }
+        }
+    }
+    if out.len() > limit {
+        let step = out.len() as f64 / limit.max(1) as f64;
+        out = (0..limit)
+            .map(|i| out[(i as f64 * step) as usize])
+            .collect();
     }
     out
 }
@@ -680,6 +734,14 @@ pub(super) fn adaptive(
             (1.5 * spacing).min(LIGHT_SHELL_MAX),
         ));
     }
+    let limit = raw.len() / 4;
+    raw.extend(emitter_layers(
+        st.baker.scene(),
+        bbox,
+        spacing,
+        st.settings.seed,
+        limit,
+    ));
     let nraw = raw.len();
     let raw: Vec<Vec3> = raw
         .into_par_iter()
@@ -1031,6 +1093,63 @@ mod tests {
             let ray = Ray::new(*parent, d.normalize());
             assert!(tracer.closest_hit(&ray, d.length()).is_none(), "{p}");
         }
+    }
+
+    /// Emitter layers lie over the emissive quad's footprint at exactly the
+    /// layer distances from its plane (checked against the plane equation),
+    /// on both sides inside the box only, respect the limit and repeat.
+    #[test]
+    fn emitter_layers_sit_at_the_layer_distances_over_the_emitter() {
+        use crate::scene::{Material, Triangle};
+        // A 1 m × 0.5 m emissive quad at y = 2, facing down, inside a box
+        // reaching to y = 2.1 (so only 6 cm of the upper side is inside).
+        let (a, b, c, d) = (
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(1.0, 2.0, 0.5),
+            Vec3::new(0.0, 2.0, 0.5),
+        );
+        let tri = |p: [Vec3; 3]| {
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            Triangle {
+                positions: p,
+                normals: [n; 3],
+                uvs: [glam::Vec2::ZERO; 3],
+                material: 0,
+            }
+        };
+        let light = Material {
+            emissive: Vec3::splat(5.0),
+            ..Material::default()
+        };
+        let scene = Scene::from_triangles(
+            "emitter",
+            vec![("quad".into(), vec![tri([a, b, c]), tri([a, c, d])])],
+            vec![light],
+            vec![],
+        )
+        .unwrap();
+        assert_eq!(scene.emissive_triangles.len(), 2);
+        let bbox = Aabb {
+            min: Vec3::new(-1.0, 0.0, -1.0),
+            max: Vec3::new(2.0, 2.1, 1.5),
+        };
+        let pts = emitter_layers(&scene, &bbox, 0.1, 7, 10_000);
+        // 0.25 m² per triangle at 0.1 m spacing: 25 points each; 3 layers
+        // below, 1 above (6 cm < 10 cm of box above; 12.5 and 25 cm are out).
+        assert_eq!(pts.len(), 2 * 25 * 4);
+        for p in &pts {
+            assert!(bbox.contains(*p));
+            assert!((-1e-5..=1.0 + 1e-5).contains(&p.x) && (-1e-5..=0.5 + 1e-5).contains(&p.z));
+            let off = (p.y - 2.0).abs() / PROBE_CLEARANCE;
+            assert!(
+                EMITTER_LAYERS.iter().any(|&f| (off - f).abs() < 1e-3),
+                "{p:?} is {off} clearances off the plane"
+            );
+        }
+        assert_eq!(pts, emitter_layers(&scene, &bbox, 0.1, 7, 10_000));
+        assert_eq!(emitter_layers(&scene, &bbox, 0.1, 7, 30).len(), 30);
+        assert!(emitter_layers(&scene, &bbox, f32::NAN, 7, 30).is_empty());
     }
 
     #[test]
