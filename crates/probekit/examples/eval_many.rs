@@ -6,12 +6,16 @@
 //!
 //! ```text
 //! cargo run --release -p probekit --example eval_many -- SCENE \
-//!     [--points 2000] [--seed 1] [--interp trilinear] FILE.probes...
+//!     [--points 2000] [--seed 1 | --seeds 1,2,3] [--interp trilinear] FILE.probes...
 //! ```
 //!
 //! Prints one line per file: probes, file bytes, `rel_rmse`,
 //! `p95_rel_error` and leaks, the figures `probekit eval` reports (same
-//! sample points for the same scene, point count and seed).
+//! sample points for the same scene, point count and seed). With `--seeds`
+//! the point sets of all the seeds are pooled into one evaluation (figures
+//! over all their points, the leak floor from the pooled mean), and each
+//! seed's own `rel_rmse` follows in brackets: one 2000-point set can be
+//! decided by a handful of points next to a light.
 
 use probekit::bake::Baker;
 use probekit::format::ProbeFile;
@@ -26,14 +30,20 @@ use common::{eval_set, EvalSet};
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene = None;
-    let (mut points, mut seed, mut interp) = (2000usize, 1u64, Interp::Trilinear);
+    let (mut points, mut seeds, mut interp) = (2000usize, vec![1u64], Interp::Trilinear);
     let mut files = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut value = || it.next().ok_or(format!("{a} needs a value"));
         match a.as_str() {
             "--points" => points = value()?.parse()?,
-            "--seed" => seed = value()?.parse()?,
+            "--seed" => seeds = vec![value()?.parse()?],
+            "--seeds" => {
+                seeds = value()?
+                    .split(',')
+                    .map(|s| s.trim().parse())
+                    .collect::<Result<_, _>>()?
+            }
             "--interp" => {
                 let v = value()?;
                 interp = Interp::from_name(v).ok_or(format!("--interp {v}: unknown"))?;
@@ -46,11 +56,13 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = Scene::load(Path::new(&scene))?;
     let baker = Baker::new(&scene)?;
     let t = std::time::Instant::now();
-    let EvalSet {
-        points: pts,
-        truth,
-        mean,
-    } = eval_set(&baker, &scene, points, seed)?;
+    let sets: Vec<EvalSet> = seeds
+        .iter()
+        .map(|&s| eval_set(&baker, &scene, points, s))
+        .collect::<Result<_, _>>()?;
+    let pts: Vec<_> = sets.iter().flat_map(|s| s.points.iter().copied()).collect();
+    let truth: Vec<_> = sets.iter().flat_map(|s| s.truth.iter().copied()).collect();
+    let mean = probekit::placement::eval::mean_luminance(&truth);
     eprintln!(
         "reference at {} points in {:.1} s",
         pts.len(),
@@ -60,13 +72,31 @@ fn main() -> Result<(), Box<dyn Error>> {
         let file = ProbeFile::load(f)?;
         let pred = Predictor::from_file(&file, interp)?.predict(&pts)?;
         let m = metrics(&pred, &truth, mean);
+        let per_seed: Vec<String> = if sets.len() > 1 {
+            let mut at = 0;
+            sets.iter()
+                .map(|s| {
+                    let n = s.points.len();
+                    let r = metrics(&pred[at..at + n], &s.truth, s.mean).rel_rmse;
+                    at += n;
+                    format!("{r:.3}")
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         println!(
-            "{f}: probes={} bytes={} rel_rmse={:.3} p95={:.2} leaks={}",
+            "{f}: probes={} bytes={} rel_rmse={:.3} p95={:.2} leaks={}{}",
             file.positions.len(),
             std::fs::metadata(f)?.len(),
             m.rel_rmse,
             m.p95_rel_error,
-            m.leaks
+            m.leaks,
+            if per_seed.is_empty() {
+                String::new()
+            } else {
+                format!(" [{}]", per_seed.join(" "))
+            }
         );
     }
     Ok(())

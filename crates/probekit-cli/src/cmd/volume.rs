@@ -50,9 +50,9 @@ pub struct VolumeArgs {
     #[arg(long, default_value_t = 1)]
     pub min_depth: u32,
     /// Deepest level below the root cells (adaptive, ≤ 20). Root cells are
-    /// near-cubic (an 8 × 3 × 4 m room gets 1.5 m roots), so the default 3
-    /// gives finest cells of about 0.2 m there.
-    #[arg(long, default_value_t = 3)]
+    /// near-cubic (an 8 × 3 × 4 m room gets 1.5 m roots), so the default 4
+    /// gives finest cells of about 0.1 m there, where a light needs them.
+    #[arg(long, default_value_t = 4)]
     pub max_depth: u32,
     /// Root cells per axis `X,Y,Z` (adaptive): the box is cut into this
     /// grid and each root cell is an octree; depths count from the root
@@ -70,8 +70,12 @@ pub struct VolumeArgs {
     pub prune: f32,
     /// Tolerances are relative to max(local DC, this × the mean DC of the
     /// min-depth samples), so dark corners are not over-refined (adaptive;
-    /// 0 = purely local).
-    #[arg(long, default_value_t = 0.5)]
+    /// 0 = purely local). The default 4 makes the tolerance nearly absolute,
+    /// which is what `eval`'s rel_rmse rewards (memory goes to bright,
+    /// fast-changing light); 0.5 spends memory on dark corners too, for a
+    /// p95 relative error like a uniform grid's at about twice the memory
+    /// (BENCHMARKS.md, "five seeds").
+    #[arg(long, default_value_t = 4.0)]
     pub relative_floor: f32,
     /// Subdivide cells that intersect scene geometry (adaptive; `false` to disable).
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
