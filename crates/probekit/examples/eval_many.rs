@@ -26,7 +26,7 @@ use std::error::Error;
 use std::path::Path;
 
 mod common;
-use common::{eval_set, EvalSet};
+use common::{eval_set, pooled, EvalSet};
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene = None;
@@ -60,9 +60,11 @@ fn main() -> Result<(), Box<dyn Error>> {
         .iter()
         .map(|&s| eval_set(&baker, &scene, points, s))
         .collect::<Result<_, _>>()?;
-    let pts: Vec<_> = sets.iter().flat_map(|s| s.points.iter().copied()).collect();
-    let truth: Vec<_> = sets.iter().flat_map(|s| s.truth.iter().copied()).collect();
-    let mean = probekit::placement::eval::mean_luminance(&truth);
+    let EvalSet {
+        points: pts,
+        truth,
+        mean,
+    } = pooled(&sets);
     eprintln!(
         "reference at {} points in {:.1} s",
         pts.len(),

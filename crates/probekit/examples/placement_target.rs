@@ -5,8 +5,10 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility]
+//!     [--light-shells] [--visibility] [--seeds 1,2,3]
 //! ```
+//!
+//! `--seeds`: the evaluation points of several seeds pooled (default 1).
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`) and cell
@@ -31,7 +33,7 @@ use probekit_sh::ShRgb;
 use std::error::Error;
 
 mod common;
-use common::{arg, eval_set, EvalSet};
+use common::{arg, eval_seeds, EvalSet};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -57,7 +59,12 @@ fn main() -> Result<(), Box<dyn Error>> {
         points: pts,
         truth,
         mean,
-    } = eval_set(&baker, &scene, npts, 1)?;
+    } = eval_seeds(
+        &baker,
+        &scene,
+        npts,
+        &arg(&args, "--seeds", "1".to_string()),
+    )?;
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {

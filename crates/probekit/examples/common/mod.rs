@@ -21,6 +21,7 @@ pub fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
 }
 
 /// `probekit eval`'s points with their ground truth.
+#[derive(Clone)]
 pub struct EvalSet {
     /// The points.
     pub points: Vec<EvalPoint>,
@@ -51,4 +52,31 @@ pub fn eval_set(
         truth,
         mean,
     })
+}
+
+/// The point sets of several seeds as one evaluation: points and truth
+/// concatenated in order, the mean (the leak floor's scale) over all of them.
+pub fn pooled(sets: &[EvalSet]) -> EvalSet {
+    let points: Vec<EvalPoint> = sets.iter().flat_map(|s| s.points.iter().copied()).collect();
+    let truth: Vec<Vec3> = sets.iter().flat_map(|s| s.truth.iter().copied()).collect();
+    let mean = mean_luminance(&truth);
+    EvalSet {
+        points,
+        truth,
+        mean,
+    }
+}
+
+/// `eval_set` of each seed in `seeds` (comma-separated), pooled.
+pub fn eval_seeds(
+    baker: &Baker,
+    scene: &Scene,
+    n: usize,
+    seeds: &str,
+) -> Result<EvalSet, Box<dyn Error>> {
+    let sets = seeds
+        .split(',')
+        .map(|s| eval_set(baker, scene, n, s.trim().parse()?))
+        .collect::<Result<Vec<_>, Box<dyn Error>>>()?;
+    Ok(pooled(&sets))
 }
