@@ -33,7 +33,7 @@ pub mod predicates;
 pub mod visibility;
 
 use glam::Vec3;
-use predicates::{InSphere, Orientation, P3};
+use predicates::{InSphere, Kernel, Orientation, P3};
 use thiserror::Error;
 
 /// Why a point set cannot be tetrahedralized.
@@ -308,6 +308,8 @@ struct Cell {
 
 struct Builder<'a> {
     pts: &'a [P3],
+    /// Predicates specialised to `pts` (lattice detection, see [`Kernel`]).
+    kernel: Kernel,
     /// Vertices and neighbours together: one cache line half per cell.
     cells: Vec<Cell>,
     /// Cavity marks: `2·gen` in conflict, `2·gen + 1` tested and not.
@@ -332,6 +334,7 @@ impl<'a> Builder<'a> {
         let cap = pts.len() * 7 + 16;
         Builder {
             pts,
+            kernel: Kernel::for_points(pts),
             cells: Vec::with_capacity(cap),
             stamp: Vec::with_capacity(cap),
             gen: 0,
@@ -444,7 +447,7 @@ impl<'a> Builder<'a> {
                 }
                 let mut q = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
                 q[i] = &pp;
-                if predicates::orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
+                if self.kernel.orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
                     prev = c;
                     c = n;
                     continue 'walk;
@@ -460,17 +463,21 @@ impl<'a> Builder<'a> {
         let pp = self.p(p);
         if let Some(k) = v.iter().position(|&x| x == INF) {
             let f = FACE[k].map(|i| v[i]);
-            let n = self.cells[c as usize].n[k];
-            let inner = self.cells[n as usize].v[self.back_index(n, c)];
-            predicates::in_infinite_cell(
+            // The finite cell across the hull face is only needed when p is
+            // co-planar with it.
+            let inner = || {
+                let n = self.cells[c as usize].n[k];
+                self.p(self.cells[n as usize].v[self.back_index(n, c)])
+            };
+            self.kernel.in_infinite_cell(
                 [self.p(f[0]), self.p(f[1]), self.p(f[2])],
                 f,
-                self.p(inner),
+                inner,
                 pp,
                 p,
             ) == InSphere::Inside
         } else {
-            predicates::insphere_perturbed(
+            self.kernel.insphere_perturbed(
                 [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])],
                 v,
                 pp,
