@@ -122,9 +122,13 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
             distinct: unique.len(),
         });
     }
+    // The builder numbers points in insertion order, so that the points of
+    // nearby cells are nearby in memory; `order` maps back to input indices,
+    // which stay the perturbation ranks.
     let order = brio_order(&pts, unique);
-    let mut builder = Builder::new(&pts);
-    let rest = builder.init(&order)?;
+    let sorted: Vec<P3> = order.iter().map(|&i| pts[i as usize]).collect();
+    let mut builder = Builder::new(&sorted, &order);
+    let rest = builder.init()?;
     for &v in &rest {
         builder.insert(v);
     }
@@ -307,7 +311,10 @@ struct Cell {
 }
 
 struct Builder<'a> {
+    /// Points in insertion order; cells refer to them by this position.
     pts: &'a [P3],
+    /// Input index (perturbation rank) of each point of `pts`.
+    rank: &'a [u32],
     /// Predicates specialised to `pts` (lattice detection, see [`Kernel`]).
     kernel: Kernel,
     /// Vertices and neighbours together: one cache line half per cell.
@@ -330,10 +337,11 @@ struct Builder<'a> {
 const EMPTY_EDGE: u64 = u64::MAX;
 
 impl<'a> Builder<'a> {
-    fn new(pts: &'a [P3]) -> Self {
+    fn new(pts: &'a [P3], rank: &'a [u32]) -> Self {
         let cap = pts.len() * 7 + 16;
         Builder {
             pts,
+            rank,
             kernel: Kernel::for_points(pts),
             cells: Vec::with_capacity(cap),
             stamp: Vec::with_capacity(cap),
@@ -355,9 +363,10 @@ impl<'a> Builder<'a> {
         &self.pts[v as usize]
     }
 
-    /// Picks a non-degenerate first tetrahedron from the start of `order` and
-    /// returns the remaining points in order.
-    fn init(&mut self, order: &[u32]) -> Result<Vec<u32>, DelaunayError> {
+    /// Picks a non-degenerate first tetrahedron from the first points and
+    /// returns the remaining points in insertion order.
+    fn init(&mut self) -> Result<Vec<u32>, DelaunayError> {
+        let order: Vec<u32> = (0..self.pts.len() as u32).collect();
         let a = order[0];
         let b = order[1];
         let ic = (2..order.len())
@@ -471,18 +480,20 @@ impl<'a> Builder<'a> {
             };
             self.kernel.in_infinite_cell(
                 [self.p(f[0]), self.p(f[1]), self.p(f[2])],
-                f,
+                f.map(|x| self.rank[x as usize]),
                 inner,
                 pp,
-                p,
+                self.rank[p as usize],
             ) == InSphere::Inside
         } else {
-            self.kernel.insphere_perturbed(
-                [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])],
-                v,
-                pp,
-                p,
-            ) == InSphere::Inside
+            let t = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
+            match self.kernel.insphere(t, pp) {
+                Some(s) => s == InSphere::Inside,
+                None => {
+                    let rt = v.map(|x| self.rank[x as usize]);
+                    self.kernel.perturbed_tie(t, rt, pp, self.rank[p as usize]) == InSphere::Inside
+                }
+            }
         }
     }
 
@@ -610,7 +621,7 @@ impl<'a> Builder<'a> {
         for (c, Cell { v, .. }) in self.cells.iter().enumerate() {
             if v[0] != FREE && !v.contains(&INF) {
                 remap[c] = tets.len() as u32;
-                tets.push(*v);
+                tets.push(v.map(|x| self.rank[x as usize]));
             }
         }
         let mut neighbors = Vec::with_capacity(tets.len());

@@ -331,11 +331,12 @@ impl Kernel {
         self.perturbed_tie(t, rt, e, re)
     }
 
-    /// Resolves an exact co-spherical tie by the lifting perturbation.
-    /// Vertices of `t` for which the orientation with `e` substituted is
-    /// `Zero` are skipped.
+    /// Resolves an exact co-spherical tie (where [`Kernel::insphere`] is
+    /// `None`) by the lifting perturbation; arguments as for
+    /// [`Kernel::insphere_perturbed`]. Vertices of `t` for which the
+    /// orientation with `e` substituted is `Zero` are skipped.
     #[inline(never)]
-    fn perturbed_tie(&self, t: [&P3; 4], rt: [u32; 4], e: &P3, re: u32) -> InSphere {
+    pub fn perturbed_tie(&self, t: [&P3; 4], rt: [u32; 4], e: &P3, re: u32) -> InSphere {
         // Visit the vertices of t with rank above re in decreasing rank.
         let mut order = [0usize, 1, 2, 3];
         order.sort_unstable_by(|&i, &j| rt[j].cmp(&rt[i]));
