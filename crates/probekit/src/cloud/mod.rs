@@ -133,7 +133,7 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
         builder.insert(v);
     }
     let (tets, neighbors) = builder.finish();
-    let (tets, neighbors) = spatial_tet_order(&pts, tets, neighbors);
+    let (tets, neighbors) = spatial_tet_order(&sorted, &order, tets, neighbors);
     Ok(Tetrahedralization {
         tets,
         neighbors,
@@ -238,25 +238,26 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
 
 /// Renumbers tetrahedra along a Morton curve of their centroids, so that
 /// neighbouring tetrahedra are close in memory (the runtime walk touches a few
-/// neighbours per query; scattered builder slots cost a cache miss per step).
+/// neighbours per query; scattered builder slots cost a cache miss per step),
+/// and maps the vertices from builder numbering (`pts`, every point a vertex)
+/// to input indices (`rank`). Ties between equal Morton codes keep `tets` order.
 fn spatial_tet_order(
     pts: &[P3],
+    rank: &[u32],
     tets: Vec<[u32; 4]>,
     neighbors: Vec<[u32; 4]>,
 ) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for v in &tets {
-        for &i in v {
-            for k in 0..3 {
-                lo[k] = lo[k].min(pts[i as usize][k]);
-                hi[k] = hi[k].max(pts[i as usize][k]);
-            }
+    for p in pts {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
     }
     let scale: [f64; 3] =
         std::array::from_fn(|k| ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE));
-    let mut keyed: Vec<(u64, u32)> = tets
+    let keyed: Vec<(u64, u32)> = tets
         .iter()
         .enumerate()
         .map(|(t, v)| {
@@ -270,12 +271,15 @@ fn spatial_tet_order(
             )
         })
         .collect();
-    keyed.sort_unstable();
+    let keyed = radix_sort_by_key(keyed, 63);
     let mut new_of_old = vec![0u32; tets.len()];
     for (new, &(_, old)) in keyed.iter().enumerate() {
         new_of_old[old as usize] = new as u32;
     }
-    let out_tets = keyed.iter().map(|&(_, old)| tets[old as usize]).collect();
+    let out_tets = keyed
+        .iter()
+        .map(|&(_, old)| tets[old as usize].map(|i| rank[i as usize]))
+        .collect();
     let out_nbrs = keyed
         .iter()
         .map(|&(_, old)| {
@@ -289,6 +293,40 @@ fn spatial_tet_order(
         })
         .collect();
     (out_tets, out_nbrs)
+}
+
+/// Stable least-significant-digit radix sort of `(key, value)` pairs by the
+/// low `bits` bits of the key (11-bit digits; a pass whose digit is the same
+/// for every key is skipped). Same order as a stable comparison sort by key.
+fn radix_sort_by_key(mut a: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
+    const DIGIT: u32 = 11;
+    let mut b = vec![(0u64, 0u32); a.len()];
+    let mut shift = 0;
+    while shift < bits {
+        let mut count = [0usize; 1 << DIGIT];
+        let digit = |k: u64| ((k >> shift) & ((1 << DIGIT) - 1)) as usize;
+        for &(k, _) in &a {
+            count[digit(k)] += 1;
+        }
+        if count.iter().any(|&c| c == a.len()) {
+            shift += DIGIT;
+            continue;
+        }
+        let mut sum = 0;
+        for c in count.iter_mut() {
+            let n = *c;
+            *c = sum;
+            sum += n;
+        }
+        for &e in &a {
+            let d = digit(e.0);
+            b[count[d]] = e;
+            count[d] += 1;
+        }
+        std::mem::swap(&mut a, &mut b);
+        shift += DIGIT;
+    }
+    a
 }
 
 /// The point at infinity.
@@ -614,14 +652,15 @@ impl<'a> Builder<'a> {
         self.faces = faces;
     }
 
-    /// Drops infinite and free cells and renumbers neighbours.
+    /// Drops infinite and free cells and renumbers neighbours; vertices stay
+    /// in builder numbering.
     fn finish(self) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
         let mut remap = vec![HULL; self.cells.len()];
         let mut tets = Vec::new();
         for (c, Cell { v, .. }) in self.cells.iter().enumerate() {
             if v[0] != FREE && !v.contains(&INF) {
                 remap[c] = tets.len() as u32;
-                tets.push(v.map(|x| self.rank[x as usize]));
+                tets.push(*v);
             }
         }
         let mut neighbors = Vec::with_capacity(tets.len());
