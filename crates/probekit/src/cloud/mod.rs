@@ -308,7 +308,7 @@ fn radix_sort_by_key(mut a: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
         for &(k, _) in &a {
             count[digit(k)] += 1;
         }
-        if count.iter().any(|&c| c == a.len()) {
+        if count.contains(&a.len()) {
             shift += DIGIT;
             continue;
         }
