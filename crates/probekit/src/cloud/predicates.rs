@@ -125,10 +125,40 @@ pub struct Kernel {
     /// `1/u` when the points lie on a lattice of spacing `u = 2^k` with extent
     /// at most [`I128_MAX_EXTENT`] units (integer exact stage); `0` otherwise.
     inv_unit: f64,
-    /// The `f64` orient3d determinant is exact (`6·D³ < 2⁵³`).
+    /// Static orient3d filter: `|det| >` this decides the sign (`∞`: none).
+    static_orient: f64,
+    /// Static insphere filter, likewise.
+    static_insphere: f64,
+    /// The `f64` orient3d determinant is exact (`6·D³ < 2⁵³`); then
+    /// `static_orient` is `0`.
     exact_f64_orient: bool,
-    /// The `f64` insphere determinant is exact (`72·D⁵ < 2⁵³`).
+    /// The `f64` insphere determinant is exact (`72·D⁵ < 2⁵³`); then
+    /// `static_insphere` is `0`.
     exact_f64_insphere: bool,
+}
+
+/// Our orientation from the sign of Shewchuk's orient3d determinant (opposite).
+#[inline(always)]
+fn shewchuk_orientation(det: f64) -> Orientation {
+    if det < 0.0 {
+        Orientation::Positive
+    } else if det > 0.0 {
+        Orientation::Negative
+    } else {
+        Orientation::Zero
+    }
+}
+
+/// In-sphere answer from the sign of Shewchuk's insphere determinant.
+#[inline(always)]
+fn insphere_sign(det: f64) -> Option<InSphere> {
+    if det > 0.0 {
+        Some(InSphere::Inside)
+    } else if det < 0.0 {
+        Some(InSphere::Outside)
+    } else {
+        None
+    }
 }
 
 /// Exponent `k` of the lowest set bit of a non-zero finite `x` (so `x` is an
@@ -146,15 +176,25 @@ fn low_bit_exponent(x: f64) -> i32 {
 }
 
 impl Kernel {
-    /// Filters plus the `robust` crate: valid for any finite points.
+    /// Semi-static filters plus the `robust` crate: valid for any finite points.
     pub const GENERAL: Kernel = Kernel {
         inv_unit: 0.0,
+        static_orient: f64::INFINITY,
+        static_insphere: f64::INFINITY,
         exact_f64_orient: false,
         exact_f64_insphere: false,
     };
 
-    /// The kernel for predicates on (any subset of) `pts`, all finite:
-    /// detects the common power-of-two lattice and its extent (see the type docs).
+    /// The kernel for predicates on (any subset of) `pts`, all finite.
+    ///
+    /// Detects the common power-of-two lattice and its extent (see the type
+    /// docs). When every coordinate is representable as an `f32` (a multiple
+    /// of 2⁻¹⁴⁹ of magnitude at most 2¹²⁸, so no product of up to five
+    /// differences under- or overflows), it also sets *static* filter bounds:
+    /// the semi-static bounds of the module docs with the per-call maxima
+    /// `Mx, My, Mz` replaced by the extents of `pts` (Devillers & Pion 2003),
+    /// which bound every difference; rounding is monotone, so the computed
+    /// extents bound the computed differences.
     pub fn for_points(pts: &[P3]) -> Kernel {
         let mut k = i32::MAX;
         let mut lo = [f64::INFINITY; 3];
@@ -168,26 +208,44 @@ impl Kernel {
                 hi[a] = hi[a].max(p[a]);
             }
         }
+        let mut kernel = Kernel::GENERAL;
+        if pts.is_empty() {
+            return kernel;
+        }
+        const F32_MAX_MAGNITUDE: f64 = 3.402_823_669_209_385e38; // 2¹²⁸
+        let f32_like =
+            k >= -149 && (0..3).all(|a| lo[a].abs().max(hi[a].abs()) <= F32_MAX_MAGNITUDE);
+        if f32_like {
+            let [ex, ey, ez] = [0, 1, 2].map(|a| hi[a] - lo[a]);
+            kernel.static_orient = O3D_SEMI_STATIC * (ex * ey * ez);
+            kernel.static_insphere =
+                ISP_SEMI_STATIC * (ex * ey * ez) * (ex * ex + ey * ey + ez * ez);
+        }
         // u⁵ must stay a normal f64 for the exact f64 evaluation; u·2²⁴ must too.
-        if pts.is_empty() || !(-200..=900).contains(&k) {
-            return Kernel::GENERAL;
+        if !(-200..=900).contains(&k) {
+            return kernel;
         }
         let inv_unit = 2f64.powi(-k);
         let mut extent = 0u64;
         for a in 0..3 {
             let d = (hi[a] - lo[a]) * inv_unit;
             if d.is_nan() || d > I128_MAX_EXTENT as f64 {
-                return Kernel::GENERAL;
+                return kernel;
             }
             // hi - lo is a multiple of u below 2²⁴·u: exact, and d an integer.
             extent = extent.max(d as u64);
         }
+        kernel.inv_unit = inv_unit;
         let d = extent as u128;
-        Kernel {
-            inv_unit,
-            exact_f64_orient: 6 * d * d * d < 1u128 << 53,
-            exact_f64_insphere: 72 * d * d * d * d * d < 1u128 << 53,
+        if 6 * d * d * d < 1u128 << 53 {
+            kernel.exact_f64_orient = true;
+            kernel.static_orient = 0.0;
         }
+        if 72 * d * d * d * d * d < 1u128 << 53 {
+            kernel.exact_f64_insphere = true;
+            kernel.static_insphere = 0.0;
+        }
+        kernel
     }
 
     /// Exact orientation of `(a, b, c, d)`; see [`Orientation`].
@@ -200,23 +258,22 @@ impl Kernel {
         let det = adz * (bdx * cdy - cdx * bdy)
             + bdz * (cdx * ady - adx * cdy)
             + cdz * (adx * bdy - bdx * ady);
+        if det.abs() > self.static_orient {
+            return shewchuk_orientation(det);
+        }
+        if self.exact_f64_orient {
+            return Orientation::Zero; // det == 0 exactly
+        }
         let mx = adx.abs().max(bdx.abs()).max(cdx.abs());
         let my = ady.abs().max(bdy.abs()).max(cdy.abs());
         let mz = adz.abs().max(bdz.abs()).max(cdz.abs());
-        let bound = if mx.min(my).min(mz) >= FILTER_MIN && mx.max(my).max(mz) <= FILTER_MAX {
-            O3D_SEMI_STATIC * (mx * my * mz)
-        } else {
-            f64::INFINITY
-        };
-        if det > bound || (self.exact_f64_orient && det > 0.0) {
-            Orientation::Negative
-        } else if det < -bound || (self.exact_f64_orient && det < 0.0) {
-            Orientation::Positive
-        } else if self.exact_f64_orient {
-            Orientation::Zero
-        } else {
-            self.orient3d_exact(a, b, c, d)
+        if mx.min(my).min(mz) >= FILTER_MIN
+            && mx.max(my).max(mz) <= FILTER_MAX
+            && det.abs() > O3D_SEMI_STATIC * (mx * my * mz)
+        {
+            return shewchuk_orientation(det);
         }
+        self.orient3d_exact(a, b, c, d)
     }
 
     /// The exact stage of [`Kernel::orient3d`].
@@ -234,13 +291,7 @@ impl Kernel {
         } else {
             robust::orient3d(c3(a), c3(b), c3(c), c3(d))
         };
-        if sign < 0.0 {
-            Orientation::Positive
-        } else if sign > 0.0 {
-            Orientation::Negative
-        } else {
-            Orientation::Zero
-        }
+        shewchuk_orientation(sign)
     }
 
     /// Exact in-sphere test of `e` against the circumsphere of the positively
@@ -269,23 +320,22 @@ impl Kernel {
         let clift = cex * cex + cey * cey + cez * cez;
         let dlift = dex * dex + dey * dey + dez * dez;
         let det = (dlift * abc - clift * dab) + (blift * cda - alift * bcd);
+        if det.abs() > self.static_insphere {
+            return insphere_sign(det);
+        }
+        if self.exact_f64_insphere {
+            return None; // det == 0 exactly
+        }
         let mx = aex.abs().max(bex.abs()).max(cex.abs().max(dex.abs()));
         let my = aey.abs().max(bey.abs()).max(cey.abs().max(dey.abs()));
         let mz = aez.abs().max(bez.abs()).max(cez.abs().max(dez.abs()));
-        let bound = if mx.min(my).min(mz) >= FILTER_MIN && mx.max(my).max(mz) <= FILTER_MAX {
-            ISP_SEMI_STATIC * (mx * my * mz) * (mx * mx + my * my + mz * mz)
-        } else {
-            f64::INFINITY
-        };
-        if det > bound || (self.exact_f64_insphere && det > 0.0) {
-            Some(InSphere::Inside)
-        } else if det < -bound || (self.exact_f64_insphere && det < 0.0) {
-            Some(InSphere::Outside)
-        } else if self.exact_f64_insphere {
-            None
-        } else {
-            self.insphere_exact(t, e)
+        if mx.min(my).min(mz) >= FILTER_MIN
+            && mx.max(my).max(mz) <= FILTER_MAX
+            && det.abs() > ISP_SEMI_STATIC * (mx * my * mz) * (mx * mx + my * my + mz * mz)
+        {
+            return insphere_sign(det);
         }
+        self.insphere_exact(t, e)
     }
 
     /// The exact stage of [`Kernel::insphere`].
@@ -311,13 +361,7 @@ impl Kernel {
         } else {
             robust::insphere(c3(t[1]), c3(t[0]), c3(t[2]), c3(t[3]), c3(e))
         };
-        if sign > 0.0 {
-            Some(InSphere::Inside)
-        } else if sign < 0.0 {
-            Some(InSphere::Outside)
-        } else {
-            None
-        }
+        insphere_sign(sign)
     }
 
     /// Perturbed in-sphere test of point `e` (rank `re`) against the positively
