@@ -188,9 +188,9 @@ impl Kernel {
     /// The kernel for predicates on (any subset of) `pts`, all finite.
     ///
     /// Detects the common power-of-two lattice and its extent (see the type
-    /// docs). When every coordinate is representable as an `f32` (a multiple
-    /// of 2⁻¹⁴⁹ of magnitude at most 2¹²⁸, so no product of up to five
-    /// differences under- or overflows), it also sets *static* filter bounds:
+    /// docs). When every coordinate is a multiple of 2⁻¹⁴⁹ of magnitude at most
+    /// 2¹²⁸ (every `f32` is; then no product of up to five differences under-
+    /// or overflows), it also sets *static* filter bounds:
     /// the semi-static bounds of the module docs with the per-call maxima
     /// `Mx, My, Mz` replaced by the extents of `pts` (Devillers & Pion 2003),
     /// which bound every difference; rounding is monotone, so the computed
@@ -212,10 +212,13 @@ impl Kernel {
         if pts.is_empty() {
             return kernel;
         }
-        const F32_MAX_MAGNITUDE: f64 = 3.402_823_669_209_385e38; // 2¹²⁸
-        let f32_like =
-            k >= -149 && (0..3).all(|a| lo[a].abs().max(hi[a].abs()) <= F32_MAX_MAGNITUDE);
-        if f32_like {
+        // Multiples of 2⁻¹⁴⁹ up to 2¹²⁸ in magnitude (every f32 qualifies):
+        // non-zero differences are at least 2⁻¹⁴⁹, so products of up to five
+        // stay normal, and at most 2¹²⁹, so they stay finite.
+        const MAX_MAGNITUDE: f64 = 3.402_823_669_209_385e38; // 2¹²⁸
+        let no_underflow =
+            k >= -149 && (0..3).all(|a| lo[a].abs().max(hi[a].abs()) <= MAX_MAGNITUDE);
+        if no_underflow {
             let [ex, ey, ez] = [0, 1, 2].map(|a| hi[a] - lo[a]);
             kernel.static_orient = O3D_SEMI_STATIC * (ex * ey * ez);
             kernel.static_insphere =
@@ -534,11 +537,188 @@ pub fn in_infinite_cell(f: [&P3; 3], rf: [u32; 3], inner: &P3, e: &P3, re: u32) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+    use proptest::test_runner::TestCaseError;
 
     const A: P3 = [0.0, 0.0, 0.0];
     const B: P3 = [1.0, 0.0, 0.0];
     const C: P3 = [0.0, 1.0, 0.0];
     const D: P3 = [0.0, 0.0, 1.0];
+
+    // ---- Filtered and lattice predicates against the `robust` crate ----
+
+    /// Shewchuk's exact orient3d through `robust`, in our sign convention.
+    fn robust_orient(a: &P3, b: &P3, c: &P3, d: &P3) -> Orientation {
+        shewchuk_orientation(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
+    }
+
+    /// Shewchuk's exact insphere determinant through `robust` (argument order
+    /// as in [`Kernel::insphere`]; the sign relation holds for any orientation).
+    fn robust_insphere(t: [&P3; 4], e: &P3) -> Option<InSphere> {
+        insphere_sign(robust::insphere(
+            c3(t[1]),
+            c3(t[0]),
+            c3(t[2]),
+            c3(t[3]),
+            c3(e),
+        ))
+    }
+
+    /// Every orient3d of 4 and insphere of 5 points of `pts` (taken as
+    /// consecutive windows and all vertex substitutions used by the builder)
+    /// agrees with `robust` under the general kernel, the kernel built for
+    /// `pts` and that kernel's exact stage alone; returns how many exact zeros
+    /// were seen (so callers can check the inputs really are degenerate).
+    fn agree_with_robust(pts: &[P3]) -> Result<usize, TestCaseError> {
+        let kernels = [Kernel::GENERAL, Kernel::for_points(pts)];
+        let mut zeros = 0;
+        let n = pts.len();
+        for s in 0..n {
+            let q: [&P3; 5] = std::array::from_fn(|i| &pts[(s + i) % n]);
+            let o = robust_orient(q[0], q[1], q[2], q[3]);
+            let i = robust_insphere([q[0], q[1], q[2], q[3]], q[4]);
+            zeros += usize::from(o == Orientation::Zero) + usize::from(i.is_none());
+            for k in &kernels {
+                prop_assert_eq!(k.orient3d(q[0], q[1], q[2], q[3]), o, "{:?} {:?}", k, q);
+                prop_assert_eq!(k.orient3d_exact(q[0], q[1], q[2], q[3]), o);
+                prop_assert_eq!(
+                    k.insphere([q[0], q[1], q[2], q[3]], q[4]),
+                    i,
+                    "{:?} {:?}",
+                    k,
+                    q
+                );
+                prop_assert_eq!(k.insphere_exact([q[0], q[1], q[2], q[3]], q[4]), i);
+                // The walk's and the perturbation's substituted orientations.
+                for j in 0..4 {
+                    let mut r = [q[0], q[1], q[2], q[3]];
+                    r[j] = q[4];
+                    prop_assert_eq!(
+                        k.orient3d(r[0], r[1], r[2], r[3]),
+                        robust_orient(r[0], r[1], r[2], r[3])
+                    );
+                }
+            }
+        }
+        Ok(zeros)
+    }
+
+    /// `x` moved by `k` units in the last place (as `f32`).
+    fn nudge(x: f32, k: i8) -> f32 {
+        let mut x = x;
+        for _ in 0..k.unsigned_abs() {
+            x = if k > 0 { x.next_up() } else { x.next_down() };
+        }
+        x
+    }
+
+    fn to_p3(v: &[[f32; 3]]) -> Vec<P3> {
+        v.iter().map(|p| p.map(f64::from)).collect()
+    }
+
+    #[test]
+    fn lattice_detection() {
+        let grid: Vec<P3> = (0..27)
+            .map(|i| [(i % 3) as f64, (i / 3 % 3) as f64, (i / 9) as f64])
+            .collect();
+        let k = Kernel::for_points(&grid);
+        assert!(k.exact_f64_orient && k.exact_f64_insphere && k.inv_unit == 1.0);
+        // f32 points in [0, 1) on the 2⁻²⁴ raster: i128 stage, no exact f64.
+        let raster = [
+            [0.0, 0.5, 1.0 - 2f64.powi(-24)],
+            [2f64.powi(-24), 0.25, 0.75],
+        ];
+        let k = Kernel::for_points(&raster);
+        assert!(!k.exact_f64_insphere && k.inv_unit == 2f64.powi(24));
+        assert!(k.static_insphere.is_finite() && k.static_insphere > 0.0);
+        // Extent 2²⁵ units: no lattice stage, static filters still on.
+        let wide = [[0.0, 0.0, 0.0], [1.0, 2f64.powi(-25), 0.0]];
+        let k = Kernel::for_points(&wide);
+        assert_eq!(k.inv_unit, 0.0);
+        assert!(k.static_orient.is_finite());
+        // Not a multiple of 2⁻¹⁴⁹: no static filter.
+        let tiny = [[1e-300, 0.0, 0.0], [1.0, 1.0, 1.0]];
+        assert_eq!(Kernel::for_points(&tiny).static_orient, f64::INFINITY);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// Grid points (every cube co-spherical, many co-planar quadruples),
+        /// scaled by a power of two, shifted, and some coordinates moved by
+        /// one or two ulps: the hardest inputs for a filter.
+        #[test]
+        fn filters_agree_on_nudged_grids(
+            cells in proptest::collection::vec((0i8..3, 0i8..3, 0i8..3, -2i8..=2, 0u8..4), 5..12),
+            scale_exp in -30i32..12,
+            offset in -100.0f32..100.0,
+        ) {
+            let h = 2f32.powi(scale_exp);
+            let pts: Vec<[f32; 3]> = cells
+                .iter()
+                .map(|&(x, y, z, k, axis)| {
+                    let mut p = [x, y, z].map(|c| offset + c as f32 * h);
+                    if axis < 3 {
+                        p[axis as usize] = nudge(p[axis as usize], k);
+                    }
+                    p
+                })
+                .collect();
+            agree_with_robust(&to_p3(&pts))?;
+        }
+
+        /// Points rounded onto a sphere (near co-spherical, tiny non-zero
+        /// insphere determinants), some moved by an ulp.
+        #[test]
+        fn filters_agree_near_spheres(
+            dirs in proptest::collection::vec((-3i8..=3, -3i8..=3, -3i8..=3, -1i8..=1), 5..10),
+            radius in 1e-3f32..1e3,
+            centre in (-10.0f32..10.0, -10.0f32..10.0, -10.0f32..10.0),
+        ) {
+            let pts: Vec<[f32; 3]> = dirs
+                .iter()
+                .filter(|d| (d.0, d.1, d.2) != (0, 0, 0))
+                .map(|&(x, y, z, k)| {
+                    let v = glam::Vec3::new(x as f32, y as f32, z as f32).normalize() * radius;
+                    [nudge(centre.0 + v.x, k), centre.1 + v.y, centre.2 + v.z]
+                })
+                .collect();
+            if pts.len() >= 5 {
+                agree_with_robust(&to_p3(&pts))?;
+            }
+        }
+
+        /// Integer lattices large enough for the i128 stage (extent up to
+        /// 2²⁴ units), with exactly co-spherical and co-planar subsets.
+        #[test]
+        fn integer_stage_agrees_on_wide_lattices(
+            base in proptest::collection::vec((0i32..3, 0i32..3, 0i32..3), 5..10),
+            spread in 0u32..=24,
+            jitter in proptest::collection::vec((-1i32..=1, -1i32..=1), 10),
+        ) {
+            let step = (1i64 << spread).min((1 << 23) - 1) as f64; // 2·step + 1 < 2²⁴
+            let pts: Vec<P3> = base
+                .iter()
+                .zip(jitter.iter().cycle())
+                .map(|(&(x, y, z), &(jx, jy))| {
+                    [x as f64 * step + jx as f64, y as f64 * step + jy as f64, z as f64 * step]
+                })
+                .collect();
+            let k = Kernel::for_points(&pts);
+            prop_assert!(k.inv_unit != 0.0);
+            agree_with_robust(&pts)?;
+        }
+    }
+
+    #[test]
+    fn degenerate_sets_do_reach_the_exact_stages() {
+        // The agreement tests above are only meaningful if exact zeros occur.
+        let cube: Vec<P3> = (0..8)
+            .map(|i| [(i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2) as f64])
+            .collect();
+        let zeros = agree_with_robust(&cube).unwrap();
+        assert!(zeros >= 8, "{zeros}");
+    }
 
     #[test]
     fn orientation_sign_matches_signed_volume() {
