@@ -271,7 +271,7 @@ fn spatial_tet_order(
             )
         })
         .collect();
-    let keyed = radix_sort_by_key(keyed, 63);
+    let keyed = bucket_sort_by_key(keyed, 63);
     let mut new_of_old = vec![0u32; tets.len()];
     for (new, &(_, old)) in keyed.iter().enumerate() {
         new_of_old[old as usize] = new as u32;
@@ -295,38 +295,32 @@ fn spatial_tet_order(
     (out_tets, out_nbrs)
 }
 
-/// Stable least-significant-digit radix sort of `(key, value)` pairs by the
-/// low `bits` bits of the key (11-bit digits; a pass whose digit is the same
-/// for every key is skipped). Same order as a stable comparison sort by key.
-fn radix_sort_by_key(mut a: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
-    const DIGIT: u32 = 11;
-    let mut b = vec![(0u64, 0u32); a.len()];
-    let mut shift = 0;
-    while shift < bits {
-        let mut count = [0usize; 1 << DIGIT];
-        let digit = |k: u64| ((k >> shift) & ((1 << DIGIT) - 1)) as usize;
-        for &(k, _) in &a {
-            count[digit(k)] += 1;
-        }
-        if count.contains(&a.len()) {
-            shift += DIGIT;
-            continue;
-        }
-        let mut sum = 0;
-        for c in count.iter_mut() {
-            let n = *c;
-            *c = sum;
-            sum += n;
-        }
-        for &e in &a {
-            let d = digit(e.0);
-            b[count[d]] = e;
-            count[d] += 1;
-        }
-        std::mem::swap(&mut a, &mut b);
-        shift += DIGIT;
+/// Sorts `(key, value)` pairs by key, then value, for keys below `2^bits`:
+/// one counting-sort pass on the top 12 key bits, then a comparison sort of
+/// each (small, cache-resident) bucket. Same order as `sort_unstable` on the
+/// pairs, about twice as fast on the builder's ~7 tets per point.
+fn bucket_sort_by_key(a: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
+    const TOP: u32 = 12;
+    let shift = bits.saturating_sub(TOP);
+    let bucket = |k: u64| (k >> shift) as usize & ((1 << TOP) - 1);
+    let mut start = vec![0usize; (1 << TOP) + 1];
+    for &(k, _) in &a {
+        start[bucket(k) + 1] += 1;
     }
-    a
+    for i in 0..1 << TOP {
+        start[i + 1] += start[i];
+    }
+    let mut next = start.clone();
+    let mut b = vec![(0u64, 0u32); a.len()];
+    for &e in &a {
+        let d = bucket(e.0);
+        b[next[d]] = e;
+        next[d] += 1;
+    }
+    for w in start.windows(2) {
+        b[w[0]..w[1]].sort_unstable();
+    }
+    b
 }
 
 /// The point at infinity.
