@@ -360,7 +360,6 @@ struct Builder<'a> {
     // Scratch reused across insertions (no allocation per point in steady state).
     stack: Vec<u32>,
     cavity: Vec<u32>,
-    boundary: Vec<(u32, u8)>,
     faces: Vec<([u32; 3], u32, u8)>,
     edge_table: Vec<(u64, u32, u8)>,
     edge_used: Vec<usize>,
@@ -383,7 +382,6 @@ impl<'a> Builder<'a> {
             rng: SplitMix(0xD1CE),
             stack: Vec::new(),
             cavity: Vec::new(),
-            boundary: Vec::new(),
             faces: Vec::new(),
             edge_table: vec![(EMPTY_EDGE, 0, 0); 256],
             edge_used: Vec::new(),
@@ -440,7 +438,8 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        self.stamp = vec![0; 5];
+        self.stamp.clear();
+        self.stamp.resize(5, 0);
         self.hint = 0;
         Ok(order
             .iter()
@@ -543,16 +542,17 @@ impl<'a> Builder<'a> {
     fn cavity_and_fill(&mut self, p: u32, start: u32, gin: u32, gout: u32) {
         let mut stack = std::mem::take(&mut self.stack);
         let mut cavity = std::mem::take(&mut self.cavity);
-        let mut boundary = std::mem::take(&mut self.boundary);
+        // Boundary faces are copied out as found, before cavity slots are reused.
+        let mut faces = std::mem::take(&mut self.faces);
         stack.clear();
         cavity.clear();
-        boundary.clear();
+        faces.clear();
         self.stamp[start as usize] = gin;
         stack.push(start);
         while let Some(c) = stack.pop() {
             cavity.push(c);
-            for i in 0..4 {
-                let n = self.cells[c as usize].n[i];
+            let cell = self.cells[c as usize];
+            for (i, &n) in cell.n.iter().enumerate() {
                 let s = self.stamp[n as usize];
                 if s == gin {
                     continue;
@@ -565,18 +565,9 @@ impl<'a> Builder<'a> {
                     }
                     self.stamp[n as usize] = gout;
                 }
-                boundary.push((c, i as u8));
+                let back = self.back_index(n, c) as u8;
+                faces.push((FACE[i].map(|k| cell.v[k]), n, back));
             }
-        }
-
-        // Copy the boundary faces out before cavity slots are reused.
-        let mut faces = std::mem::take(&mut self.faces);
-        faces.clear();
-        for &(c, i) in &boundary {
-            let cv = self.cells[c as usize].v;
-            let outside = self.cells[c as usize].n[i as usize];
-            let back = self.back_index(outside, c) as u8;
-            faces.push((FACE[i as usize].map(|k| cv[k]), outside, back));
         }
 
         // Size the edge table: 3 half-edges per face, 2 per edge, load <= 1/4.
@@ -642,7 +633,6 @@ impl<'a> Builder<'a> {
         self.hint = last;
         self.stack = stack;
         self.cavity = cavity;
-        self.boundary = boundary;
         self.faces = faces;
     }
 
