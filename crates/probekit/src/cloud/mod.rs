@@ -334,12 +334,13 @@ const FACE: [[usize; 3]; 4] = [[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]];
 
 /// One cell of the triangulation under construction.
 #[derive(Clone, Copy)]
-#[repr(C, align(32))]
 struct Cell {
     /// Vertices (`INF` for the point at infinity, `FREE` on the free list).
     v: [u32; 4],
     /// Neighbour opposite each vertex.
     n: [u32; 4],
+    /// Cavity mark: `2·gen` in conflict, `2·gen + 1` tested and not.
+    stamp: u32,
 }
 
 struct Builder<'a> {
@@ -349,10 +350,10 @@ struct Builder<'a> {
     rank: &'a [u32],
     /// Predicates specialised to `pts` (lattice detection, see [`Kernel`]).
     kernel: Kernel,
-    /// Vertices and neighbours together: one cache line half per cell.
+    /// Vertices, neighbours and cavity mark together (36 bytes): the flood
+    /// reads a neighbour's mark and, if untested, its vertices from one record.
     cells: Vec<Cell>,
-    /// Cavity marks: `2·gen` in conflict, `2·gen + 1` tested and not.
-    stamp: Vec<u32>,
+    /// Current insertion's generation for [`Cell::stamp`].
     gen: u32,
     free: Vec<u32>,
     hint: u32,
@@ -375,7 +376,6 @@ impl<'a> Builder<'a> {
             rank,
             kernel: Kernel::for_points(pts),
             cells: Vec::with_capacity(cap),
-            stamp: Vec::with_capacity(cap),
             gen: 0,
             free: Vec::new(),
             hint: 0,
@@ -418,12 +418,14 @@ impl<'a> Builder<'a> {
         self.cells.push(Cell {
             v: fin,
             n: [HULL; 4],
+            stamp: 0,
         });
         for face in &FACE {
             let f = face.map(|i| fin[i]);
             self.cells.push(Cell {
                 v: [f[1], f[0], f[2], INF],
                 n: [HULL; 4],
+                stamp: 0,
             });
         }
         for s in 0..5 {
@@ -438,8 +440,6 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        self.stamp.clear();
-        self.stamp.resize(5, 0);
         self.hint = 0;
         Ok(order
             .iter()
@@ -531,7 +531,7 @@ impl<'a> Builder<'a> {
     fn insert(&mut self, p: u32) {
         let start = self.locate(p);
         if self.gen >= (u32::MAX >> 1) - 1 {
-            self.stamp.iter_mut().for_each(|s| *s = 0);
+            self.cells.iter_mut().for_each(|c| c.stamp = 0);
             self.gen = 0;
         }
         self.gen += 1;
@@ -547,23 +547,23 @@ impl<'a> Builder<'a> {
         stack.clear();
         cavity.clear();
         faces.clear();
-        self.stamp[start as usize] = gin;
+        self.cells[start as usize].stamp = gin;
         stack.push(start);
         while let Some(c) = stack.pop() {
             cavity.push(c);
             let cell = self.cells[c as usize];
             for (i, &n) in cell.n.iter().enumerate() {
-                let s = self.stamp[n as usize];
+                let s = self.cells[n as usize].stamp;
                 if s == gin {
                     continue;
                 }
                 if s != gout {
                     if self.conflict(n, p) {
-                        self.stamp[n as usize] = gin;
+                        self.cells[n as usize].stamp = gin;
                         stack.push(n);
                         continue;
                     }
-                    self.stamp[n as usize] = gout;
+                    self.cells[n as usize].stamp = gout;
                 }
                 let back = self.back_index(n, c) as u8;
                 faces.push((FACE[i].map(|k| cell.v[k]), n, back));
@@ -588,8 +588,8 @@ impl<'a> Builder<'a> {
                 self.cells.push(Cell {
                     v: [FREE; 4],
                     n: [HULL; 4],
+                    stamp: 0,
                 });
-                self.stamp.push(0);
                 (self.cells.len() - 1) as u32
             };
             self.cells[nc as usize].v = [f[0], f[1], f[2], p];
