@@ -15,12 +15,17 @@
 //! * **Location** is a stochastic visibility walk (Devillers, Pion & Teillaud,
 //!   "Walking in a triangulation", 2002) from the last created cell.
 //! * **Exactness.** Every decision is an exact predicate from
-//!   [`predicates`] (Shewchuk's adaptive orient3d/insphere via the `robust`
+//!   [`predicates`] (a [`predicates::Kernel`] for the point set: static and
+//!   semi-static floating-point filters, then an exact `f64`/`i128` lattice
+//!   evaluation or Shewchuk's adaptive orient3d/insphere via the `robust`
 //!   crate), and co-spherical ties — every cube of a regular grid — are broken
 //!   by the symbolic lifting perturbation of Devillers & Teillaud (2011), so the
 //!   result is the unique Delaunay triangulation of the perturbed points: no
 //!   zero-volume tetrahedron, whatever the degeneracy. Perturbation ranks are
 //!   the input indices, so the output does not depend on insertion order.
+//! * **Memory.** The builder numbers points in insertion order and keeps
+//!   each cell's vertices, neighbours and cavity mark in one record, so that
+//!   the cells and points touched by one insertion share cache lines.
 //! * **Duplicates** (bit-identical positions, `-0.0 == 0.0`) are merged before
 //!   insertion: the lowest index is kept and the pair is reported in
 //!   [`Tetrahedralization::merged_duplicates`].
