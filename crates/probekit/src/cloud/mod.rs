@@ -506,21 +506,25 @@ impl<'a> Builder<'a> {
     fn conflict(&self, c: u32, p: u32) -> bool {
         let v = self.cells[c as usize].v;
         let pp = self.p(p);
-        if let Some(k) = v.iter().position(|&x| x == INF) {
+        // Branch-free search for the point at infinity (at most one).
+        let inf = v.map(|x| x == INF);
+        if inf.contains(&true) {
+            let k = inf.iter().position(|&b| b).unwrap_or(0);
             let f = FACE[k].map(|i| v[i]);
-            // The finite cell across the hull face is only needed when p is
-            // co-planar with it.
-            let inner = || {
+            // The finite cell across the hull face and the ranks are only
+            // needed when p is co-planar with the face.
+            let coplanar = || {
                 let n = self.cells[c as usize].n[k];
-                self.p(self.cells[n as usize].v[self.back_index(n, c)])
+                let inner = self.p(self.cells[n as usize].v[self.back_index(n, c)]);
+                (
+                    inner,
+                    f.map(|x| self.rank[x as usize]),
+                    self.rank[p as usize],
+                )
             };
-            self.kernel.in_infinite_cell(
-                [self.p(f[0]), self.p(f[1]), self.p(f[2])],
-                f.map(|x| self.rank[x as usize]),
-                inner,
-                pp,
-                self.rank[p as usize],
-            ) == InSphere::Inside
+            self.kernel
+                .in_infinite_cell([self.p(f[0]), self.p(f[1]), self.p(f[2])], pp, coplanar)
+                == InSphere::Inside
         } else {
             let t = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
             match self.kernel.insphere(t, pp) {

@@ -402,25 +402,26 @@ impl Kernel {
         InSphere::Outside
     }
 
-    /// Conflict test of point `e` (rank `re`) with the infinite cell whose
-    /// finite face is `f = [a, b, c]`, oriented so that `(a, b, c, ∞)` is
-    /// positive; `inner()` yields any point strictly on the negative side of
-    /// `abc` and is only called in the co-planar case. Returns `Inside` when
-    /// `e` is in the open half-space beyond `abc` or in the perturbed
-    /// circumdisk of `abc`.
+    /// Conflict test of point `e` with the infinite cell whose finite face is
+    /// `f = [a, b, c]`, oriented so that `(a, b, c, ∞)` is positive. Only in
+    /// the co-planar case is `coplanar()` called, for `(inner, rf, re)`: any
+    /// point strictly on the negative side of `abc`, the ranks of `f` and
+    /// that of `e`. Returns `Inside` when `e` is in the open half-space beyond
+    /// `abc` or in the perturbed circumdisk of `abc`.
     #[inline(always)]
     pub fn in_infinite_cell<'p>(
         &self,
         f: [&P3; 3],
-        rf: [u32; 3],
-        inner: impl FnOnce() -> &'p P3,
         e: &P3,
-        re: u32,
+        coplanar: impl FnOnce() -> (&'p P3, [u32; 3], u32),
     ) -> InSphere {
         match self.orient3d(f[0], f[1], f[2], e) {
             Orientation::Positive => InSphere::Inside,
             Orientation::Negative => InSphere::Outside,
-            Orientation::Zero => self.in_infinite_cell_coplanar(f, rf, inner(), e, re),
+            Orientation::Zero => {
+                let (inner, rf, re) = coplanar();
+                self.in_infinite_cell_coplanar(f, rf, inner, e, re)
+            }
         }
     }
 
@@ -531,7 +532,7 @@ pub fn insphere_perturbed(t: [&P3; 4], rt: [u32; 4], e: &P3, re: u32) -> InSpher
 /// across the face). Returns `Inside` when `e` is in the cell's "circumsphere"
 /// (the open half-space beyond `abc`, plus the perturbed circumdisk of `abc`).
 pub fn in_infinite_cell(f: [&P3; 3], rf: [u32; 3], inner: &P3, e: &P3, re: u32) -> InSphere {
-    Kernel::GENERAL.in_infinite_cell(f, rf, || inner, e, re)
+    Kernel::GENERAL.in_infinite_cell(f, e, || (inner, rf, re))
 }
 
 #[cfg(test)]
