@@ -3,7 +3,9 @@
 //! (best of 5; one run for the 1 M set), printing one JSON line per set. `scripts/bench_qhull.py` runs
 //! this, then SciPy's Qhull on the same files, and prints the comparison.
 //!
-//! Usage: `cargo run --release -p probekit --example delaunay_peer -- DIR`
+//! Usage: `cargo run --release -p probekit --example delaunay_peer -- DIR [SETS]`
+//! where the optional `SETS` is a comma-separated subset of the set names
+//! (e.g. `grid_47`, for profiling one set).
 
 use probekit::cloud::{bench_points, predicates, tetrahedralize};
 use std::io::Write;
@@ -18,14 +20,32 @@ fn thread_cpu_ns() -> Option<u64> {
     s.split_whitespace().next()?.parse().ok()
 }
 
+/// FNV-1a over the output tetrahedra and neighbours, so that runs of two
+/// builds can be compared for identical output.
+fn output_hash(t: &probekit::cloud::Tetrahedralization) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for x in t.tets.iter().chain(&t.neighbors).flatten() {
+        for b in x.to_le_bytes() {
+            h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    h
+}
+
 fn main() -> std::io::Result<()> {
     let dir = std::path::PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| ".".into()));
     std::fs::create_dir_all(&dir)?;
+    let only: Option<Vec<String>> = std::env::args()
+        .nth(2)
+        .map(|s| s.split(',').map(str::to_owned).collect());
     for (name, pts) in [
         ("random_100k", bench_points::uniform(100_000, 1)),
         ("grid_47", bench_points::grid(47)),
         ("random_1m", bench_points::uniform(1_000_000, 5)),
     ] {
+        if only.as_ref().is_some_and(|o| !o.iter().any(|s| s == name)) {
+            continue;
+        }
         let path = dir.join(format!("{name}.f32"));
         let mut f = std::io::BufWriter::new(std::fs::File::create(&path)?);
         for p in &pts {
@@ -59,11 +79,12 @@ fn main() -> std::io::Result<()> {
             })
             .count();
         println!(
-            "{{\"set\":\"{name}\",\"points\":{},\"tets\":{},\"seconds\":{best:.4},\"points_per_s\":{:.0},\"non_positive_tets\":{zero},\"cpu_seconds\":{best_cpu:.4},\"points_per_cpu_s\":{:.0}}}",
+            "{{\"set\":\"{name}\",\"points\":{},\"tets\":{},\"seconds\":{best:.4},\"points_per_s\":{:.0},\"non_positive_tets\":{zero},\"cpu_seconds\":{best_cpu:.4},\"points_per_cpu_s\":{:.0},\"output_hash\":\"{:016x}\"}}",
             pts.len(),
             t.tets.len(),
             pts.len() as f64 / best,
-            pts.len() as f64 / best_cpu
+            pts.len() as f64 / best_cpu,
+            output_hash(&t)
         );
     }
     Ok(())

@@ -15,12 +15,17 @@
 //! * **Location** is a stochastic visibility walk (Devillers, Pion & Teillaud,
 //!   "Walking in a triangulation", 2002) from the last created cell.
 //! * **Exactness.** Every decision is an exact predicate from
-//!   [`predicates`] (Shewchuk's adaptive orient3d/insphere via the `robust`
+//!   [`predicates`] (a [`predicates::Kernel`] for the point set: static and
+//!   semi-static floating-point filters, then an exact `f64`/`i128` lattice
+//!   evaluation or Shewchuk's adaptive orient3d/insphere via the `robust`
 //!   crate), and co-spherical ties — every cube of a regular grid — are broken
 //!   by the symbolic lifting perturbation of Devillers & Teillaud (2011), so the
 //!   result is the unique Delaunay triangulation of the perturbed points: no
 //!   zero-volume tetrahedron, whatever the degeneracy. Perturbation ranks are
 //!   the input indices, so the output does not depend on insertion order.
+//! * **Memory.** The builder numbers points in insertion order and keeps
+//!   each cell's vertices, neighbours and cavity mark in one record, so that
+//!   the cells and points touched by one insertion share cache lines.
 //! * **Duplicates** (bit-identical positions, `-0.0 == 0.0`) are merged before
 //!   insertion: the lowest index is kept and the pair is reported in
 //!   [`Tetrahedralization::merged_duplicates`].
@@ -34,7 +39,7 @@ pub mod predicates;
 pub mod visibility;
 
 use glam::Vec3;
-use predicates::{InSphere, Orientation, P3};
+use predicates::{InSphere, Kernel, Orientation, P3};
 use thiserror::Error;
 
 /// Why a point set cannot be tetrahedralized.
@@ -123,14 +128,18 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
             distinct: unique.len(),
         });
     }
+    // The builder numbers points in insertion order, so that the points of
+    // nearby cells are nearby in memory; `order` maps back to input indices,
+    // which stay the perturbation ranks.
     let order = brio_order(&pts, unique);
-    let mut builder = Builder::new(&pts);
-    let rest = builder.init(&order)?;
+    let sorted: Vec<P3> = order.iter().map(|&i| pts[i as usize]).collect();
+    let mut builder = Builder::new(&sorted, &order);
+    let rest = builder.init()?;
     for &v in &rest {
         builder.insert(v);
     }
     let (tets, neighbors) = builder.finish();
-    let (tets, neighbors) = spatial_tet_order(&pts, tets, neighbors);
+    let (tets, neighbors) = spatial_tet_order(&sorted, &order, tets, neighbors);
     Ok(Tetrahedralization {
         tets,
         neighbors,
@@ -235,25 +244,26 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
 
 /// Renumbers tetrahedra along a Morton curve of their centroids, so that
 /// neighbouring tetrahedra are close in memory (the runtime walk touches a few
-/// neighbours per query; scattered builder slots cost a cache miss per step).
+/// neighbours per query; scattered builder slots cost a cache miss per step),
+/// and maps the vertices from builder numbering (`pts`, every point a vertex)
+/// to input indices (`rank`). Ties between equal Morton codes keep `tets` order.
 fn spatial_tet_order(
     pts: &[P3],
+    rank: &[u32],
     tets: Vec<[u32; 4]>,
     neighbors: Vec<[u32; 4]>,
 ) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for v in &tets {
-        for &i in v {
-            for k in 0..3 {
-                lo[k] = lo[k].min(pts[i as usize][k]);
-                hi[k] = hi[k].max(pts[i as usize][k]);
-            }
+    for p in pts {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
     }
     let scale: [f64; 3] =
         std::array::from_fn(|k| ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE));
-    let mut keyed: Vec<(u64, u32)> = tets
+    let keyed: Vec<(u64, u32)> = tets
         .iter()
         .enumerate()
         .map(|(t, v)| {
@@ -267,12 +277,15 @@ fn spatial_tet_order(
             )
         })
         .collect();
-    keyed.sort_unstable();
+    let keyed = bucket_sort_by_key(keyed, 63);
     let mut new_of_old = vec![0u32; tets.len()];
     for (new, &(_, old)) in keyed.iter().enumerate() {
         new_of_old[old as usize] = new as u32;
     }
-    let out_tets = keyed.iter().map(|&(_, old)| tets[old as usize]).collect();
+    let out_tets = keyed
+        .iter()
+        .map(|&(_, old)| tets[old as usize].map(|i| rank[i as usize]))
+        .collect();
     let out_nbrs = keyed
         .iter()
         .map(|&(_, old)| {
@@ -288,6 +301,34 @@ fn spatial_tet_order(
     (out_tets, out_nbrs)
 }
 
+/// Sorts `(key, value)` pairs by key, then value, for keys below `2^bits`:
+/// one counting-sort pass on the top 12 key bits, then a comparison sort of
+/// each (small, cache-resident) bucket. Same order as `sort_unstable` on the
+/// pairs, about twice as fast on the builder's ~7 tets per point.
+fn bucket_sort_by_key(a: Vec<(u64, u32)>, bits: u32) -> Vec<(u64, u32)> {
+    const TOP: u32 = 12;
+    let shift = bits.saturating_sub(TOP);
+    let bucket = |k: u64| (k >> shift) as usize & ((1 << TOP) - 1);
+    let mut start = vec![0usize; (1 << TOP) + 1];
+    for &(k, _) in &a {
+        start[bucket(k) + 1] += 1;
+    }
+    for i in 0..1 << TOP {
+        start[i + 1] += start[i];
+    }
+    let mut next = start.clone();
+    let mut b = vec![(0u64, 0u32); a.len()];
+    for &e in &a {
+        let d = bucket(e.0);
+        b[next[d]] = e;
+        next[d] += 1;
+    }
+    for w in start.windows(2) {
+        b[w[0]..w[1]].sort_unstable();
+    }
+    b
+}
+
 /// The point at infinity.
 const INF: u32 = u32::MAX;
 /// Marks a cell slot on the free list.
@@ -299,20 +340,26 @@ const FACE: [[usize; 3]; 4] = [[3, 2, 1], [2, 3, 0], [1, 0, 3], [0, 1, 2]];
 
 /// One cell of the triangulation under construction.
 #[derive(Clone, Copy)]
-#[repr(C, align(32))]
 struct Cell {
     /// Vertices (`INF` for the point at infinity, `FREE` on the free list).
     v: [u32; 4],
     /// Neighbour opposite each vertex.
     n: [u32; 4],
+    /// Cavity mark: `2·gen` in conflict, `2·gen + 1` tested and not.
+    stamp: u32,
 }
 
 struct Builder<'a> {
+    /// Points in insertion order; cells refer to them by this position.
     pts: &'a [P3],
-    /// Vertices and neighbours together: one cache line half per cell.
+    /// Input index (perturbation rank) of each point of `pts`.
+    rank: &'a [u32],
+    /// Predicates specialised to `pts` (lattice detection, see [`Kernel`]).
+    kernel: Kernel,
+    /// Vertices, neighbours and cavity mark together (36 bytes): the flood
+    /// reads a neighbour's mark and, if untested, its vertices from one record.
     cells: Vec<Cell>,
-    /// Cavity marks: `2·gen` in conflict, `2·gen + 1` tested and not.
-    stamp: Vec<u32>,
+    /// Current insertion's generation for [`Cell::stamp`].
     gen: u32,
     free: Vec<u32>,
     hint: u32,
@@ -320,7 +367,6 @@ struct Builder<'a> {
     // Scratch reused across insertions (no allocation per point in steady state).
     stack: Vec<u32>,
     cavity: Vec<u32>,
-    boundary: Vec<(u32, u8)>,
     faces: Vec<([u32; 3], u32, u8)>,
     edge_table: Vec<(u64, u32, u8)>,
     edge_used: Vec<usize>,
@@ -329,19 +375,19 @@ struct Builder<'a> {
 const EMPTY_EDGE: u64 = u64::MAX;
 
 impl<'a> Builder<'a> {
-    fn new(pts: &'a [P3]) -> Self {
+    fn new(pts: &'a [P3], rank: &'a [u32]) -> Self {
         let cap = pts.len() * 7 + 16;
         Builder {
             pts,
+            rank,
+            kernel: Kernel::for_points(pts),
             cells: Vec::with_capacity(cap),
-            stamp: Vec::with_capacity(cap),
             gen: 0,
             free: Vec::new(),
             hint: 0,
             rng: SplitMix(0xD1CE),
             stack: Vec::new(),
             cavity: Vec::new(),
-            boundary: Vec::new(),
             faces: Vec::new(),
             edge_table: vec![(EMPTY_EDGE, 0, 0); 256],
             edge_used: Vec::new(),
@@ -353,9 +399,10 @@ impl<'a> Builder<'a> {
         &self.pts[v as usize]
     }
 
-    /// Picks a non-degenerate first tetrahedron from the start of `order` and
-    /// returns the remaining points in order.
-    fn init(&mut self, order: &[u32]) -> Result<Vec<u32>, DelaunayError> {
+    /// Picks a non-degenerate first tetrahedron from the first points and
+    /// returns the remaining points in insertion order.
+    fn init(&mut self) -> Result<Vec<u32>, DelaunayError> {
+        let order: Vec<u32> = (0..self.pts.len() as u32).collect();
         let a = order[0];
         let b = order[1];
         let ic = (2..order.len())
@@ -377,12 +424,14 @@ impl<'a> Builder<'a> {
         self.cells.push(Cell {
             v: fin,
             n: [HULL; 4],
+            stamp: 0,
         });
         for face in &FACE {
             let f = face.map(|i| fin[i]);
             self.cells.push(Cell {
                 v: [f[1], f[0], f[2], INF],
                 n: [HULL; 4],
+                stamp: 0,
             });
         }
         for s in 0..5 {
@@ -397,7 +446,6 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        self.stamp = vec![0; 5];
         self.hint = 0;
         Ok(order
             .iter()
@@ -445,7 +493,7 @@ impl<'a> Builder<'a> {
                 }
                 let mut q = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
                 q[i] = &pp;
-                if predicates::orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
+                if self.kernel.orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
                     prev = c;
                     c = n;
                     continue 'walk;
@@ -459,31 +507,41 @@ impl<'a> Builder<'a> {
     fn conflict(&self, c: u32, p: u32) -> bool {
         let v = self.cells[c as usize].v;
         let pp = self.p(p);
-        if let Some(k) = v.iter().position(|&x| x == INF) {
+        // Branch-free search for the point at infinity (at most one).
+        let inf = v.map(|x| x == INF);
+        if inf.contains(&true) {
+            let k = inf.iter().position(|&b| b).unwrap_or(0);
             let f = FACE[k].map(|i| v[i]);
-            let n = self.cells[c as usize].n[k];
-            let inner = self.cells[n as usize].v[self.back_index(n, c)];
-            predicates::in_infinite_cell(
-                [self.p(f[0]), self.p(f[1]), self.p(f[2])],
-                f,
-                self.p(inner),
-                pp,
-                p,
-            ) == InSphere::Inside
+            // The finite cell across the hull face and the ranks are only
+            // needed when p is co-planar with the face.
+            let coplanar = || {
+                let n = self.cells[c as usize].n[k];
+                let inner = self.p(self.cells[n as usize].v[self.back_index(n, c)]);
+                (
+                    inner,
+                    f.map(|x| self.rank[x as usize]),
+                    self.rank[p as usize],
+                )
+            };
+            self.kernel
+                .in_infinite_cell([self.p(f[0]), self.p(f[1]), self.p(f[2])], pp, coplanar)
+                == InSphere::Inside
         } else {
-            predicates::insphere_perturbed(
-                [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])],
-                v,
-                pp,
-                p,
-            ) == InSphere::Inside
+            let t = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
+            match self.kernel.insphere(t, pp) {
+                Some(s) => s == InSphere::Inside,
+                None => {
+                    let rt = v.map(|x| self.rank[x as usize]);
+                    self.kernel.perturbed_tie(t, rt, pp, self.rank[p as usize]) == InSphere::Inside
+                }
+            }
         }
     }
 
     fn insert(&mut self, p: u32) {
         let start = self.locate(p);
         if self.gen >= (u32::MAX >> 1) - 1 {
-            self.stamp.iter_mut().for_each(|s| *s = 0);
+            self.cells.iter_mut().for_each(|c| c.stamp = 0);
             self.gen = 0;
         }
         self.gen += 1;
@@ -494,40 +552,36 @@ impl<'a> Builder<'a> {
     fn cavity_and_fill(&mut self, p: u32, start: u32, gin: u32, gout: u32) {
         let mut stack = std::mem::take(&mut self.stack);
         let mut cavity = std::mem::take(&mut self.cavity);
-        let mut boundary = std::mem::take(&mut self.boundary);
+        // Boundary faces are copied out as found, before cavity slots are reused.
+        let mut faces = std::mem::take(&mut self.faces);
         stack.clear();
         cavity.clear();
-        boundary.clear();
-        self.stamp[start as usize] = gin;
+        faces.clear();
+        self.cells[start as usize].stamp = gin;
         stack.push(start);
         while let Some(c) = stack.pop() {
             cavity.push(c);
-            for i in 0..4 {
-                let n = self.cells[c as usize].n[i];
-                let s = self.stamp[n as usize];
+            let cell = self.cells[c as usize];
+            // Load the four neighbours' marks up front: independent cache
+            // misses overlap instead of stalling one after the other. (A cell
+            // has four distinct neighbours, so no mark changes in between.)
+            let stamps = cell.n.map(|n| self.cells[n as usize].stamp);
+            for (i, &n) in cell.n.iter().enumerate() {
+                let s = stamps[i];
                 if s == gin {
                     continue;
                 }
                 if s != gout {
                     if self.conflict(n, p) {
-                        self.stamp[n as usize] = gin;
+                        self.cells[n as usize].stamp = gin;
                         stack.push(n);
                         continue;
                     }
-                    self.stamp[n as usize] = gout;
+                    self.cells[n as usize].stamp = gout;
                 }
-                boundary.push((c, i as u8));
+                let back = self.back_index(n, c) as u8;
+                faces.push((FACE[i].map(|k| cell.v[k]), n, back));
             }
-        }
-
-        // Copy the boundary faces out before cavity slots are reused.
-        let mut faces = std::mem::take(&mut self.faces);
-        faces.clear();
-        for &(c, i) in &boundary {
-            let cv = self.cells[c as usize].v;
-            let outside = self.cells[c as usize].n[i as usize];
-            let back = self.back_index(outside, c) as u8;
-            faces.push((FACE[i as usize].map(|k| cv[k]), outside, back));
         }
 
         // Size the edge table: 3 half-edges per face, 2 per edge, load <= 1/4.
@@ -548,8 +602,8 @@ impl<'a> Builder<'a> {
                 self.cells.push(Cell {
                     v: [FREE; 4],
                     n: [HULL; 4],
+                    stamp: 0,
                 });
-                self.stamp.push(0);
                 (self.cells.len() - 1) as u32
             };
             self.cells[nc as usize].v = [f[0], f[1], f[2], p];
@@ -593,11 +647,11 @@ impl<'a> Builder<'a> {
         self.hint = last;
         self.stack = stack;
         self.cavity = cavity;
-        self.boundary = boundary;
         self.faces = faces;
     }
 
-    /// Drops infinite and free cells and renumbers neighbours.
+    /// Drops infinite and free cells and renumbers neighbours; vertices stay
+    /// in builder numbering.
     fn finish(self) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
         let mut remap = vec![HULL; self.cells.len()];
         let mut tets = Vec::new();

@@ -187,6 +187,29 @@ fn clustered_points_with_large_scale_range() {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    fn bucket_sort_matches_comparison_sort(
+        keys in proptest::collection::vec((0u64..1 << 63, 0u8..4), 0..3000),
+    ) {
+        // Clustered keys (few buckets) and repeated keys (ties on the value).
+        let pairs: Vec<(u64, u32)> = keys
+            .iter()
+            .enumerate()
+            .map(|(i, &(k, mode))| match mode {
+                0 => (k, i as u32),
+                1 => (k & 0xff, i as u32),
+                2 => (k >> 50, i as u32),
+                _ => (7, i as u32),
+            })
+            .collect();
+        let mut expect = pairs.clone();
+        expect.sort_unstable();
+        prop_assert_eq!(bucket_sort_by_key(pairs, 63), expect);
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
     #[test]
     fn random_small_integer_sets_are_valid(
