@@ -6,7 +6,8 @@
 //!    is shaded `emission + albedo/π · E_probes(p, n)` (irradiance from the
 //!    probes at the hit point, moved 1 cm along the facing normal, for the
 //!    facing shading normal), so the probes' lighting shows on the walls too
-//!    (walls without a cloud's visibility weighting: 1 cm from a wall, the
+//!    (walls without a cloud's visibility weighting, distance moments and
+//!    cell visibility alike: 1 cm from a wall, the
 //!    wall itself fills the probes' distance texels at grazing angles and
 //!    the Chebyshev test would drop probes that do see the point — the
 //!    runtime applies no DDGI-style normal bias yet; static geometry is lit
@@ -383,11 +384,12 @@ pub fn render(
     }
     let source = Source::from_file(file)?;
     // Walls are shaded without visibility weighting (module docs): a second
-    // view of the cloud with it off, only when the first has it on.
+    // view of the cloud with both kinds off, only when the first has one on.
     let unweighted = match &source {
-        Source::Cloud(c) if c.visibility_enabled() => {
+        Source::Cloud(c) if c.visibility_enabled() || c.cell_visibility_enabled() => {
             let mut c = c.clone();
             c.set_visibility(false);
+            c.set_cell_visibility(false);
             Some(Source::Cloud(c))
         }
         _ => None,
