@@ -168,6 +168,39 @@ fn eval_compare_and_sweep_plot() {
     // A grid of the file's probe count, less cells inside the wall.
     let (gn, n) = (g["probes"].as_u64().unwrap(), v["probes"].as_u64().unwrap());
     assert!(gn >= 4 && gn <= n, "{v}");
+    // The grid is baked with the file's visibility data and blended with
+    // the same flags: `--no-visibility` on a file with visibility gives the
+    // grid figures of a file baked without it.
+    let plain = dir.path().join("plain.probes");
+    json(&probekit(&[
+        "bake",
+        &scene,
+        "--grid",
+        "20",
+        "--no-visibility",
+        "-o",
+        plain.to_str().unwrap(),
+        "--json",
+    ]));
+    let compare = |f: &str, extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            f,
+            "--scene",
+            &scene,
+            "--points",
+            "25",
+            "--compare",
+            "grid",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&probekit(&args))["compare"]["grid"].clone()
+    };
+    assert_eq!(
+        compare(p, &["--no-visibility"]),
+        compare(plain.to_str().unwrap(), &[])
+    );
     let o = probekit(&[
         "eval",
         p,

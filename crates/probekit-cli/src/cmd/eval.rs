@@ -5,7 +5,9 @@
 //!
 //! `--compare grid` also bakes (in-process, with the capture settings the
 //! file's metadata records) a uniform grid with the file's probe count over
-//! the scene's bake box and reports its figures under `"compare":{"grid":..}`;
+//! the scene's bake box and reports its figures under `"compare":{"grid":..}`
+//! (with the distance moments and cell visibility the file has, baked for
+//! the grid with the same settings, and the same query-time flags);
 //! `--plot FILE.png [--budgets 50,100,200,400]` runs a placement sweep
 //! (`probekit::placement::sweep`) on the same points and ground truth, draws
 //! rel. RMSE against probe count (log-log) and reports it under `"sweep"`.
@@ -15,12 +17,14 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::cloud::cell_visibility::bake_file_cell_visibility;
+use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
     mean_luminance, metrics, reference, region_metrics, sample_points, EvalPoint, Metrics,
     Predictor,
 };
 use probekit::placement::sweep::{
-    place_and_bake, plot_sweep, predict_file, settings_from_metadata, sweep, SWEEP_METHODS,
+    place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
@@ -125,10 +129,31 @@ pub fn run(a: &EvalArgs) -> Result<()> {
                 cell: None,
                 budget: Some(file.positions.len().max(8)),
             };
-            let g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec)
-                .with_context(|| format!("{scene_name}: --compare grid"))?;
-            let gp =
-                predict_file(&g, &pts).with_context(|| format!("{scene_name}: --compare grid"))?;
+            let ctx = || format!("{scene_name}: --compare grid");
+            let mut g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec)
+                .with_context(ctx)?;
+            // The grid gets the visibility data the evaluated file has, so
+            // both blend the same way.
+            let tracer = baker.tracer();
+            if let Some(v) = &file.visibility {
+                let vs = VisibilitySettings {
+                    resolution: v.resolution,
+                    ..VisibilitySettings::new(v.max_distance, settings.seed)
+                };
+                g.visibility = Some(
+                    bake_distance_moments(tracer, &g.positions, &vs, &|_, _| {})
+                        .with_context(ctx)?,
+                );
+            }
+            if let Some(c) = &file.cell_visibility {
+                g.cell_visibility = Some(
+                    bake_file_cell_visibility(tracer, &g, c.subdivision(), &|_, _| {})
+                        .with_context(ctx)?,
+                );
+            }
+            let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
+            a.visibility.apply(&mut gpred)?;
+            let gp = gpred.predict(&pts).with_context(ctx)?;
             out["compare"] = serde_json::json!({ "grid": figures(&scene, &pts, &gp, &truth, g.positions.len()) });
         }
         Some(o) => bail!("--compare {o}: expected grid"),
