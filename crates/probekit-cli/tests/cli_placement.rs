@@ -146,17 +146,22 @@ fn eval_compare_and_sweep_plot() {
         "--json",
     ]));
     let p = probes.to_str().unwrap();
-    let v = json(&probekit(&[
-        "eval",
-        p,
-        "--scene",
-        &scene,
-        "--points",
-        "25",
-        "--compare",
-        "grid",
-        "--json",
-    ]));
+    let eval_compare = |f: &str, extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            f,
+            "--scene",
+            &scene,
+            "--points",
+            "25",
+            "--compare",
+            "grid",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&probekit(&args))
+    };
+    let v = eval_compare(p, &[]);
     let g = &v["compare"]["grid"];
     assert!(v["rel_rmse"].as_f64().unwrap() >= 0.0, "{v}");
     assert!(g["rel_rmse"].as_f64().unwrap() >= 0.0, "{v}");
@@ -182,24 +187,9 @@ fn eval_compare_and_sweep_plot() {
         plain.to_str().unwrap(),
         "--json",
     ]));
-    let compare = |f: &str, extra: &[&str]| {
-        let mut args = vec![
-            "eval",
-            f,
-            "--scene",
-            &scene,
-            "--points",
-            "25",
-            "--compare",
-            "grid",
-            "--json",
-        ];
-        args.extend_from_slice(extra);
-        json(&probekit(&args))["compare"]["grid"].clone()
-    };
     assert_eq!(
-        compare(p, &["--no-visibility"]),
-        compare(plain.to_str().unwrap(), &[])
+        eval_compare(p, &["--no-visibility"])["compare"]["grid"],
+        eval_compare(plain.to_str().unwrap(), &[])["compare"]["grid"]
     );
     let o = probekit(&[
         "eval",

@@ -357,8 +357,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
         f
     };
-    if let Some(v) = &vis {
-        let tracer = probekit::trace::Tracer::new(&scene);
+    // One tracer (one BVH build) for both kinds of visibility. Cell
+    // visibility needs every probe's tetrahedra: not in shard parts
+    // (`merge --scene` bakes it).
+    let cells = cells.filter(|_| a.shard.is_none());
+    let tracer = (vis.is_some() || cells.is_some()).then(|| probekit::trace::Tracer::new(&scene));
+    if let (Some(v), Some(tracer)) = (&vis, &tracer) {
         let pb = ProgressBar::new(file.positions.len() as u64);
         pb.set_style(
             ProgressStyle::with_template(
@@ -366,18 +370,15 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             )
             .expect("static template"),
         );
-        let m = bake_distance_moments(&tracer, &file.positions, v, &|done, _| {
+        let m = bake_distance_moments(tracer, &file.positions, v, &|done, _| {
             pb.set_position(done as u64)
         })
         .with_context(|| format!("{}: --visibility-res", a.scene))?;
         pb.finish_and_clear();
         file.visibility = Some(m);
     }
-    // Cell visibility needs every probe's tetrahedra: not in shard parts
-    // (`merge --scene` bakes it).
-    if let (Some(k), None) = (cells, &a.shard) {
-        let tracer = probekit::trace::Tracer::new(&scene);
-        file.cell_visibility = Some(cell_visibility_of(&tracer, &file, k, &outname)?);
+    if let (Some(k), Some(tracer)) = (cells, &tracer) {
+        file.cell_visibility = Some(cell_visibility_of(tracer, &file, k, &outname)?);
     }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;

@@ -72,15 +72,7 @@ impl ProbeCloud {
     /// coefficients decoded to f32 (`order²` per probe), and its distance
     /// moments (`VISM`) when present, which switch visibility weighting on.
     pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
-        let tets = file
-            .tetrahedra
-            .as_ref()
-            .ok_or(ProbeCloudError::NoTetrahedra)?;
-        let mesh = TetMesh::new(
-            file.positions.clone(),
-            tets.vertices.clone(),
-            tets.neighbours.clone(),
-        )?;
+        let mesh = Self::mesh_from_file(file)?;
         let mut cloud = Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)?;
         if let Some(m) = &file.visibility {
             let maps = VisibilityMaps::from_moments(m).ok_or(FormatError::InvalidValue {
@@ -94,6 +86,20 @@ impl ProbeCloud {
             cloud.set_cell_visibility_bits(Some(c.clone()))?;
         }
         Ok(cloud)
+    }
+
+    /// The tetrahedral mesh a cloud file stores: its positions and its `TETS`
+    /// vertices and neighbours, validated by [`TetMesh::new`].
+    pub fn mesh_from_file(file: &ProbeFile) -> Result<TetMesh, ProbeCloudError> {
+        let tets = file
+            .tetrahedra
+            .as_ref()
+            .ok_or(ProbeCloudError::NoTetrahedra)?;
+        Ok(TetMesh::new(
+            file.positions.clone(),
+            tets.vertices.clone(),
+            tets.neighbours.clone(),
+        )?)
     }
 
     /// Builds a cloud from a mesh and `order²` radiance SH coefficients per

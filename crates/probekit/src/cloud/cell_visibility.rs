@@ -19,25 +19,23 @@ use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::{
     lattice_numerators, lattice_position, record_bytes, CellVisibility, MAX_CELL_SUBDIVISION,
 };
-use probekit_runtime::cloud::TetMesh;
+use probekit_runtime::cloud::{ProbeCloud, TetMesh};
 use probekit_runtime::format::ProbeFile;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use thiserror::Error;
 
 /// Why cell visibility cannot be baked.
-#[derive(Debug, Error, PartialEq)]
+#[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum CellVisibilityError {
     /// The subdivision is outside `1..=8`.
     #[error("cell visibility subdivision {0} is outside 1..={MAX_CELL_SUBDIVISION}")]
     Subdivision(u32),
-    /// The file has no tetrahedra (a volume, or an unmerged shard part).
-    #[error("the file has no tetrahedra (not a probe cloud, or an unmerged shard part)")]
-    NoTetrahedra,
-    /// The file's tetrahedra do not form a valid mesh.
+    /// The file has no tetrahedra (a volume, or an unmerged shard part), or
+    /// they do not form a valid mesh.
     #[error(transparent)]
-    Mesh(#[from] probekit_runtime::cloud::CloudError),
+    Mesh(#[from] probekit_runtime::cloud::ProbeCloudError),
 }
 
 /// True when the segment from `a` to `b` crosses no surface (any surface,
@@ -52,10 +50,16 @@ pub fn segment_clear(tracer: &Tracer<'_>, a: Vec3, b: Vec3) -> bool {
 }
 
 /// One cell's record: corner `v`'s bit for lattice point `l` at bit
-/// `v·lattice_len + l`, least significant bit first.
-fn record(tracer: &Tracer<'_>, probes: &[u32], positions: &[Vec3], k: u32) -> Vec<u8> {
+/// `v·lattice_len + l`, least significant bit first. `lattice` is
+/// [`lattice_numerators`] for the cell's corner count.
+fn record(
+    tracer: &Tracer<'_>,
+    probes: &[u32],
+    positions: &[Vec3],
+    lattice: &[[u32; 4]],
+    k: u32,
+) -> Vec<u8> {
     let vertices = probes.len();
-    let lattice = lattice_numerators(vertices, k);
     let mut out = vec![0u8; record_bytes(vertices, k)];
     for (l, n) in lattice.iter().enumerate() {
         let q = lattice_position(probes, positions, n, k);
@@ -88,17 +92,18 @@ pub fn bake_cell_visibility(
     let tets = mesh.tets();
     let faces = mesh.hull_face_count();
     let total = tets.len() + faces;
+    let (lattice4, lattice3) = (lattice_numerators(4, k), lattice_numerators(3, k));
     let done = AtomicUsize::new(0);
     let records: Vec<Vec<u8>> = (0..total)
         .into_par_iter()
         .map(|c| {
             let r = if c < tets.len() {
-                record(tracer, &tets[c], positions, k)
+                record(tracer, &tets[c], positions, &lattice4, k)
             } else {
                 let f = mesh
                     .hull_face_probes((c - tets.len()) as u32)
                     .expect("hull face index in range");
-                record(tracer, &f, positions, k)
+                record(tracer, &f, positions, &lattice3, k)
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             r
@@ -116,15 +121,7 @@ pub fn bake_file_cell_visibility(
     k: u32,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<CellVisibility, CellVisibilityError> {
-    let tets = file
-        .tetrahedra
-        .as_ref()
-        .ok_or(CellVisibilityError::NoTetrahedra)?;
-    let mesh = TetMesh::new(
-        file.positions.clone(),
-        tets.vertices.clone(),
-        tets.neighbours.clone(),
-    )?;
+    let mesh = ProbeCloud::mesh_from_file(file)?;
     bake_cell_visibility(tracer, &mesh, k, progress)
 }
 
@@ -206,14 +203,14 @@ mod tests {
             assert_eq!(offset, cv.data().len());
             assert!(hidden > 0, "some cells must straddle the wall");
         }
-        assert_eq!(
+        assert!(matches!(
             bake_cell_visibility(&tracer, &mesh, 0, &|_, _| {}),
             Err(CellVisibilityError::Subdivision(0))
-        );
-        assert_eq!(
+        ));
+        assert!(matches!(
             bake_cell_visibility(&tracer, &mesh, 9, &|_, _| {}),
             Err(CellVisibilityError::Subdivision(9))
-        );
+        ));
     }
 
     #[test]
