@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! cargo run --release -p probekit --example leak_diag -- demo.probes [SCENE] \
-//!     [--points 400] [--hi 16384] [--all]
+//!     [--points 400] [--seeds 1] [--hi 16384] [--all]
 //! ```
 //!
 //! For every leak point (only those in regions unless `--all`) it prints:
@@ -25,7 +25,7 @@ use probekit_sh::ShRgb;
 use std::error::Error;
 
 mod common;
-use common::{arg, eval_set, EvalSet};
+use common::{arg, eval_seeds, EvalSet};
 
 fn lum(v: Vec3) -> f32 {
     probekit_sh::LUMINANCE.dot(v)
@@ -45,6 +45,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let npts: usize = arg(&args, "--points", 400);
     let hi: u32 = arg(&args, "--hi", 16384);
     let all = args.iter().any(|a| a == "--all");
+    let seeds: String = arg(&args, "--seeds", "1".to_string());
     let scene = Scene::load(std::path::Path::new(&scene_name))?;
     let baker = Baker::new(&scene)?;
     let file = ProbeFile::load(&file_name)?;
@@ -56,7 +57,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         points: pts,
         truth,
         mean,
-    } = eval_set(&baker, &scene, npts, 1)?;
+    } = eval_seeds(&baker, &scene, npts, &seeds)?;
     let predicted = pred.predict(&pts)?;
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = hi;

@@ -98,7 +98,7 @@ const LIGHT_SHELL_MAX: f32 = 2.5;
 /// ranking see that error and put probes there. Measured on builtin:demo
 /// (docs/bench/placement.md): without it, a point by room A's lamp and the
 /// back wall was predicted at 0.5 % of its truth.
-const BOUNDARY_SNAP: f32 = 1.2 * PROBE_CLEARANCE;
+pub(super) const BOUNDARY_SNAP: f32 = 1.2 * PROBE_CLEARANCE;
 
 /// New candidates spawned around each inserted probe.
 const SPAWN: usize = 4;
@@ -525,11 +525,15 @@ impl Adaptive<'_, '_, '_> {
         // behind a wall (or outside the building, beyond an outer wall)
         // does not refine this probe's neighbourhood, and one outside sees
         // the sky and sun (docs/bench/placement.md, leaks).
+        // Onto the layers along the box's faces (`snap_to_layer`) first.
         let bbox = self.bbox;
+        let layer = self.st.layer;
         let cands: Vec<Vec3> = cands
             .into_par_iter()
             .filter_map(|(o, dir, r)| {
                 let p = o + r * dir;
+                let p = layer.map_or(p, |l| super::snap_to_layer(p, &l));
+                let (dir, r) = ((p - o).normalize_or_zero(), p.distance(o));
                 (dir != Vec3::ZERO
                     && bbox.contains(p)
                     && tracer
@@ -718,6 +722,10 @@ pub(super) fn adaptive(
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<(), PlacementError> {
     let tracer = st.baker.tracer();
+    st.layer = Some(Aabb::new(
+        bbox.min + Vec3::splat(BOUNDARY_SNAP),
+        bbox.max - Vec3::splat(BOUNDARY_SNAP),
+    ));
     let mut raw = jittered(
         bbox,
         (POOL_FACTOR * budget).clamp(512, 60_000),
@@ -743,7 +751,8 @@ pub(super) fn adaptive(
         limit,
     ));
     let nraw = raw.len();
-    let raw: Vec<Vec3> = raw
+    let raw: Vec<Vec3> = st
+        .snap(raw)
         .into_par_iter()
         .filter(|p| super::is_free(tracer, *p, PROBE_CLEARANCE))
         .collect();
@@ -999,6 +1008,7 @@ mod tests {
             sh: Vec::new(),
             next_index: 0,
             stats: Default::default(),
+            layer: None,
         };
         let mut pos = Vec::new();
         let mut sh = Vec::new();
@@ -1060,6 +1070,7 @@ mod tests {
             sh: Vec::new(),
             next_index: 0,
             stats: Default::default(),
+            layer: None,
         };
         // Next to the back wall (z = 0) and the ceiling (y = 3) of room B.
         let parents = [Vec3::new(5.0, 2.8, 0.15), Vec3::new(6.5, 0.2, 0.2)];

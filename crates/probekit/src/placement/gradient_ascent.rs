@@ -522,6 +522,7 @@ mod tests {
             sh: Vec::new(),
             next_index: 0,
             stats: PlacementStats::default(),
+            layer: None,
         };
         let p = GradientAscentParams {
             initial: 64,

@@ -322,9 +322,51 @@ struct State<'a, 'b> {
     sh: Vec<ShRgb>,
     next_index: usize,
     stats: PlacementStats,
+    /// The layer box of [`snap_to_layer`], when the method keeps its probes
+    /// on layers along the bake box's faces (`adaptive`).
+    layer: Option<Aabb>,
+}
+
+/// Points within this distance (metres) of a face of the layer box, or beyond
+/// it, are moved onto it ([`snap_to_layer`]).
+pub const LAYER_SNAP: f32 = 0.0125;
+
+/// `p` with each coordinate within [`LAYER_SNAP`] of a face of `layer`, or
+/// outside it, set to that face's coordinate exactly.
+///
+/// Why: the probes along a face of the bake box form a face of their convex
+/// hull, and a point outside the hull is lit by the hull triangle closest to
+/// it. When those probes are co-planar only up to rounding (a leak-prevention
+/// probe 5·10⁻⁷ m off the layer, a spawned candidate 3 mm inside it), the
+/// exact Delaunay tetrahedralization is right to make them sliver
+/// tetrahedra, and the hull then has triangles metres long that skip the
+/// probes next to a query point — through a wall (docs/bench/placement.md,
+/// "Hull slivers"). Exactly co-planar probes give a planar hull triangulated
+/// in the plane.
+pub fn snap_to_layer(p: Vec3, layer: &Aabb) -> Vec3 {
+    let mut q = p;
+    for a in 0..3 {
+        if q[a] <= layer.min[a] + LAYER_SNAP {
+            q[a] = layer.min[a];
+        } else if q[a] >= layer.max[a] - LAYER_SNAP {
+            q[a] = layer.max[a];
+        }
+    }
+    q
 }
 
 impl State<'_, '_> {
+    /// `pts` moved onto the layer box's faces ([`snap_to_layer`]) when the
+    /// method has one; unchanged otherwise.
+    fn snap(&self, mut pts: Vec<Vec3>) -> Vec<Vec3> {
+        if let Some(layer) = &self.layer {
+            for p in &mut pts {
+                *p = snap_to_layer(*p, layer);
+            }
+        }
+        pts
+    }
+
     /// Captures `points` (already filtered for inside-geometry); returns the
     /// valid ones as (position, SH).
     fn capture(&mut self, points: &[Vec3]) -> Result<Vec<(Vec3, ShRgb)>, PlacementError> {
@@ -390,6 +432,7 @@ impl State<'_, '_> {
             if new.is_empty() {
                 break;
             }
+            let new = self.snap(new);
             let new = self.filter_free(new);
             let mut got = self.capture(&new)?;
             got.retain(|(p, _)| inside(p));
@@ -495,6 +538,7 @@ pub fn place(
             method: method.name().into(),
             ..Default::default()
         },
+        layer: None,
     };
     let ls = LeakSettings::default();
     match method {

@@ -257,3 +257,83 @@ fn region_metrics_match_hand_filtered_points() {
     assert_eq!(out[0].1.leaks, 1, "9 against a truth of 2 is a leak");
     assert_eq!(out[1].1.points, 0);
 }
+
+/// `6·volume / (longest edge)³` of a tetrahedron, in f64 from the f32
+/// positions: 0 for a flat one, `√2 ≈ 1.41` for a regular one.
+fn flatness(p: [Vec3; 4]) -> f64 {
+    let q = p.map(|v| v.as_dvec3());
+    let vol6 = (q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]).abs();
+    let mut longest = 0.0f64;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            longest = longest.max(q[i].distance(q[j]));
+        }
+    }
+    vol6 / longest.powi(3)
+}
+
+/// Adaptive probes along the bake box's faces are exactly co-planar, so the
+/// cloud's convex hull has no sliver tetrahedra along them: before
+/// `snap_to_layer`, 19 of the 44 hull faces on the layers of this placement
+/// belonged to tetrahedra flatter than 10⁻⁶ (probes a few ulps or
+/// millimetres off the layer). Such hull triangles, metres long, skipped the
+/// probes next to a query point outside the hull and lit it through the
+/// dividing wall.
+#[test]
+fn adaptive_hull_has_no_sliver_tetrahedra_along_the_layers() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let m = PlacementMethod::Adaptive {
+        budget: 64,
+        tolerance: 0.0,
+        light_shells: false,
+    };
+    let bbox = scene.bake_box();
+    let a = place(&baker, bbox, &m, &fast_settings(), &|_, _, _| {}).unwrap();
+    let snap = Vec3::splat(adaptive::BOUNDARY_SNAP);
+    let layer = Aabb::new(bbox.min + snap, bbox.max - snap);
+    let planes: Vec<(usize, f32)> = (0..3)
+        .flat_map(|k| [(k, layer.min[k]), (k, layer.max[k])])
+        .collect();
+    for p in &a.positions {
+        for &(k, c) in &planes {
+            let d = (p[k] - c).abs();
+            assert!(d == 0.0 || d > LAYER_SNAP, "{p} is {d} m off a layer");
+        }
+    }
+    let t = crate::cloud::tetrahedralize(&a.positions).unwrap();
+    let (mut on_layers, mut slivers) = (0, 0);
+    for (v, nb) in t.tets.iter().zip(&t.neighbors) {
+        let q = v.map(|i| a.positions[i as usize]);
+        for (i, &n) in nb.iter().enumerate() {
+            if n != probekit_runtime::cloud::HULL {
+                continue;
+            }
+            // The hull face is the one opposite vertex i.
+            let face: Vec<Vec3> = (0..4).filter(|&j| j != i).map(|j| q[j]).collect();
+            let on = |&(k, c): &(usize, f32)| face.iter().all(|p| (p[k] - c).abs() < 1e-3);
+            if planes.iter().any(on) {
+                on_layers += 1;
+                if flatness(q) < 1e-6 {
+                    slivers += 1;
+                }
+            }
+        }
+    }
+    assert!(on_layers > 20, "{on_layers}");
+    assert_eq!(slivers, 0, "of {on_layers} hull faces on the layers");
+}
+
+#[test]
+fn snap_to_layer_moves_only_points_near_or_beyond_a_face() {
+    let layer = Aabb::new(Vec3::splat(0.06), Vec3::new(7.94, 2.94, 3.94));
+    let inside = Vec3::new(1.0, 1.5, 2.0);
+    assert_eq!(snap_to_layer(inside, &layer), inside);
+    // Within LAYER_SNAP inside a face, on it, and beyond it: onto the face.
+    for z in [0.06 + 0.9 * LAYER_SNAP, 0.06, 0.059_999_995, 0.01] {
+        let q = snap_to_layer(Vec3::new(1.0, 1.5, z), &layer);
+        assert_eq!(q, Vec3::new(1.0, 1.5, 0.06), "{z}");
+    }
+    let q = snap_to_layer(Vec3::new(7.95, 2.935, 0.06 + 1.1 * LAYER_SNAP), &layer);
+    assert_eq!(q, Vec3::new(7.94, 2.94, 0.06 + 1.1 * LAYER_SNAP));
+}
