@@ -329,7 +329,7 @@ struct State<'a, 'b> {
 
 /// Points within this distance (metres) of a face of the layer box, or beyond
 /// it, are moved onto it ([`snap_to_layer`]).
-pub const LAYER_SNAP: f32 = 0.0125;
+pub const LAYER_SNAP: f32 = 0.001;
 
 /// `p` with each coordinate within [`LAYER_SNAP`] of a face of `layer`, or
 /// outside it, set to that face's coordinate exactly.
@@ -337,12 +337,14 @@ pub const LAYER_SNAP: f32 = 0.0125;
 /// Why: the probes along a face of the bake box form a face of their convex
 /// hull, and a point outside the hull is lit by the hull triangle closest to
 /// it. When those probes are co-planar only up to rounding (a leak-prevention
-/// probe 5·10⁻⁷ m off the layer, a spawned candidate 3 mm inside it), the
-/// exact Delaunay tetrahedralization is right to make them sliver
-/// tetrahedra, and the hull then has triangles metres long that skip the
-/// probes next to a query point — through a wall (docs/bench/placement.md,
-/// "Hull slivers"). Exactly co-planar probes give a planar hull triangulated
-/// in the plane.
+/// probe 5·10⁻⁷ m off the layer, `1.2 × 0.05` rounded one ulp away from a
+/// layer computed another way), the exact Delaunay tetrahedralization is
+/// right to make them sliver tetrahedra, and the hull then has triangles
+/// metres long that skip the probes next to a query point — through a wall
+/// (BENCHMARKS.md, "Hull slivers"). Exactly co-planar probes give a planar
+/// hull triangulated in the plane. The tolerance is small (1 mm) so that
+/// layers placed on purpose near a face (the emitter layers under a ceiling
+/// light) stay where they are.
 pub fn snap_to_layer(p: Vec3, layer: &Aabb) -> Vec3 {
     let mut q = p;
     for a in 0..3 {

@@ -275,8 +275,8 @@ fn flatness(p: [Vec3; 4]) -> f64 {
 /// Adaptive probes along the bake box's faces are exactly co-planar, so the
 /// cloud's convex hull has no sliver tetrahedra along them: before
 /// `snap_to_layer`, 19 of the 44 hull faces on the layers of this placement
-/// belonged to tetrahedra flatter than 10⁻⁶ (probes a few ulps or
-/// millimetres off the layer). Such hull triangles, metres long, skipped the
+/// belonged to tetrahedra flatter than 10⁻⁶ (probes a few ulps off the
+/// layer). Such hull triangles, metres long, skipped the
 /// probes next to a query point outside the hull and lit it through the
 /// dividing wall.
 #[test]
@@ -334,6 +334,6 @@ fn snap_to_layer_moves_only_points_near_or_beyond_a_face() {
         let q = snap_to_layer(Vec3::new(1.0, 1.5, z), &layer);
         assert_eq!(q, Vec3::new(1.0, 1.5, 0.06), "{z}");
     }
-    let q = snap_to_layer(Vec3::new(7.95, 2.935, 0.06 + 1.1 * LAYER_SNAP), &layer);
+    let q = snap_to_layer(Vec3::new(7.95, 2.9395, 0.06 + 1.1 * LAYER_SNAP), &layer);
     assert_eq!(q, Vec3::new(7.94, 2.94, 0.06 + 1.1 * LAYER_SNAP));
 }
