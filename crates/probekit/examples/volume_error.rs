@@ -69,6 +69,7 @@ fn main() {
             prune_tolerance: Some(tol * 0.4),
             relative_floor: 0.0,
             geometry_depth: u32::MAX,
+            emitter_depth: 0,
             noise_k: 0.0,
             balance: false,
             roots: None,

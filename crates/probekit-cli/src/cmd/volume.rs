@@ -86,6 +86,12 @@ pub struct VolumeArgs {
     /// which spends most samples on walls).
     #[arg(long, default_value_t = 2)]
     pub geometry_depth: u32,
+    /// Cells within one cell size of an emitter (emissive surface or
+    /// positional light) split down to this depth (adaptive; default
+    /// `--max-depth`; 0 = off): the near field of an area light changes
+    /// within centimetres.
+    #[arg(long)]
+    pub emitter_depth: Option<u32>,
     /// A prediction miss counts only by what it exceeds this many standard
     /// errors of the capture noise (batch means over 256-sample chunks;
     /// adaptive; 0 = raw misses, the old criterion).
@@ -253,6 +259,7 @@ fn build_and_write(
                 prune_tolerance: Some(a.prune),
                 relative_floor: a.relative_floor,
                 geometry_depth: a.geometry_depth,
+                emitter_depth: a.emitter_depth.unwrap_or(a.max_depth),
                 noise_k: a.noise_k,
                 balance: a.balance,
                 roots: match a.roots.as_deref() {

@@ -26,7 +26,7 @@
 
 use super::source::{central_difference, central_points, Captured, VolumeSource};
 use crate::bake::{BakeError, Baker, CaptureSettings};
-use crate::scene::Scene;
+use crate::scene::{LightKind, Scene};
 use crate::sh::compare::spherical_fibonacci;
 use crate::trace::Ray;
 use glam::Vec3;
@@ -43,6 +43,9 @@ pub struct BakerSource<'s> {
     baker: Baker<'s>,
     settings: CaptureSettings,
     bins: TriangleBins,
+    /// Boxes of the scene's emitters: emissive triangles and positional
+    /// lights (their sphere or disk radius around the position).
+    emitters: Vec<(Vec3, Vec3)>,
     /// Rays per point of the harmonic-mean-depth heuristic (default 64).
     pub depth_rays: usize,
     dirs: Vec<Vec3>,
@@ -77,6 +80,7 @@ impl<'s> BakerSource<'s> {
             baker,
             settings,
             bins: TriangleBins::new(scene),
+            emitters: emitter_boxes(scene),
             depth_rays: 64,
             dirs: spherical_fibonacci(64),
             requested: AtomicUsize::new(0),
@@ -219,6 +223,13 @@ impl VolumeSource for BakerSource<'_> {
         self.bins.overlaps(self.baker.scene(), min + pad, max - pad)
     }
 
+    /// An emitter's box overlaps the cell.
+    fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
+        self.emitters
+            .iter()
+            .any(|(a, b)| a.cmple(max).all() && b.cmpge(min).all())
+    }
+
     fn depth_harmonic_mean(&self, p: Vec3) -> f32 {
         let inv: f64 = self
             .dirs
@@ -236,6 +247,28 @@ impl VolumeSource for BakerSource<'_> {
             f32::INFINITY
         }
     }
+}
+
+/// Bounding boxes of `scene`'s emitters: its emissive triangles, and its
+/// point, spot, sphere and disk lights as the sphere of their radius around
+/// their position (directional lights have no position).
+fn emitter_boxes(scene: &Scene) -> Vec<(Vec3, Vec3)> {
+    let mut out: Vec<(Vec3, Vec3)> = scene
+        .emissive_triangles
+        .iter()
+        .filter_map(|e| scene.triangles.get(e.triangle as usize))
+        .map(|t| {
+            let [a, b, c] = t.positions;
+            (a.min(b).min(c), a.max(b).max(c))
+        })
+        .collect();
+    for l in &scene.lights {
+        if l.kind != LightKind::Directional && l.position.is_finite() {
+            let r = Vec3::splat(l.radius.max(0.0));
+            out.push((l.position - r, l.position + r));
+        }
+    }
+    out
 }
 
 /// Triangles binned by their boxes into a uniform grid over the scene

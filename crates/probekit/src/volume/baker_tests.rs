@@ -535,3 +535,71 @@ fn capture_std_error_is_batch_means_over_the_chunks() {
     // A Monte Carlo capture of a lit scene is noisy, not exact.
     assert!(se[0].max_element() > 0.0);
 }
+
+/// The emitter rule's test: an emissive triangle's box and a sphere light's
+/// ball (its radius around its position) overlap a cell; nothing else does.
+#[test]
+fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
+    let emissive = |t: Triangle| Triangle { material: 1, ..t };
+    let quad = [
+        emissive(tri(
+            Vec3::new(0.0, 0.9, 0.0),
+            Vec3::new(0.2, 0.9, 0.0),
+            Vec3::new(0.2, 0.9, 0.2),
+        )),
+        emissive(tri(
+            Vec3::new(0.0, 0.9, 0.0),
+            Vec3::new(0.2, 0.9, 0.2),
+            Vec3::new(0.0, 0.9, 0.2),
+        )),
+    ];
+    let lamp = Material {
+        name: "lamp".into(),
+        emissive: Vec3::splat(5.0),
+        ..Material::default()
+    };
+    let grey = Material {
+        name: "grey".into(),
+        base_color: Vec3::splat(0.5),
+        ..Material::default()
+    };
+    let mut objs: Vec<(String, Vec<Triangle>)> = vec![(
+        "walls".into(),
+        box_tris(Vec3::splat(-1.0), Vec3::splat(1.0)),
+    )];
+    objs.push(("lamp".into(), quad.to_vec()));
+    let light = |kind, position: Vec3, radius| Light {
+        kind,
+        position,
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+        intensity: 1.0,
+        radius,
+        inner_angle: 0.0,
+        outer_angle: 0.0,
+        group: None,
+    };
+    let sphere = light(LightKind::Sphere, Vec3::splat(-0.5), 0.1);
+    // A directional light has no position (its field is ignored).
+    let sun = light(LightKind::Directional, Vec3::new(0.95, 0.05, 0.05), 0.0);
+    let sc =
+        Scene::from_triangles("emit", objs, vec![grey, lamp], vec![sphere, sun]).expect("scene");
+    assert_eq!(sc.emissive_triangles.len(), 2, "the quad is emissive");
+    let src = BakerSource::new(&sc, settings(4, false)).unwrap();
+    let cell = |lo: [f32; 3], size: f32| (Vec3::from(lo), Vec3::from(lo) + size);
+    // The quad (y = 0.9, x and z in [0, 0.2]).
+    let (a, b) = cell([0.1, 0.85, 0.1], 0.1);
+    assert!(src.contains_emitter(a, b));
+    let (a, b) = cell([0.25, 0.85, 0.1], 0.1);
+    assert!(!src.contains_emitter(a, b));
+    let (a, b) = cell([0.1, 0.7, 0.1], 0.1);
+    assert!(!src.contains_emitter(a, b));
+    // The sphere light's ball: a cell 0.05 from its centre, and one 0.3 away.
+    let (a, b) = cell([-0.45, -0.5, -0.5], 0.1);
+    assert!(src.contains_emitter(a, b));
+    let (a, b) = cell([-0.2, -0.5, -0.5], 0.1);
+    assert!(!src.contains_emitter(a, b));
+    // The walls are not emitters, and the sun has no position.
+    let (a, b) = cell([0.95, 0.0, 0.0], 0.1);
+    assert!(!src.contains_emitter(a, b));
+}

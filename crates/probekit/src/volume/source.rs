@@ -42,6 +42,14 @@ pub trait VolumeSource: Sync {
         false
     }
 
+    /// Whether an emitter (an emissive surface, or a positional light's
+    /// sphere of its radius) overlaps the box `[min, max]`; such cells are
+    /// refined further (see
+    /// [`super::build::AdaptiveSettings::emitter_depth`]). Default: none.
+    fn contains_emitter(&self, _min: Vec3, _max: Vec3) -> bool {
+        false
+    }
+
     /// Harmonic mean `N / Σ 1/dᵢ` of the ray distances to the scene from `p`
     /// (seed 001 after Pharr & Humphreys); `f32::INFINITY` where nothing is
     /// hit. Default: infinity.
@@ -235,6 +243,14 @@ impl VolumeSource for LightsDemo {
                 }
             })
             .collect()
+    }
+
+    /// A light's ball (its radius around its centre) overlaps the box.
+    fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
+        self.lights.iter().any(|l| {
+            let r = Vec3::splat(l.radius);
+            (l.center - r).cmple(max).all() && (l.center + r).cmpge(min).all()
+        })
     }
 
     fn contains_geometry(&self, min: Vec3, max: Vec3) -> bool {

@@ -61,6 +61,7 @@ pub(super) fn geometry_only(common: CommonSettings, max_depth: u32) -> AdaptiveS
         prune_tolerance: None,
         relative_floor: 0.0,
         geometry_depth: u32::MAX,
+        emitter_depth: 0,
         noise_k: 0.0,
         balance: false,
         roots: Some([1, 1, 1]),
@@ -1146,4 +1147,64 @@ mod forest {
             serde_json::json!([2 * 4, 4, 4])
         );
     }
+}
+
+/// Constant radiance with a small emitter at `EMITTER` (a 2 cm cube): no
+/// prediction test can see it, only the emitter rule.
+struct ConstantWithEmitter;
+const EMITTER: Vec3 = Vec3::new(0.61, 0.37, 0.83);
+impl VolumeSource for ConstantWithEmitter {
+    fn order(&self) -> usize {
+        1
+    }
+    fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
+        p.iter().map(|_| exact(vec![Vec3::ONE])).collect()
+    }
+    fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
+        let (a, b) = (EMITTER - 0.01, EMITTER + 0.01);
+        a.cmple(max).all() && b.cmpge(min).all()
+    }
+}
+
+/// `emitter_depth`: the cells holding the emitter split down to it and the
+/// prune test (which a constant field always passes) keeps them; elsewhere
+/// the octree stays at `min_depth`; 0 turns the rule off.
+#[test]
+fn emitter_cells_refine_to_emitter_depth_and_are_not_pruned() {
+    let build = |e: u32, prune: Option<f32>| {
+        build_adaptive(
+            &ConstantWithEmitter,
+            &AdaptiveSettings {
+                geometry: false,
+                emitter_depth: e,
+                prediction_tolerance: Some(0.1),
+                prune_tolerance: prune,
+                ..geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 5)
+            },
+        )
+        .unwrap()
+        .0
+    };
+    for prune in [None, Some(10.0)] {
+        for e in [2, 4, 5] {
+            let f = build(e, prune);
+            assert_eq!(leaf_depth(&f, EMITTER), e, "depth {e}, prune {prune:?}");
+            assert_eq!(leaf_depth(&f, Vec3::new(0.1, 0.9, 0.1)), 1);
+        }
+        let off = build(0, prune);
+        assert_eq!(leaf_depth(&off, EMITTER), 1);
+        assert_eq!(off.positions.len(), 27);
+    }
+    // Depth beyond max_depth is capped by it.
+    let f = build_adaptive(
+        &ConstantWithEmitter,
+        &AdaptiveSettings {
+            geometry: false,
+            emitter_depth: 9,
+            ..geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 3)
+        },
+    )
+    .unwrap()
+    .0;
+    assert_eq!(leaf_depth(&f, EMITTER), 3);
 }
