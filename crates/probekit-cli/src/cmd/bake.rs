@@ -28,7 +28,8 @@ use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
 };
-use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
+use probekit::cloud::visibility::VisibilitySettings;
+use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
@@ -357,28 +358,36 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
         f
     };
-    // One tracer (one BVH build) for both kinds of visibility. Cell
-    // visibility needs every probe's tetrahedra: not in shard parts
+    // Cell visibility needs every probe's tetrahedra: not in shard parts
     // (`merge --scene` bakes it).
     let cells = cells.filter(|_| a.shard.is_none());
-    let tracer = (vis.is_some() || cells.is_some()).then(|| probekit::trace::Tracer::new(&scene));
-    if let (Some(v), Some(tracer)) = (&vis, &tracer) {
-        let pb = ProgressBar::new(file.positions.len() as u64);
-        pb.set_style(
-            ProgressStyle::with_template(
-                "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed",
-            )
-            .expect("static template"),
+    let kinds = VisibilityBake {
+        moments: vis,
+        cell_subdivision: cells,
+    };
+    if kinds != VisibilityBake::none() {
+        let bar = |template: &str| {
+            let pb = ProgressBar::new(0);
+            pb.set_style(ProgressStyle::with_template(template).expect("static template"));
+            pb
+        };
+        let (pm, pc) = (
+            bar("visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed"),
+            bar("cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed"),
         );
-        let m = bake_distance_moments(tracer, &file.positions, v, &|done, _| {
+        let progress = |pb: &ProgressBar, done: usize, total: usize| {
+            pb.set_length(total as u64);
             pb.set_position(done as u64)
-        })
-        .with_context(|| format!("{}: --visibility-res", a.scene))?;
-        pb.finish_and_clear();
-        file.visibility = Some(m);
-    }
-    if let (Some(k), Some(tracer)) = (cells, &tracer) {
-        file.cell_visibility = Some(cell_visibility_of(tracer, &file, k, &outname)?);
+        };
+        // One tracer (one BVH build) for both kinds.
+        let tracer = probekit::trace::Tracer::new(&scene);
+        kinds
+            .bake_into(&tracer, &mut file, &|d, t| progress(&pm, d, t), &|d, t| {
+                progress(&pc, d, t)
+            })
+            .with_context(|| format!("{}: visibility data", outname))?;
+        pm.finish_and_clear();
+        pc.finish_and_clear();
     }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;

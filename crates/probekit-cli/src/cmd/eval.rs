@@ -9,16 +9,17 @@
 //! (with the distance moments and cell visibility the file has, baked for
 //! the grid with the same settings, and the same query-time flags);
 //! `--plot FILE.png [--budgets 50,100,200,400]` runs a placement sweep
-//! (`probekit::placement::sweep`) on the same points and ground truth, draws
-//! rel. RMSE against probe count (log-log) and reports it under `"sweep"`.
+//! (`probekit::placement::sweep`) on the same points and ground truth (every
+//! swept cloud with the file's kinds of visibility data and the same
+//! query-time flags), draws rel. RMSE against probe count (log-log) and
+//! reports it under `"sweep"`.
 
 use super::util::{load_probes, parse_interp};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::cloud::cell_visibility::bake_file_cell_visibility;
-use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
+use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
     mean_luminance, metrics, reference, region_metrics, sample_points, EvalPoint, Metrics,
     Predictor,
@@ -134,23 +135,9 @@ pub fn run(a: &EvalArgs) -> Result<()> {
                 .with_context(ctx)?;
             // The grid gets the visibility data the evaluated file has, so
             // both blend the same way.
-            let tracer = baker.tracer();
-            if let Some(v) = &file.visibility {
-                let vs = VisibilitySettings {
-                    resolution: v.resolution,
-                    ..VisibilitySettings::new(v.max_distance, settings.seed)
-                };
-                g.visibility = Some(
-                    bake_distance_moments(tracer, &g.positions, &vs, &|_, _| {})
-                        .with_context(ctx)?,
-                );
-            }
-            if let Some(c) = &file.cell_visibility {
-                g.cell_visibility = Some(
-                    bake_file_cell_visibility(tracer, &g, c.subdivision(), &|_, _| {})
-                        .with_context(ctx)?,
-                );
-            }
+            VisibilityBake::like(&file, settings.seed)
+                .bake_into(baker.tracer(), &mut g, &|_, _| {}, &|_, _| {})
+                .with_context(ctx)?;
             let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
@@ -166,12 +153,27 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             Some(m) => m.iter().map(String::as_str).collect(),
             None => SWEEP_METHODS.to_vec(),
         };
+        // The swept clouds get the evaluated file's visibility data (less
+        // what the flags turn off) and its query flags, so the curves blend
+        // as the file does.
+        a.visibility.check()?;
+        let mut kinds = VisibilityBake::like(&file, settings.seed);
+        if a.visibility.no_visibility {
+            kinds = VisibilityBake::none();
+        } else if a.visibility.no_cell_visibility {
+            kinds.cell_subdivision = None;
+        }
         let rows = sweep(
             &baker,
             scene.bake_box(),
             &methods,
             &a.budgets,
             &settings,
+            &kinds,
+            // `apply` fails only where `check` does.
+            &|p| {
+                let _checked = a.visibility.apply(p);
+            },
             &pts,
             &truth,
             &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),

@@ -105,21 +105,28 @@ pub struct VisibilityArgs {
 }
 
 impl VisibilityArgs {
-    /// Applies the settings to a cloud predictor (volumes ignore them).
+    /// Checks the values (a finite bias, a sharpness of at most 16).
+    pub fn check(&self) -> Result<()> {
+        if let Some(b) = self.visibility_bias.filter(|b| !b.is_finite()) {
+            bail!("--visibility-bias {b}: expected a finite distance in metres");
+        }
+        if let Some(k) = self.visibility_sharpness.filter(|&k| k > 16) {
+            bail!("--visibility-sharpness {k}: expected 0 to 16");
+        }
+        Ok(())
+    }
+
+    /// Applies the settings to a cloud predictor (volumes ignore them),
+    /// after [`Self::check`].
     pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
+        self.check()?;
         if let probekit::placement::eval::Predictor::Cloud(c) = p {
             c.set_visibility(!self.no_visibility);
             c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
             if let Some(b) = self.visibility_bias {
-                if !b.is_finite() {
-                    bail!("--visibility-bias {b}: expected a finite distance in metres");
-                }
                 c.set_visibility_bias(b);
             }
             if let Some(k) = self.visibility_sharpness {
-                if k > 16 {
-                    bail!("--visibility-sharpness {k}: expected 0 to 16");
-                }
                 if let Some(m) = c.visibility_maps_mut() {
                     m.set_sharpness(k);
                 }

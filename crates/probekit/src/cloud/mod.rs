@@ -37,6 +37,7 @@ pub mod cell_visibility;
 pub mod file;
 pub mod predicates;
 pub mod visibility;
+pub mod visibility_bake;
 
 use glam::Vec3;
 use predicates::{InSphere, Kernel, Orientation, P3};

@@ -13,6 +13,11 @@
 //! budget `B`, `spawn-merge` an initial grid of `B/2` growing to at most `B`,
 //! `gradient-ascent` an initial grid of `B` (merging, dark clustering and
 //! leak prevention change the count).
+//!
+//! Every swept cloud gets the visibility data the caller asks for
+//! ([`VisibilityBake`]; `probekit eval --plot` passes what the evaluated
+//! file has) and its predictor the caller's query settings, so the curves
+//! blend as the evaluated file does.
 
 use super::eval::{mean_luminance, metrics, EvalPoint, Metrics, PredictError, Predictor};
 use super::gradient_ascent::GradientAscentParams;
@@ -20,6 +25,7 @@ use super::spawn_merge::SpawnMergeParams;
 use super::{place, PlacementError, PlacementMethod};
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::file::{cloud_file, file_validity, settings_json, CloudFileError};
+use crate::cloud::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
 use crate::plot::{line_chart_log, PlotError};
 use crate::scene::Aabb;
@@ -49,6 +55,9 @@ pub enum SweepError {
     /// The cloud file could not be built.
     #[error(transparent)]
     Cloud(#[from] CloudFileError),
+    /// The cloud's visibility data could not be baked.
+    #[error(transparent)]
+    Visibility(#[from] VisibilityBakeError),
     /// The cloud could not be evaluated.
     #[error(transparent)]
     Predict(#[from] PredictError),
@@ -124,12 +133,6 @@ pub fn bake_cloud(
     Ok(cloud_file(&pos, &sh, &validity, codec, &meta)?)
 }
 
-/// Irradiance predicted by `file` at `points` (clouds and volumes alike).
-pub fn predict_file(file: &ProbeFile, points: &[EvalPoint]) -> Result<Vec<Vec3>, SweepError> {
-    let p = Predictor::from_file(file, Interp::Trilinear)?;
-    Ok(p.predict(points)?)
-}
-
 /// Capture settings recorded in a probe file's metadata (`samples`,
 /// `bounces`, `order`, `seed`, `russian_roulette_depth`, `split_direct` of
 /// [`settings_json`]), each falling back to `fallback`'s value when absent
@@ -195,9 +198,11 @@ impl SweepRow {
 }
 
 /// Runs every method of `methods` at every budget of `budgets`: place, bake
-/// with `settings` (f32 coefficients), evaluate on `points` against `truth`.
-/// A configuration that fails is reported to `on_error(method, budget,
-/// error)` and left out; the rest go on. Rows are in method-then-budget order.
+/// with `settings` (f32 coefficients), bake `visibility` into the cloud,
+/// `configure` its predictor (query-time settings), evaluate on `points`
+/// against `truth`. A configuration that fails is reported to
+/// `on_error(method, budget, error)` and left out; the rest go on. Rows are
+/// in method-then-budget order.
 #[allow(clippy::too_many_arguments)]
 pub fn sweep(
     baker: &Baker,
@@ -205,6 +210,8 @@ pub fn sweep(
     methods: &[&str],
     budgets: &[usize],
     settings: &CaptureSettings,
+    visibility: &VisibilityBake,
+    configure: &dyn Fn(&mut Predictor),
     points: &[EvalPoint],
     truth: &[Vec3],
     on_error: &mut dyn FnMut(&str, usize, &SweepError),
@@ -215,8 +222,11 @@ pub fn sweep(
         for &b in budgets {
             let r = method_for_budget(m, b)
                 .and_then(|method| place_and_bake(baker, bake_box, &method, settings, Codec::F32))
-                .and_then(|file| {
-                    let pred = predict_file(&file, points)?;
+                .and_then(|mut file| {
+                    visibility.bake_into(baker.tracer(), &mut file, &|_, _| {}, &|_, _| {})?;
+                    let mut p = Predictor::from_file(&file, Interp::Trilinear)?;
+                    configure(&mut p);
+                    let pred = p.predict(points)?;
                     Ok((file.positions.len(), metrics(&pred, truth, mean)))
                 });
             match r {
@@ -333,6 +343,8 @@ mod tests {
             &SWEEP_METHODS,
             &budgets,
             &s,
+            &VisibilityBake::none(),
+            &|_| {},
             &pts,
             &truth,
             &mut |m, b, e| failures.push(format!("{m} {b}: {e}")),
@@ -367,6 +379,44 @@ mod tests {
                 .count();
             assert_eq!(r.probes, free);
         }
+        // With visibility data and a query setting: the grid row is what
+        // the same file gives when baked and queried that way by hand, and
+        // differs from the plain row.
+        let vis = VisibilityBake {
+            moments: Some(crate::cloud::visibility::VisibilitySettings {
+                resolution: 4,
+                ..crate::cloud::visibility::VisibilitySettings::new(10.0, 1)
+            }),
+            cell_subdivision: Some(2),
+        };
+        let configure = |p: &mut Predictor| {
+            if let Predictor::Cloud(c) = p {
+                c.set_visibility_bias(0.1);
+            }
+        };
+        let grid = sweep(
+            &baker,
+            scene.bake_box(),
+            &["grid"],
+            &[32],
+            &s,
+            &vis,
+            &configure,
+            &pts,
+            &truth,
+            &mut |m, b, e| panic!("{m} {b}: {e}"),
+        );
+        let method = method_for_budget("grid", 32).unwrap();
+        let mut f = place_and_bake(&baker, scene.bake_box(), &method, &s, Codec::F32).unwrap();
+        assert!(f.visibility.is_none() && f.cell_visibility.is_none());
+        vis.bake_into(baker.tracer(), &mut f, &|_, _| {}, &|_, _| {})
+            .unwrap();
+        let mut p = Predictor::from_file(&f, Interp::Trilinear).unwrap();
+        configure(&mut p);
+        let by_hand = metrics(&p.predict(&pts).unwrap(), &truth, mean_luminance(&truth));
+        assert_eq!(grid[0].metrics, by_hand);
+        let plain = rows.iter().find(|r| r.method == "grid" && r.budget == 32);
+        assert_ne!(plain.map(|r| r.metrics), Some(by_hand));
         let dir = tempfile::tempdir().unwrap();
         let png = dir.path().join("sweep.png");
         plot_sweep(&png, "sweep", &rows).unwrap();

@@ -1,0 +1,173 @@
+//! Both kinds of a cloud's visibility data, baked together into a file as
+//! `probekit bake` stores them: distance moments (`VISM`,
+//! [`super::visibility`]) and cell visibility (`CVIS`,
+//! [`super::cell_visibility`]).
+//!
+//! `probekit bake`, `probekit eval --compare grid` (the grid gets what the
+//! evaluated file has), the `--plot` sweep and the placement examples all
+//! go through [`VisibilityBake::bake_into`], so a cloud compared or plotted
+//! blends exactly as a baked one.
+
+use super::cell_visibility::{bake_file_cell_visibility, CellVisibilityError};
+use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
+use crate::trace::Tracer;
+use probekit_runtime::format::ProbeFile;
+use thiserror::Error;
+
+/// Why a cloud's visibility data cannot be baked.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum VisibilityBakeError {
+    /// The distance moments failed (settings or positions).
+    #[error("distance moments: {0}")]
+    Moments(#[from] VisibilityError),
+    /// The cell visibility failed (subdivision, or the file's tetrahedra).
+    #[error("cell visibility: {0}")]
+    Cells(#[from] CellVisibilityError),
+}
+
+/// Which visibility data to bake for a cloud.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VisibilityBake {
+    /// Distance moments (`VISM`) with these settings; `None`: none.
+    pub moments: Option<VisibilitySettings>,
+    /// Cell visibility (`CVIS`) at this lattice subdivision (1..=8);
+    /// `None`: none.
+    pub cell_subdivision: Option<u32>,
+}
+
+impl VisibilityBake {
+    /// No visibility data: the cloud blends with plain barycentric weights.
+    pub fn none() -> Self {
+        Self {
+            moments: None,
+            cell_subdivision: None,
+        }
+    }
+
+    /// The kinds `file` stores, with its settings: the moments' resolution
+    /// and distance clamp (ray jitter from `seed`, default rays per texel)
+    /// and the cells' subdivision. For a second cloud that should blend as
+    /// `file` does (`eval --compare grid`, the `--plot` sweep).
+    pub fn like(file: &ProbeFile, seed: u64) -> Self {
+        Self {
+            moments: file.visibility.as_ref().map(|v| VisibilitySettings {
+                resolution: v.resolution,
+                ..VisibilitySettings::new(v.max_distance, seed)
+            }),
+            cell_subdivision: file.cell_visibility.as_ref().map(|c| c.subdivision()),
+        }
+    }
+
+    /// Bakes the selected kinds into `file` (a cloud with positions and,
+    /// for the cells, tetrahedra), replacing what it had; kinds not
+    /// selected are removed. `moments_progress(done, total)` counts probes,
+    /// `cells_progress` cells and hull faces. Deterministic (any thread
+    /// count).
+    pub fn bake_into(
+        &self,
+        tracer: &Tracer<'_>,
+        file: &mut ProbeFile,
+        moments_progress: &(dyn Fn(usize, usize) + Sync),
+        cells_progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
+        file.visibility = match &self.moments {
+            Some(v) => Some(bake_distance_moments(
+                tracer,
+                &file.positions,
+                v,
+                moments_progress,
+            )?),
+            None => None,
+        };
+        file.cell_visibility = match self.cell_subdivision {
+            Some(k) => Some(bake_file_cell_visibility(tracer, file, k, cells_progress)?),
+            None => None,
+        };
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::file::cloud_file;
+    use crate::format::{BakeMetadata, Codec, Placement, Validity as FileValidity};
+    use glam::Vec3;
+    use probekit_sh::ShRgb;
+
+    /// `like` reproduces a file's kinds and settings, and `bake_into` gives
+    /// the bytes the two bakers give on their own.
+    #[test]
+    fn like_then_bake_into_matches_the_separate_bakes() {
+        let scene = crate::scene::tests_support::boxes_scene(&[(
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.3, 2.0, 2.0),
+        )]);
+        let tracer = Tracer::new(&scene);
+        let mut pos = Vec::new();
+        for i in 0..4 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    pos.push(Vec3::new(
+                        -1.5 + i as f32,
+                        0.3 + 0.7 * j as f32,
+                        0.3 + 0.7 * k as f32,
+                    ));
+                }
+            }
+        }
+        let sh = vec![ShRgb::zeros(2); pos.len()];
+        let meta = BakeMetadata::new(
+            "0".into(),
+            Placement {
+                method: "manual".into(),
+                parameters: serde_json::json!({}),
+            },
+            serde_json::json!({}),
+        );
+        let valid = vec![
+            FileValidity {
+                value: 1.0,
+                flags: 0
+            };
+            pos.len()
+        ];
+        let mut a = cloud_file(&pos, &sh, &valid, Codec::F32, &meta).unwrap();
+        let vs = VisibilitySettings {
+            resolution: 4,
+            ..VisibilitySettings::new(5.0, 7)
+        };
+        let want = VisibilityBake {
+            moments: Some(vs),
+            cell_subdivision: Some(2),
+        };
+        want.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
+            .unwrap();
+        let moments = bake_distance_moments(&tracer, &pos, &vs, &|_, _| {}).unwrap();
+        assert_eq!(a.visibility.as_ref(), Some(&moments));
+        let cells = bake_file_cell_visibility(&tracer, &a, 2, &|_, _| {}).unwrap();
+        assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
+        let like = VisibilityBake::like(&a, 7);
+        assert_eq!(like.cell_subdivision, Some(2));
+        assert_eq!(
+            like.moments.map(|m| (m.resolution, m.max_distance)),
+            Some((4, 5.0))
+        );
+        // `none` removes both.
+        VisibilityBake::none()
+            .bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
+            .unwrap();
+        assert!(a.visibility.is_none() && a.cell_visibility.is_none());
+        assert_eq!(VisibilityBake::like(&a, 7), VisibilityBake::none());
+        // A bad subdivision is a typed error.
+        let bad = VisibilityBake {
+            moments: None,
+            cell_subdivision: Some(99),
+        };
+        assert!(matches!(
+            bad.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {}),
+            Err(VisibilityBakeError::Cells(_))
+        ));
+    }
+}
