@@ -174,6 +174,28 @@ pub fn decode_light_groups(file: &ProbeFile) -> Result<Vec<(String, Vec<ShRgb>)>
         .collect()
 }
 
+/// A cloud file of `positions` and `sh` (f32, every probe valid, placement
+/// `manual`), for tests.
+#[cfg(test)]
+pub(crate) fn test_cloud_file(positions: &[Vec3], sh: &[ShRgb]) -> ProbeFile {
+    let validity = vec![
+        FileValidity {
+            value: 1.0,
+            flags: 0
+        };
+        positions.len()
+    ];
+    let meta = BakeMetadata::new(
+        "0".into(),
+        crate::format::Placement {
+            method: "manual".into(),
+            parameters: serde_json::json!({}),
+        },
+        serde_json::json!({}),
+    );
+    cloud_file(positions, sh, &validity, Codec::F32, &meta).expect("test cloud")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -185,11 +185,10 @@ pub fn bake_distance_moments(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::file::cloud_file;
-    use crate::format::{BakeMetadata, Placement};
+    use crate::cloud::file::test_cloud_file;
     use crate::scene::Scene;
     use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
-    use probekit_runtime::format::{Codec, ProbeFile, Validity};
+    use probekit_runtime::format::ProbeFile;
     use probekit_sh::ShRgb;
 
     /// Distance from `p` (inside) to the walls of box `[lo, hi]` along unit
@@ -339,22 +338,7 @@ mod tests {
                 s
             })
             .collect();
-        let validity = vec![
-            Validity {
-                value: 1.0,
-                flags: 0
-            };
-            pos.len()
-        ];
-        let meta = BakeMetadata::new(
-            "0".into(),
-            Placement {
-                method: "manual".into(),
-                parameters: serde_json::json!({}),
-            },
-            serde_json::json!({}),
-        );
-        let mut file = cloud_file(&pos, &sh, &validity, Codec::F32, &meta).unwrap();
+        let mut file = test_cloud_file(&pos, &sh);
         let s = VisibilitySettings::new((room.1 - room.0).length(), 1);
         file.visibility = Some(bake_distance_moments(&tracer, &pos, &s, &|_, _| {}).unwrap());
         let file = ProbeFile::from_bytes(&file.to_bytes().unwrap()).unwrap();

@@ -91,8 +91,7 @@ impl VisibilityBake {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::file::cloud_file;
-    use crate::format::{BakeMetadata, Codec, Placement, Validity as FileValidity};
+    use crate::cloud::file::test_cloud_file;
     use glam::Vec3;
     use probekit_sh::ShRgb;
 
@@ -117,23 +116,7 @@ mod tests {
                 }
             }
         }
-        let sh = vec![ShRgb::zeros(2); pos.len()];
-        let meta = BakeMetadata::new(
-            "0".into(),
-            Placement {
-                method: "manual".into(),
-                parameters: serde_json::json!({}),
-            },
-            serde_json::json!({}),
-        );
-        let valid = vec![
-            FileValidity {
-                value: 1.0,
-                flags: 0
-            };
-            pos.len()
-        ];
-        let mut a = cloud_file(&pos, &sh, &valid, Codec::F32, &meta).unwrap();
+        let mut a = test_cloud_file(&pos, &vec![ShRgb::zeros(2); pos.len()]);
         let vs = VisibilitySettings {
             resolution: 4,
             ..VisibilitySettings::new(5.0, 7)
