@@ -5,8 +5,12 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility] [--seeds 1,2,3]
+//!     [--light-shells] [--visibility] [--seeds 1,2,3] [--seed S]
 //! ```
+//!
+//! `--seed`: the capture seed, which also seeds adaptive placement (another
+//! seed, another placement of the same budget: its spread shows how much of a
+//! difference between two placements is chance).
 //!
 //! `--seeds`: the evaluation points of several seeds pooled (default 1).
 //!
@@ -67,6 +71,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     )?;
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;
+    // The capture seed, which also seeds placement (pool jitter, spawns).
+    s.seed = arg(&args, "--seed", s.seed);
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {
         let sh: Vec<ShRgb> = baker
             .capture_many(pos, 0, &s, &|_, _| {})?

@@ -7,8 +7,10 @@
 //!
 //! 1. **Pool.** About `4 × budget` points, jittered-stratified over the bake
 //!    box, kept when in free space (not inside geometry, no surface within
-//!    [`PROBE_CLEARANCE`]), captured at the placement sample count; the
-//!    outermost layer sits just inside the box's faces ([`BOUNDARY_SNAP`]).
+//!    [`PROBE_CLEARANCE`], up to [`CLEARANCE_TOLERANCE`]), captured at the
+//!    placement sample count; the outermost layer sits just inside the box's
+//!    faces ([`BOUNDARY_SNAP`]), its points exactly co-planar
+//!    ([`super::snap_to_layer`]).
 //!    The pool is both the candidate set and the validation set. Nothing
 //!    outside the bake box is ever a candidate or a probe (through a thin
 //!    outer wall a probe sees the sun and sky, and interpolation spreads that
@@ -67,6 +69,21 @@ use rayon::prelude::*;
 
 /// No probe or pool point closer than this to a surface, metres.
 pub const PROBE_CLEARANCE: f32 = 0.05;
+
+/// Pool points and spawned candidates keep [`PROBE_CLEARANCE`] from every
+/// surface up to this much, metres. A point exactly at the clearance must
+/// not be rejected by the rounding of a ray hit: on the Cornell box the
+/// box layer ([`BOUNDARY_SNAP`], 6 cm under the ceiling) is exactly 5 cm
+/// under the light, which hangs 1 cm below it, and losing the layer's points
+/// there left the probes' hull spanning over the light, so points just under
+/// it were lit from the light's edge (BENCHMARKS.md, "Hull slivers").
+const CLEARANCE_TOLERANCE: f32 = 1e-3;
+
+/// Whether a pool point or candidate at `p` keeps [`PROBE_CLEARANCE`] from
+/// every surface (up to [`CLEARANCE_TOLERANCE`]) and is not inside geometry.
+fn has_clearance(tracer: &crate::trace::Tracer, p: Vec3) -> bool {
+    super::is_free(tracer, p, PROBE_CLEARANCE - CLEARANCE_TOLERANCE)
+}
 
 /// Pool points per unit of budget.
 const POOL_FACTOR: usize = 4;
@@ -539,7 +556,7 @@ impl Adaptive<'_, '_, '_> {
                     && tracer
                         .closest_hit(&Ray::new(o, dir), r + PROBE_CLEARANCE)
                         .is_none()
-                    && super::is_free(tracer, p, PROBE_CLEARANCE))
+                    && has_clearance(tracer, p))
                 .then_some(p)
             })
             .collect();
@@ -754,7 +771,7 @@ pub(super) fn adaptive(
     let raw: Vec<Vec3> = st
         .snap(raw)
         .into_par_iter()
-        .filter(|p| super::is_free(tracer, *p, PROBE_CLEARANCE))
+        .filter(|p| has_clearance(tracer, *p))
         .collect();
     st.stats.rejected_inside += nraw - raw.len();
     progress("pool", 0, raw.len());
@@ -1161,6 +1178,23 @@ mod tests {
         assert_eq!(pts, emitter_layers(&scene, &bbox, 0.1, 7, 10_000));
         assert_eq!(emitter_layers(&scene, &bbox, 0.1, 7, 30).len(), 30);
         assert!(emitter_layers(&scene, &bbox, f32::NAN, 7, 30).is_empty());
+    }
+
+    /// The Cornell box's case: the box layer ([`BOUNDARY_SNAP`] under the
+    /// ceiling at y = 1.99) is exactly 5 cm under a light hanging 1 cm
+    /// below it; a pool point there keeps its clearance, one 2 mm higher
+    /// does not.
+    #[test]
+    fn a_layer_point_at_exactly_the_clearance_is_kept() {
+        let scene = crate::scene::tests_support::boxes_scene(&[
+            (Vec3::new(-1.0, 1.99, -1.0), Vec3::new(1.0, 2.1, 1.0)),
+            (Vec3::new(-0.24, 1.98, -0.22), Vec3::new(0.23, 1.985, 0.16)),
+        ]);
+        let tracer = crate::trace::Tracer::new(&scene);
+        let layer = 1.99 - BOUNDARY_SNAP;
+        assert!(has_clearance(&tracer, Vec3::new(0.0, layer, 0.0)));
+        assert!(!has_clearance(&tracer, Vec3::new(0.0, layer + 0.002, 0.0)));
+        assert!(has_clearance(&tracer, Vec3::new(0.6, layer + 0.002, 0.0)));
     }
 
     #[test]
