@@ -43,9 +43,10 @@ pub struct BakerSource<'s> {
     baker: Baker<'s>,
     settings: CaptureSettings,
     bins: TriangleBins,
-    /// Boxes of the scene's emitters: emissive triangles and positional
-    /// lights (their sphere or disk radius around the position).
-    emitters: Vec<(Vec3, Vec3)>,
+    /// The scene's emissive triangles.
+    emissive: Vec<[Vec3; 3]>,
+    /// Boxes of its positional lights (their radius around the position).
+    light_boxes: Vec<(Vec3, Vec3)>,
     /// Rays per point of the harmonic-mean-depth heuristic (default 64).
     pub depth_rays: usize,
     dirs: Vec<Vec3>,
@@ -80,7 +81,13 @@ impl<'s> BakerSource<'s> {
             baker,
             settings,
             bins: TriangleBins::new(scene),
-            emitters: emitter_boxes(scene),
+            emissive: scene
+                .emissive_triangles
+                .iter()
+                .filter_map(|e| scene.triangles.get(e.triangle as usize))
+                .map(|t| t.positions)
+                .collect(),
+            light_boxes: light_boxes(scene),
             depth_rays: 64,
             dirs: spherical_fibonacci(64),
             requested: AtomicUsize::new(0),
@@ -223,11 +230,16 @@ impl VolumeSource for BakerSource<'_> {
         self.bins.overlaps(self.baker.scene(), min + pad, max - pad)
     }
 
-    /// An emitter's box overlaps the cell.
+    /// An emissive triangle (exact overlap test) or a positional light's
+    /// box overlaps the cell.
     fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
-        self.emitters
+        self.light_boxes
             .iter()
             .any(|(a, b)| a.cmple(max).all() && b.cmpge(min).all())
+            || self
+                .emissive
+                .iter()
+                .any(|t| triangle_box_overlap(*t, min, max))
     }
 
     fn depth_harmonic_mean(&self, p: Vec3) -> f32 {
@@ -249,26 +261,18 @@ impl VolumeSource for BakerSource<'_> {
     }
 }
 
-/// Bounding boxes of `scene`'s emitters: its emissive triangles, and its
-/// point, spot, sphere and disk lights as the sphere of their radius around
-/// their position (directional lights have no position).
-fn emitter_boxes(scene: &Scene) -> Vec<(Vec3, Vec3)> {
-    let mut out: Vec<(Vec3, Vec3)> = scene
-        .emissive_triangles
+/// Boxes of `scene`'s point, spot, sphere and disk lights: their radius
+/// around their position (directional lights have no position).
+fn light_boxes(scene: &Scene) -> Vec<(Vec3, Vec3)> {
+    scene
+        .lights
         .iter()
-        .filter_map(|e| scene.triangles.get(e.triangle as usize))
-        .map(|t| {
-            let [a, b, c] = t.positions;
-            (a.min(b).min(c), a.max(b).max(c))
-        })
-        .collect();
-    for l in &scene.lights {
-        if l.kind != LightKind::Directional && l.position.is_finite() {
+        .filter(|l| l.kind != LightKind::Directional && l.position.is_finite())
+        .map(|l| {
             let r = Vec3::splat(l.radius.max(0.0));
-            out.push((l.position - r, l.position + r));
-        }
-    }
-    out
+            (l.position - r, l.position + r)
+        })
+        .collect()
 }
 
 /// Triangles binned by their boxes into a uniform grid over the scene

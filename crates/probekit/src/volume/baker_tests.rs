@@ -536,7 +536,7 @@ fn capture_std_error_is_batch_means_over_the_chunks() {
     assert!(se[0].max_element() > 0.0);
 }
 
-/// The emitter rule's test: an emissive triangle's box and a sphere light's
+/// The emitter rule's test: an emissive triangle (not its box) and a sphere light's
 /// ball (its radius around its position) overlap a cell; nothing else does.
 #[test]
 fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
@@ -551,6 +551,12 @@ fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
             Vec3::new(0.0, 0.9, 0.0),
             Vec3::new(0.2, 0.9, 0.2),
             Vec3::new(0.0, 0.9, 0.2),
+        )),
+        // A diagonal triangle at z = 0.5, x + y ≤ −1 (its box reaches x + y = −0.2).
+        emissive(tri(
+            Vec3::new(-0.9, -0.9, 0.5),
+            Vec3::new(-0.1, -0.9, 0.5),
+            Vec3::new(-0.9, -0.1, 0.5),
         )),
     ];
     let lamp = Material {
@@ -584,7 +590,7 @@ fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
     let sun = light(LightKind::Directional, Vec3::new(0.95, 0.05, 0.05), 0.0);
     let sc =
         Scene::from_triangles("emit", objs, vec![grey, lamp], vec![sphere, sun]).expect("scene");
-    assert_eq!(sc.emissive_triangles.len(), 2, "the quad is emissive");
+    assert_eq!(sc.emissive_triangles.len(), 3, "the quad and the diagonal");
     let src = BakerSource::new(&sc, settings(4, false)).unwrap();
     let cell = |lo: [f32; 3], size: f32| (Vec3::from(lo), Vec3::from(lo) + size);
     // The quad (y = 0.9, x and z in [0, 0.2]).
@@ -598,6 +604,11 @@ fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
     let (a, b) = cell([-0.45, -0.5, -0.5], 0.1);
     assert!(src.contains_emitter(a, b));
     let (a, b) = cell([-0.2, -0.5, -0.5], 0.1);
+    assert!(!src.contains_emitter(a, b));
+    // The diagonal triangle: by its surface, not its box.
+    let (a, b) = cell([-0.8, -0.8, 0.45], 0.1);
+    assert!(src.contains_emitter(a, b));
+    let (a, b) = cell([-0.25, -0.25, 0.45], 0.1);
     assert!(!src.contains_emitter(a, b));
     // The walls are not emitters, and the sun has no position.
     let (a, b) = cell([0.95, 0.0, 0.0], 0.1);
