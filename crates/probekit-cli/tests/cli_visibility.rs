@@ -104,6 +104,34 @@ fn bake_inspect_query_with_and_without_visibility() {
         ],
         "visibility-sharpness",
     );
+    // The flags are checked for volumes too (they ignore them), so a bad
+    // value is never silently dropped.
+    json(
+        d,
+        &[
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "vol.probes",
+            "--uniform",
+            "--resolution",
+            "3,3,3",
+            "--json",
+        ],
+    );
+    fails_one_line(
+        d,
+        &[
+            "query",
+            "vol.probes",
+            "--at",
+            "0,0,0",
+            "--visibility-bias",
+            "inf",
+            "--json",
+        ],
+        "visibility-bias",
+    );
     // Sharpness 0 switches the moments' test off: with cell visibility off
     // too, the plain barycentric blend.
     assert_eq!(
