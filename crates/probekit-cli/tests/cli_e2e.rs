@@ -145,6 +145,8 @@ fn json_shapes_and_bad_input() {
     let i = json(d, &["inspect", "c.probes", "--json"]);
     assert!(i["probes"].as_u64().unwrap() >= 24);
     assert!(i["tetrahedra"].as_u64().unwrap() > 0);
+    // A grid's outer probes are exactly co-planar: no sliver on the hull.
+    assert_eq!(i["hull_slivers"], 0);
     assert!(i["basis"].is_string());
     let by = i["bytes_by_section"].as_object().unwrap();
     let sum: u64 = by.values().map(|v| v.as_u64().unwrap()).sum();

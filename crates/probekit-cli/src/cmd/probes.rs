@@ -224,8 +224,10 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
-/// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra",
+/// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra","hull_slivers",
 /// "basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","placement","scene_hash"}`
+/// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
+/// up to rounding, which light points outside the hull from far probes)
 /// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
 /// `cell_visibility`: `{"subdivision"}` of the `CVIS` section, or null);
 /// volumes: [`probekit::volume::inspect_json`].
@@ -251,6 +253,9 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             "kind": if part.is_some() { "cloud-part" } else { "cloud" },
             "probes": file.positions.len(),
             "tetrahedra": file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
+            "hull_slivers": file.tetrahedra.as_ref().map_or(0, |t| {
+                probekit::cloud::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
+            }),
             "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
             "invalid": invalid,
             "bytes": bytes,

@@ -672,6 +672,51 @@ impl<'a> Builder<'a> {
     }
 }
 
+/// `6·volume / (longest edge)³` of the tetrahedron `p`, in `f64` from the
+/// `f32` positions: 0 for a flat one, `√2 ≈ 1.41` for a regular one.
+pub fn flatness(p: [Vec3; 4]) -> f64 {
+    let q = p.map(|v| v.as_dvec3());
+    let vol6 = (q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]).abs();
+    let mut longest = 0.0f64;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            longest = longest.max(q[i].distance(q[j]));
+        }
+    }
+    if longest > 0.0 {
+        vol6 / longest.powi(3)
+    } else {
+        0.0
+    }
+}
+
+/// [`flatness`] under which [`hull_slivers`] counts a tetrahedron.
+pub const SLIVER_FLATNESS: f64 = 1e-6;
+
+/// Tetrahedra with a face on the convex hull ([`probekit_runtime::cloud::HULL`]
+/// neighbour) whose [`flatness`] is below [`SLIVER_FLATNESS`]: probes
+/// co-planar with a hull face only up to rounding. The exact
+/// tetrahedralization is right to keep them, but their hull triangles can
+/// reach metres past the probes next to a query point outside the hull,
+/// which is then lit from far-away probes, even through a wall
+/// (BENCHMARKS.md, "Hull slivers"; adaptive placement avoids them with
+/// `placement::snap_to_layer`). `tets` and `neighbours` as in a file's
+/// `TETS` section; indices out of range are skipped.
+pub fn hull_slivers(positions: &[Vec3], tets: &[[u32; 4]], neighbours: &[[u32; 4]]) -> usize {
+    tets.iter()
+        .zip(neighbours)
+        .filter(|(_, n)| n.contains(&probekit_runtime::cloud::HULL))
+        .filter_map(|(v, _)| {
+            let p: Vec<Vec3> = v
+                .iter()
+                .map(|&i| positions.get(i as usize).copied())
+                .collect::<Option<_>>()?;
+            Some(flatness([p[0], p[1], p[2], p[3]]))
+        })
+        .filter(|&f| f < SLIVER_FLATNESS)
+        .count()
+}
+
 impl Tetrahedralization {
     /// Builds the runtime query structure for these tetrahedra over `points`
     /// (the same slice given to [`tetrahedralize`]).

@@ -236,3 +236,39 @@ proptest! {
         prop_assert_eq!(t.sanity_check(&p), Ok(()));
     }
 }
+
+/// `flatness` against closed forms, and `hull_slivers` on a cube whose top
+/// face has one corner a few ulps too high: the corner makes a sliver on
+/// the hull, the exact cube none.
+#[test]
+fn flatness_and_hull_slivers() {
+    let reg = [
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-1.0, -1.0, 1.0),
+    ];
+    // Regular tetrahedron of edge a: 6V = a³/√2.
+    assert!((flatness(reg) - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12);
+    let flat = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)];
+    assert_eq!(flatness(flat), 0.0);
+    let mut grid = Vec::new();
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                grid.push(Vec3::new(i as f32, j as f32, k as f32));
+            }
+        }
+    }
+    let t = check(&grid);
+    assert_eq!(hull_slivers(&grid, &t.tets, &t.neighbors), 0);
+    let mut bumped = grid.clone();
+    // (1, 3, 1) on the top face, lifted by a few ulps.
+    let top = bumped
+        .iter()
+        .position(|p| *p == Vec3::new(1.0, 3.0, 1.0))
+        .unwrap();
+    bumped[top].y = f32::from_bits(3.0f32.to_bits() + 4);
+    let t = check(&bumped);
+    assert!(hull_slivers(&bumped, &t.tets, &t.neighbors) > 0);
+}

@@ -258,20 +258,6 @@ fn region_metrics_match_hand_filtered_points() {
     assert_eq!(out[1].1.points, 0);
 }
 
-/// `6·volume / (longest edge)³` of a tetrahedron, in f64 from the f32
-/// positions: 0 for a flat one, `√2 ≈ 1.41` for a regular one.
-fn flatness(p: [Vec3; 4]) -> f64 {
-    let q = p.map(|v| v.as_dvec3());
-    let vol6 = (q[1] - q[0]).cross(q[2] - q[0]).dot(q[3] - q[0]).abs();
-    let mut longest = 0.0f64;
-    for i in 0..4 {
-        for j in i + 1..4 {
-            longest = longest.max(q[i].distance(q[j]));
-        }
-    }
-    vol6 / longest.powi(3)
-}
-
 /// Adaptive probes along the bake box's faces are exactly co-planar, so the
 /// cloud's convex hull has no sliver tetrahedra along them: before
 /// `snap_to_layer`, 19 of the 44 hull faces on the layers of this placement
@@ -314,7 +300,7 @@ fn adaptive_hull_has_no_sliver_tetrahedra_along_the_layers() {
             let on = |&(k, c): &(usize, f32)| face.iter().all(|p| (p[k] - c).abs() < 1e-3);
             if planes.iter().any(on) {
                 on_layers += 1;
-                if flatness(q) < 1e-6 {
+                if crate::cloud::flatness(q) < crate::cloud::SLIVER_FLATNESS {
                     slivers += 1;
                 }
             }
