@@ -366,24 +366,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         cell_subdivision: cells,
     };
     if kinds != VisibilityBake::none() {
-        let bar = |template: &str| {
-            let pb = ProgressBar::new(0);
-            pb.set_style(ProgressStyle::with_template(template).expect("static template"));
-            pb
-        };
-        let (pm, pc) = (
-            bar("visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed"),
-            bar("cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed"),
-        );
-        let progress = |pb: &ProgressBar, done: usize, total: usize| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64)
-        };
+        let (pm, pc) = (counting_bar(MOMENTS_BAR), counting_bar(CELLS_BAR));
         // One tracer (one BVH build) for both kinds.
         let tracer = probekit::trace::Tracer::new(&scene);
         kinds
-            .bake_into(&tracer, &mut file, &|d, t| progress(&pm, d, t), &|d, t| {
-                progress(&pc, d, t)
+            .bake_into(&tracer, &mut file, &|d, t| advance(&pm, d, t), &|d, t| {
+                advance(&pc, d, t)
             })
             .with_context(|| format!("{}: visibility data", outname))?;
         pm.finish_and_clear();
@@ -458,32 +446,24 @@ fn part_file(
     Ok(f)
 }
 
-/// Runs `probekit merge`.
-/// Bakes the `CVIS` section of a cloud file with a progress bar.
-fn cell_visibility_of(
-    tracer: &probekit::trace::Tracer,
-    file: &ProbeFile,
-    k: u32,
-    name: &str,
-) -> Result<probekit_runtime::cloud::CellVisibility> {
-    let cells = file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len());
-    let pb = ProgressBar::new(cells as u64);
-    pb.set_style(
-        ProgressStyle::with_template(
-            "cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed",
-        )
-        .expect("static template"),
-    );
-    let c =
-        probekit::cloud::cell_visibility::bake_file_cell_visibility(tracer, file, k, &|d, t| {
-            pb.set_length(t as u64);
-            pb.set_position(d as u64)
-        })
-        .with_context(|| name.to_string())?;
-    pb.finish_and_clear();
-    Ok(c)
+/// Progress-bar templates of the two visibility bakes.
+const MOMENTS_BAR: &str = "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed";
+const CELLS_BAR: &str = "cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed";
+
+/// A progress bar with `template` whose length [`advance`] sets.
+fn counting_bar(template: &str) -> ProgressBar {
+    let pb = ProgressBar::new(0);
+    pb.set_style(ProgressStyle::with_template(template).expect("static template"));
+    pb
 }
 
+/// A library progress callback `(done, total)` on `pb`.
+fn advance(pb: &ProgressBar, done: usize, total: usize) {
+    pb.set_length(total as u64);
+    pb.set_position(done as u64)
+}
+
+/// Runs `probekit merge`.
 pub fn merge(a: &MergeArgs) -> Result<()> {
     struct Part {
         name: String,
@@ -622,7 +602,16 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             bail!("{scene_name}: not the scene {} was baked from", head.name);
         }
         let tracer = probekit::trace::Tracer::new(&scene);
-        file.cell_visibility = Some(cell_visibility_of(&tracer, &file, k as u32, &out)?);
+        let pb = counting_bar(CELLS_BAR);
+        let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
+            &tracer,
+            &file,
+            k as u32,
+            &|d, t| advance(&pb, d, t),
+        )
+        .with_context(|| out.clone())?;
+        pb.finish_and_clear();
+        file.cell_visibility = Some(cells);
     }
     file.validate().with_context(|| out.clone())?;
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;

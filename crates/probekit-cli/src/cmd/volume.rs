@@ -86,10 +86,10 @@ pub struct VolumeArgs {
     /// which spends most samples on walls).
     #[arg(long, default_value_t = 2)]
     pub geometry_depth: u32,
-    /// Cells within one cell size of an emitter (emissive surface or
-    /// positional light) split down to this depth (adaptive; default
-    /// `--max-depth`; 0 = off): the near field of an area light changes
-    /// within centimetres.
+    /// Cells that contain part of an emitter (emissive triangle, or a
+    /// positional light's ball) split down to this depth and are not pruned
+    /// (adaptive; default `--max-depth`; 0 = off): the near field of an area
+    /// light changes within centimetres.
     #[arg(long)]
     pub emitter_depth: Option<u32>,
     /// A prediction miss counts only by what it exceeds this many standard

@@ -4,9 +4,9 @@
 //! [`super::cell_visibility`]).
 //!
 //! `probekit bake`, `probekit eval --compare grid` (the grid gets what the
-//! evaluated file has), the `--plot` sweep and the placement examples all
-//! go through [`VisibilityBake::bake_into`], so a cloud compared or plotted
-//! blends exactly as a baked one.
+//! evaluated file has) and the `--plot` sweep all go through
+//! [`VisibilityBake::bake_into`], so a cloud compared or plotted blends
+//! exactly as a baked one.
 
 use super::cell_visibility::{bake_file_cell_visibility, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
