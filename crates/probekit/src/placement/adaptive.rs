@@ -195,9 +195,10 @@ fn energy(w: &[f32], a: &ShRgb) -> f32 {
 }
 
 /// About `n` points jittered in the cells of a grid over `b` (seeded); in
-/// the outermost cells the coordinate across the box face is set to `snap`
-/// from it (when `snap > 0`), so the pool has points along the box's walls.
-fn jittered(b: &Aabb, n: usize, seed: u64, snap: f32) -> Vec<Vec3> {
+/// the outermost cells the coordinate across the box face is set to the
+/// face of `layer` on that side (when given), so the pool has points along
+/// the box's walls.
+fn jittered(b: &Aabb, n: usize, seed: u64, layer: Option<&Aabb>) -> Vec<Vec3> {
     let size = b.size();
     let cell = (size.x * size.y * size.z / n.max(1) as f32).cbrt();
     let dims = (size / cell).ceil().max(Vec3::ONE);
@@ -214,12 +215,12 @@ fn jittered(b: &Aabb, n: usize, seed: u64, snap: f32) -> Vec<Vec3> {
                     (k as f32 + rng.next_f32()) / nz as f32,
                 );
                 let mut p = b.min + u * size;
-                if snap > 0.0 {
+                if let Some(l) = layer {
                     for (a, (c, m)) in [(i, nx), (j, ny), (k, nz)].into_iter().enumerate() {
                         if c == 0 {
-                            p[a] = b.min[a] + snap;
+                            p[a] = l.min[a];
                         } else if c + 1 == m {
-                            p[a] = b.max[a] - snap;
+                            p[a] = l.max[a];
                         }
                     }
                 }
@@ -534,7 +535,9 @@ impl Adaptive<'_, '_, '_> {
             for d in DIRS.iter().take(SPAWN) {
                 let j = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
                 let dir = (Vec3::from(*d).normalize() + 0.5 * j).normalize_or_zero();
-                cands.push((self.pool.pos[i], dir, r));
+                // Onto the layers along the box's faces (`snap_to_layer`).
+                let o = self.pool.pos[i];
+                cands.push((o, self.st.snap_point(o + r * dir)));
             }
         }
         let n = cands.len();
@@ -542,14 +545,10 @@ impl Adaptive<'_, '_, '_> {
         // behind a wall (or outside the building, beyond an outer wall)
         // does not refine this probe's neighbourhood, and one outside sees
         // the sky and sun (docs/bench/placement.md, leaks).
-        // Onto the layers along the box's faces (`snap_to_layer`) first.
         let bbox = self.bbox;
-        let layer = self.st.layer;
         let cands: Vec<Vec3> = cands
             .into_par_iter()
-            .filter_map(|(o, dir, r)| {
-                let p = o + r * dir;
-                let p = layer.map_or(p, |l| super::snap_to_layer(p, &l));
+            .filter_map(|(o, p)| {
                 let (dir, r) = ((p - o).normalize_or_zero(), p.distance(o));
                 (dir != Vec3::ZERO
                     && bbox.contains(p)
@@ -747,7 +746,7 @@ pub(super) fn adaptive(
         bbox,
         (POOL_FACTOR * budget).clamp(512, 60_000),
         st.settings.seed,
-        BOUNDARY_SNAP,
+        st.layer.as_ref(),
     );
     // Shells reach out to where the uniform pool is about as dense.
     let size = bbox.size();

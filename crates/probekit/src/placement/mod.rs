@@ -361,12 +361,15 @@ impl State<'_, '_> {
     /// `pts` moved onto the layer box's faces ([`snap_to_layer`]) when the
     /// method has one; unchanged otherwise.
     fn snap(&self, mut pts: Vec<Vec3>) -> Vec<Vec3> {
-        if let Some(layer) = &self.layer {
-            for p in &mut pts {
-                *p = snap_to_layer(*p, layer);
-            }
+        for p in &mut pts {
+            *p = self.snap_point(*p);
         }
         pts
+    }
+
+    /// [`Self::snap`] of one point.
+    fn snap_point(&self, p: Vec3) -> Vec3 {
+        self.layer.as_ref().map_or(p, |l| snap_to_layer(p, l))
     }
 
     /// Captures `points` (already filtered for inside-geometry); returns the
