@@ -259,8 +259,9 @@ impl ProbeCloud {
             (sum.is_finite() && sum > 0.0).then(|| w.map(|x| x / sum))
         };
         let bcv = core::array::from_fn(|k| bary[k] * c[k] * v[k]);
-        let bv = core::array::from_fn(|k| bary[k] * v[k]);
-        let w = normalized(bcv).or_else(|| normalized(bv)).unwrap_or(bary);
+        let w = normalized(bcv)
+            .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k])))
+            .unwrap_or(bary);
         (probes, w)
     }
 
