@@ -47,30 +47,18 @@ fn sharded_bake_merges_to_the_unsharded_file() {
     assert!(a == b, "merged file differs from the unsharded bake");
     // Cell visibility spans every probe: merge bakes it, from the same scene.
     std::fs::write(d.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let merge = [
+        "merge",
+        "p0.probes",
+        "p1.probes",
+        "p2.probes",
+        "-o",
+        "x.probes",
+    ];
+    fails_one_line(d, &merge, "--scene");
     fails_one_line(
         d,
-        &[
-            "merge",
-            "p0.probes",
-            "p1.probes",
-            "p2.probes",
-            "-o",
-            "x.probes",
-        ],
-        "--scene",
-    );
-    fails_one_line(
-        d,
-        &[
-            "merge",
-            "p0.probes",
-            "p1.probes",
-            "p2.probes",
-            "-o",
-            "x.probes",
-            "--scene",
-            "tri.obj",
-        ],
+        &[&merge[..], &["--scene", "tri.obj"]].concat(),
         "not the scene",
     );
     // A gap, an overlap and a different setting are refused.

@@ -8,12 +8,8 @@ mod common;
 use common::*;
 use probekit_runtime::cloud::cell_visibility::{lattice_len, record_bytes};
 use probekit_runtime::cloud::CellVisibility;
-use probekit_runtime::format::layout::{header, SECTION_HEADER_LEN};
+use probekit_runtime::format::layout::SECTION_HEADER_LEN;
 use probekit_runtime::format::*;
-
-fn minor_of(bytes: &[u8]) -> u16 {
-    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
-}
 
 const K: u32 = 2;
 const HULL: usize = 5;
@@ -100,12 +96,7 @@ fn the_writer_refuses_inconsistent_cell_visibility() {
 fn truncated_or_corrupt_sections_are_typed_errors() {
     let good = cvis_file().to_bytes().unwrap();
     let (off, _) = find_section(&good, SectionId::CELL_VISIBILITY);
-    let patched = |edit: &dyn Fn(&mut Vec<u8>)| {
-        let mut b = good.clone();
-        edit(&mut b);
-        reseal(&mut b);
-        ProbeFile::from_bytes(&b)
-    };
+    let patched = |edit: &dyn Fn(&mut [u8])| load_patched(&good, edit);
     let tets = u32::from_le_bytes(good[off..off + 4].try_into().unwrap());
     // More records than the section holds, or counts that overflow.
     assert!(matches!(

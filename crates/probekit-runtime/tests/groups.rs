@@ -6,12 +6,8 @@ mod common;
 
 use common::*;
 use glam::{DVec3, Vec3};
-use probekit_runtime::format::layout::{self, header};
+use probekit_runtime::format::layout;
 use probekit_runtime::format::*;
-
-fn minor_of(bytes: &[u8]) -> u16 {
-    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
-}
 
 #[test]
 fn groups_round_trip_and_set_minor_1_only_when_present() {

@@ -8,12 +8,8 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use probekit_runtime::format::layout::{self, header, NONE};
+use probekit_runtime::format::layout::{self, NONE};
 use probekit_runtime::format::*;
-
-fn minor_of(bytes: &[u8]) -> u16 {
-    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
-}
 
 /// Box [0, 2]³ split once, child 0 split again (max depth 2): 17 nodes,
 /// 15 leaves. Positions are the 27 + 19 distinct lattice corners at spacing

@@ -6,12 +6,8 @@
 mod common;
 
 use common::*;
-use probekit_runtime::format::layout::{self, header, SECTION_HEADER_LEN};
+use probekit_runtime::format::layout::{self, SECTION_HEADER_LEN};
 use probekit_runtime::format::*;
-
-fn minor_of(bytes: &[u8]) -> u16 {
-    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
-}
 
 /// `full_file()` with a 3×3 map per probe of values `k/(n+1)` (in [0, 1)).
 fn vis_file() -> ProbeFile {
@@ -91,12 +87,7 @@ fn the_writer_refuses_bad_moments() {
 fn truncated_or_corrupt_sections_are_typed_errors() {
     let good = vis_file().to_bytes().unwrap();
     let (off, len) = find_section(&good, SectionId::VISIBILITY);
-    let patched = |edit: &dyn Fn(&mut Vec<u8>)| {
-        let mut b = good.clone();
-        edit(&mut b);
-        reseal(&mut b);
-        ProbeFile::from_bytes(&b)
-    };
+    let patched = |edit: &dyn Fn(&mut [u8])| load_patched(&good, edit);
     // Probe count one more than the data holds: the section is too short.
     let probes = u32::from_le_bytes(good[off..off + 4].try_into().unwrap());
     assert!(matches!(

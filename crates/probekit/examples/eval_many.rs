@@ -26,7 +26,7 @@ use std::error::Error;
 use std::path::Path;
 
 mod common;
-use common::{eval_set, pooled, EvalSet};
+use common::{eval_set, pooled, seed_list, EvalSet};
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene = None;
@@ -38,12 +38,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         match a.as_str() {
             "--points" => points = value()?.parse()?,
             "--seed" => seeds = vec![value()?.parse()?],
-            "--seeds" => {
-                seeds = value()?
-                    .split(',')
-                    .map(|s| s.trim().parse())
-                    .collect::<Result<_, _>>()?
-            }
+            "--seeds" => seeds = seed_list(value()?)?,
             "--interp" => {
                 let v = value()?;
                 interp = Interp::from_name(v).ok_or(format!("--interp {v}: unknown"))?;

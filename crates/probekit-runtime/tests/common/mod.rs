@@ -252,6 +252,17 @@ pub fn find_section(bytes: &[u8], id: SectionId) -> (usize, usize) {
         .expect("section present")
 }
 
+/// The format minor version a file's header records.
+pub fn minor_of(bytes: &[u8]) -> u16 {
+    u16::from_le_bytes([bytes[header::MINOR], bytes[header::MINOR + 1]])
+}
+
+/// `good` with `edit` applied anywhere in it, checksums resealed (so the
+/// section parsers see the edit), loaded.
+pub fn load_patched(good: &[u8], edit: impl FnOnce(&mut [u8])) -> Result<ProbeFile, FormatError> {
+    ProbeFile::from_bytes(&patch_header(good, edit))
+}
+
 pub fn put_u32(bytes: &mut [u8], at: usize, v: u32) {
     bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
 }
@@ -303,6 +314,8 @@ fn patch(base: &[u8], id: SectionId, edit: impl FnOnce(&mut [u8])) -> Vec<u8> {
     b
 }
 
+/// `base` with `edit` applied to its bytes (the header or anywhere), then
+/// the checksums resealed.
 fn patch_header(base: &[u8], edit: impl FnOnce(&mut [u8])) -> Vec<u8> {
     let mut b = base.to_vec();
     edit(&mut b);

@@ -67,6 +67,11 @@ pub fn pooled(sets: &[EvalSet]) -> EvalSet {
     }
 }
 
+/// Seeds written comma-separated (`1,2,3`).
+pub fn seed_list(seeds: &str) -> Result<Vec<u64>, std::num::ParseIntError> {
+    seeds.split(',').map(|s| s.trim().parse()).collect()
+}
+
 /// `eval_set` of each seed in `seeds` (comma-separated), pooled.
 pub fn eval_seeds(
     baker: &Baker,
@@ -74,9 +79,9 @@ pub fn eval_seeds(
     n: usize,
     seeds: &str,
 ) -> Result<EvalSet, Box<dyn Error>> {
-    let sets = seeds
-        .split(',')
-        .map(|s| eval_set(baker, scene, n, s.trim().parse()?))
-        .collect::<Result<Vec<_>, Box<dyn Error>>>()?;
+    let sets = seed_list(seeds)?
+        .into_iter()
+        .map(|s| eval_set(baker, scene, n, s))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(pooled(&sets))
 }
