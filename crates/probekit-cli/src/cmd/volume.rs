@@ -89,7 +89,9 @@ pub struct VolumeArgs {
     /// Cells that contain part of an emitter (emissive triangle, or a
     /// positional light's ball) split down to this depth and are not pruned
     /// (adaptive; default `--max-depth`; 0 = off): the near field of an area
-    /// light changes within centimetres.
+    /// light changes within centimetres. It may exceed `--max-depth`: only
+    /// emitter cells go deeper (`--emitter-depth 5` at the default depth 4
+    /// is the Cornell box's recipe, BENCHMARKS.md).
     #[arg(long)]
     pub emitter_depth: Option<u32>,
     /// A prediction miss counts only by what it exceeds this many standard

@@ -46,7 +46,8 @@ pub struct AdaptiveSettings {
     pub common: CommonSettings,
     /// Cells shallower than this are always subdivided.
     pub min_depth: u32,
-    /// Cells at this depth are never subdivided (≤ 20).
+    /// Cells at this depth are never subdivided, except by the emitter rule
+    /// ([`Self::emitter_depth`], which may exceed it); both ≤ 20.
     pub max_depth: u32,
     /// Subdivide cells that contain geometry (Greger et al. 1998).
     pub geometry: bool,
@@ -58,7 +59,8 @@ pub struct AdaptiveSettings {
     pub geometry_depth: u32,
     /// Cells that contain part of an emitter (an emissive surface or a
     /// positional light, [`VolumeSource::contains_emitter`]) split down to
-    /// this depth, and pruning does not collapse them. Next to an area
+    /// this depth, and pruning does not collapse them; it may be deeper
+    /// than `max_depth`, which then bounds every other rule. Next to an area
     /// light the irradiance changes within centimetres (ten times from 30 to
     /// 3 cm under the Cornell box's ceiling quad), where the prediction
     /// test, fed by noisy captures, refines or prunes by chance; 2:1
@@ -439,8 +441,10 @@ pub fn build_adaptive(
 ) -> Result<(ProbeFile, BuildStats), VolumeBuildError> {
     let common = &s.common;
     check_box(common.min, common.max)?;
-    if s.max_depth > 20 || s.min_depth > s.max_depth {
-        return Err(VolumeBuildError::BadDepth(s.min_depth, s.max_depth));
+    // The emitter rule may go below `max_depth` (its cells alone).
+    let finest_depth = s.max_depth.max(s.emitter_depth);
+    if finest_depth > 20 || s.min_depth > s.max_depth {
+        return Err(VolumeBuildError::BadDepth(s.min_depth, finest_depth));
     }
     let n = src.order() * src.order();
     let roots = match s.roots {
@@ -448,7 +452,7 @@ pub fn build_adaptive(
         None => near_cubic_roots(common.min, common.max)?,
     };
     // Edge of a depth-0 (root) cell in lattice units.
-    let full = 1u32 << s.max_depth;
+    let full = 1u32 << finest_depth;
     let lattice_cells = roots.map(|r| r as u64 * full as u64);
     let root_total: u64 = roots.iter().map(|&r| r as u64).product();
     if roots.iter().any(|&r| r == 0 || r > 65536)
@@ -504,7 +508,7 @@ pub fn build_adaptive(
                 scale.floor = s.relative_floor * valid.iter().sum::<f32>() / valid.len() as f32;
             }
         }
-        if depth == s.max_depth {
+        if depth == finest_depth {
             break;
         }
         let mut split = vec![false; frontier.len()];
@@ -514,6 +518,11 @@ pub fn build_adaptive(
             let cmin = lat.pos(c.lo);
             let cmax = lat.pos([c.lo[0] + size, c.lo[1] + size, c.lo[2] + size]);
             let edge = (cmax - cmin).max_element();
+            if depth >= s.max_depth {
+                // Below `max_depth` only the emitter rule splits.
+                split[fi] = emitter_cell(src, s, depth, cmin, cmax);
+                continue;
+            }
             let cs = corners(c.lo, size);
             let mut yes = depth < s.min_depth
                 || (s.geometry && depth < s.geometry_depth && src.contains_geometry(cmin, cmax))

@@ -39,7 +39,8 @@ pub enum VolumeBuildError {
     /// A cell size that is not a positive number.
     #[error("cell size {0} is not a positive number")]
     BadCell(f32),
-    /// Depth limits out of order or above 20.
+    /// Depth limits out of order or above 20 (the second is the deepest of
+    /// the maximum and emitter depths).
     #[error("depths min {0} / max {1}: need min <= max <= 20")]
     BadDepth(u32, u32),
     /// A root grid axis outside 1..=65536, more than 2^20 roots, or roots ×

@@ -1195,16 +1195,49 @@ fn emitter_cells_refine_to_emitter_depth_and_are_not_pruned() {
         assert_eq!(leaf_depth(&off, EMITTER), 1);
         assert_eq!(off.positions.len(), 27);
     }
-    // Depth beyond max_depth is capped by it.
+    // An emitter depth beyond max_depth: the emitter's cells alone go on.
     let f = build_adaptive(
-        &ConstantWithEmitter,
+        &RippleWithEmitter,
         &AdaptiveSettings {
             geometry: false,
-            emitter_depth: 9,
+            emitter_depth: 6,
+            prediction_tolerance: Some(0.01),
             ..geometry_only(common(Vec3::ZERO, Vec3::ONE, GradientMode::None), 3)
         },
     )
     .unwrap()
     .0;
-    assert_eq!(leaf_depth(&f, EMITTER), 3);
+    assert_eq!(leaf_depth(&f, EMITTER), 6);
+    assert_eq!(leaf_depth(&f, Vec3::new(0.1, 0.9, 0.1)), 3);
+    let o = f.octree.as_ref().unwrap();
+    let leaves = o
+        .nodes
+        .iter()
+        .filter(|n| n.first_child == crate::format::layout::NONE);
+    for n in leaves {
+        // Deeper than max_depth only as a child of an emitter cell (box
+        // [0, 1]³, one root: the parent is the aligned box twice the size).
+        let size = 2.0 * (n.max - n.min);
+        let lo = (n.min / size).floor() * size;
+        let parent_holds = RippleWithEmitter.contains_emitter(lo, lo + size);
+        assert!(n.depth == 3 || (n.depth > 3 && parent_holds), "{n:?}");
+    }
+}
+
+/// [`ConstantWithEmitter`]'s emitter in a field that trilinear prediction
+/// misses everywhere (a ripple along x), so every cell splits to
+/// `max_depth`.
+struct RippleWithEmitter;
+impl VolumeSource for RippleWithEmitter {
+    fn order(&self) -> usize {
+        1
+    }
+    fn capture(&self, p: &[Vec3]) -> Vec<Captured> {
+        p.iter()
+            .map(|p| exact(vec![Vec3::splat(1.0 + 0.5 * (40.0 * p.x).sin())]))
+            .collect()
+    }
+    fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
+        ConstantWithEmitter.contains_emitter(min, max)
+    }
 }
