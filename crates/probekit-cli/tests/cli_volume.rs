@@ -205,6 +205,29 @@ fn volume_adaptive_and_errors() {
             "--roots",
             "2,1",
         ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--cell",
+            "1",
+            "--gradient-step",
+            "0.1",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--cell",
+            "1",
+            "--gradients",
+            "central",
+            "--gradient-step=-0.1",
+        ],
     ] {
         let o = probekit(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");

@@ -118,6 +118,11 @@ pub struct VolumeArgs {
     /// scene) or `analytic` (closed form; only `builtin:lights-demo`).
     #[arg(long)]
     pub gradients: Option<String>,
+    /// Offset of the central differences, metres (`--gradients central`;
+    /// default half the finest cell edge: noise against truncation, see
+    /// BENCHMARKS.md "Gradient step").
+    #[arg(long)]
+    pub gradient_step: Option<f32>,
     /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres); default the scene's `[bake] box`.
     #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
     pub bbox: Option<Vec<f32>>,
@@ -235,9 +240,22 @@ fn build_and_write(
     validity_threshold: f32,
     pb: Option<&ProgressBar>,
 ) -> Result<()> {
+    if a.gradient_step.is_some() && a.gradients.as_deref() != Some("central") {
+        bail!("{}: --gradient-step needs --gradients central", a.scene);
+    }
     let gradients = match a.gradients.as_deref() {
         None => GradientMode::None,
-        Some("central") => GradientMode::Central { step: 0.0 },
+        Some("central") => match a.gradient_step {
+            Some(h) if !(h.is_finite() && h > 0.0) => {
+                bail!(
+                    "{}: --gradient-step {h}: need a positive length in metres",
+                    a.scene
+                )
+            }
+            h => GradientMode::Central {
+                step: h.unwrap_or(0.0),
+            },
+        },
         Some("analytic") => GradientMode::Analytic,
         Some(o) => bail!("{}: --gradients {o}: expected central or analytic", a.scene),
     };

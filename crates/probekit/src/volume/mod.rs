@@ -20,6 +20,7 @@ pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress
 pub use build::{
     build_adaptive, build_uniform, dilate, near_cubic_roots, relative_difference,
     resolution_for_cell, AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
+    DEFAULT_STEP_FRACTION,
 };
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
 pub use report::{depth_rows, plot_depths, DepthRow};
