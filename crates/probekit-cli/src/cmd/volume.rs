@@ -217,7 +217,8 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
     // corner sample out of its cell (typically through a wall): dilate it.
     let size = max - min;
     let finest = if a.adaptive {
-        (size / (1u64 << a.max_depth.min(20)) as f32).min_element()
+        let deepest = a.max_depth.max(a.emitter_depth.unwrap_or(0)).min(20);
+        (size / (1u64 << deepest) as f32).min_element()
     } else {
         let r = resolution(a, min, max)?;
         (size / (Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32) - 1.0).max(Vec3::ONE))
