@@ -228,6 +228,30 @@ fn volume_adaptive_and_errors() {
             "central",
             "--gradient-step=-0.1",
         ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--cell",
+            "1",
+            "--gradients",
+            "analytic",
+            "--gradient-order",
+            "0",
+        ],
+        vec![
+            "volume",
+            "builtin:lights-demo",
+            "-o",
+            "x.probes",
+            "--uniform",
+            "--cell",
+            "1",
+            "--gradient-order",
+            "2",
+        ],
     ] {
         let o = probekit(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");

@@ -21,7 +21,8 @@ use probekit::bake::CaptureSettings;
 use probekit::format::write_probe_file;
 use probekit::volume::{
     build_adaptive, build_uniform, inspect_json, plot_depths, resolution_for_cell,
-    AdaptiveSettings, BakerSource, CommonSettings, GradientMode, LightsDemo, VolumeSource,
+    truncate_gradients, AdaptiveSettings, BakerSource, CommonSettings, GradientMode, LightsDemo,
+    VolumeSource,
 };
 use std::path::PathBuf;
 
@@ -123,6 +124,11 @@ pub struct VolumeArgs {
     /// BENCHMARKS.md "Gradient step").
     #[arg(long)]
     pub gradient_step: Option<f32>,
+    /// Store the gradients of the first N bands only (default: all of
+    /// `--order`); the others are extrapolated flat. 1 = the DC term's
+    /// gradient, 3 RGB vectors per sample instead of 27 for L2.
+    #[arg(long)]
+    pub gradient_order: Option<u32>,
     /// Box `MINX,MINY,MINZ,MAXX,MAXY,MAXZ` (metres); default the scene's `[bake] box`.
     #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
     pub bbox: Option<Vec<f32>>,
@@ -244,6 +250,18 @@ fn build_and_write(
     if a.gradient_step.is_some() && a.gradients.as_deref() != Some("central") {
         bail!("{}: --gradient-step needs --gradients central", a.scene);
     }
+    if a.gradient_order.is_some() && a.gradients.is_none() {
+        bail!("{}: --gradient-order needs --gradients", a.scene);
+    }
+    if a.gradient_order
+        .is_some_and(|g| g == 0 || g as usize > a.order)
+    {
+        bail!(
+            "{}: --gradient-order must be in 1..=--order ({})",
+            a.scene,
+            a.order
+        );
+    }
     let gradients = match a.gradients.as_deref() {
         None => GradientMode::None,
         Some("central") => match a.gradient_step {
@@ -298,7 +316,10 @@ fn build_and_write(
     if let Some(pb) = pb {
         pb.finish_and_clear();
     }
-    let (file, stats) = built.with_context(|| a.scene.clone())?;
+    let (mut file, stats) = built.with_context(|| a.scene.clone())?;
+    if let Some(g) = a.gradient_order {
+        truncate_gradients(&mut file, g).with_context(|| a.scene.clone())?;
+    }
     write_probe_file(&a.output, &file).with_context(|| a.output.display().to_string())?;
     if let Some(p) = &a.plot {
         let title = format!("{}: leaves and samples per depth", a.scene);

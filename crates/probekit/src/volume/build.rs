@@ -878,6 +878,36 @@ fn finish(
     Ok(file)
 }
 
+/// Keeps only the first `order` bands of a volume's stored gradients (the
+/// runtime treats the missing bands' gradients as zero: Taylor and tricubic
+/// extrapolate those bands flat). Gradients cost `3·order²` RGB vectors per
+/// sample, 3× the L2 coefficients themselves; most of the irradiance's
+/// change is in the low bands (BENCHMARKS.md, "Gradient order"). A file
+/// without gradients, or with `order` at least theirs, is left unchanged.
+pub fn truncate_gradients(file: &mut ProbeFile, order: u32) -> Result<(), VolumeBuildError> {
+    let Some(g) = &mut file.gradients else {
+        return Ok(());
+    };
+    if order == 0 {
+        return Err(VolumeBuildError::BadGradientOrder(order));
+    }
+    if order >= g.order {
+        return Ok(());
+    }
+    let (old, new) = ((g.order * g.order) as usize, (order * order) as usize);
+    if g.data.len() % old != 0 {
+        return Err(VolumeBuildError::SourceOrder);
+    }
+    g.data = g
+        .data
+        .chunks_exact(old)
+        .flat_map(|c| c[..new].iter().copied())
+        .collect();
+    g.order = order;
+    file.validate()?;
+    Ok(())
+}
+
 /// Replaces every invalid sample by the validity-weighted average of its
 /// valid (or already dilated) neighbours, ring by ring (Jacobi order, so the
 /// result does not depend on sample order). Dilated samples take part in

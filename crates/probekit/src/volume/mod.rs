@@ -19,8 +19,8 @@ mod tests;
 pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress};
 pub use build::{
     build_adaptive, build_uniform, dilate, near_cubic_roots, relative_difference,
-    resolution_for_cell, AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
-    DEFAULT_STEP_FRACTION,
+    resolution_for_cell, truncate_gradients, AdaptiveSettings, BuildStats, CommonSettings,
+    GradientMode, DEFAULT_STEP_FRACTION,
 };
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
 pub use report::{depth_rows, plot_depths, DepthRow};
@@ -58,6 +58,9 @@ pub enum VolumeBuildError {
     /// non-finite gradients.
     #[error("the capture source returned data of the wrong size or non-finite values")]
     SourceOrder,
+    /// A gradient order of 0 ([`truncate_gradients`]).
+    #[error("gradient order {0}: need at least 1 band")]
+    BadGradientOrder(u32),
     /// `GradientMode::Analytic` with a source that has no closed form.
     #[error("the source has no closed-form gradients; use central differences")]
     NoAnalyticGradients,

@@ -192,6 +192,65 @@ fn central_differences_match_the_closed_form_sphere_light_gradient() {
     }
 }
 
+/// `truncate_gradients` keeps each (sample, axis) group's first `order²`
+/// gradients, and the runtime extrapolates the dropped bands flat: Taylor
+/// of the truncated file equals Taylor of the full file in bands 0–1 and
+/// trilinear in band 2 (Taylor with a zero gradient is trilinear), at
+/// random points. Order 0 is refused; a larger order or a file without
+/// gradients is left alone.
+#[test]
+fn truncated_gradients_keep_the_low_bands_and_flatten_the_rest() {
+    let src = lights_no_slab(3);
+    let (min, max) = (Vec3::new(-0.5, -0.5, -0.5), Vec3::new(0.5, 0.5, 0.5));
+    let (full, _) =
+        build_uniform(&src, &common(min, max, GradientMode::Analytic), [3, 3, 3]).unwrap();
+    let mut cut = full.clone();
+    truncate_gradients(&mut cut, 2).unwrap();
+    let (gf, gc) = (
+        full.gradients.as_ref().unwrap(),
+        cut.gradients.as_ref().unwrap(),
+    );
+    assert_eq!((gf.order, gc.order), (3, 2));
+    assert_eq!(gc.data.len(), 27 * 3 * 4);
+    for (a, b) in gf.data.chunks_exact(9).zip(gc.data.chunks_exact(4)) {
+        assert_eq!(&a[..4], b);
+    }
+    let (vf, vc) = (
+        Volume::from_file(&full).unwrap(),
+        Volume::from_file(&cut).unwrap(),
+    );
+    let mut rng = Rng(5);
+    // How much the gradients change each band group (the test is void if
+    // Taylor equals trilinear anyway).
+    let mut moved = [0.0f32; 2];
+    for _ in 0..50 {
+        let p = Vec3::new(rng.next(), rng.next(), rng.next()) - 0.5;
+        let (mut tf, mut tc, mut tl) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9], [Vec3::ZERO; 9]);
+        vf.sample_sh(p, Interp::Taylor, &mut tf).unwrap();
+        vc.sample_sh(p, Interp::Taylor, &mut tc).unwrap();
+        vf.sample_sh(p, Interp::Trilinear, &mut tl).unwrap();
+        for k in 0..9 {
+            let want = if k < 4 { tf[k] } else { tl[k] };
+            assert!((tc[k] - want).abs().max_element() < 1e-4, "{p} coeff {k}");
+            let m = &mut moved[(k >= 4) as usize];
+            *m = m.max((tf[k] - tl[k]).abs().max_element());
+        }
+    }
+    assert!(moved[0] > 1e-2 && moved[1] > 1e-3, "{moved:?}");
+    assert!(matches!(
+        truncate_gradients(&mut cut.clone(), 0),
+        Err(VolumeBuildError::BadGradientOrder(0))
+    ));
+    let mut same = full.clone();
+    truncate_gradients(&mut same, 5).unwrap();
+    assert_eq!(same, full);
+    let (mut plain, _) =
+        build_uniform(&src, &common(min, max, GradientMode::None), [3, 3, 3]).unwrap();
+    let before = plain.clone();
+    truncate_gradients(&mut plain, 1).unwrap();
+    assert_eq!(plain, before);
+}
+
 #[test]
 fn taylor_and_trilinear_errors_on_a_quadratic_are_opposite_and_exact() {
     // c0 = x²: along x, trilinear overshoots by t(1−t)h² (½f''·t(1−t)h²),
