@@ -445,21 +445,32 @@ impl<'a> Builder<'a> {
             if v.contains(&INF) {
                 return c;
             }
+            let nb = self.cells[c as usize].n;
             // The next step (or the flood, if p is in c) reads one of the
-            // neighbours: overlap its load with the orientation tests.
-            for n in self.cells[c as usize].n {
-                if n != prev {
-                    self.prefetch_cell(n);
-                }
+            // neighbours: overlap its load with the orientation tests. (prev
+            // is prefetched too: it is in cache, and a test would mispredict.)
+            for n in nb {
+                self.prefetch_cell(n);
             }
             let start = (self.rng.next() & 3) as usize;
-            for j in 0..4 {
-                let i = (start + j) & 3;
-                let n = self.cells[c as usize].n[i];
-                if n == prev {
-                    // p is on the positive side of the face we came through.
-                    continue;
-                }
+            // p is on the positive side of the face we came through (the one
+            // with neighbour prev, at index `back`): visit the others in
+            // the order start, start + 1, … (mod 4), skipping `back` by
+            // index arithmetic rather than a test per face, whose outcome
+            // (a random position) the branch predictor gets wrong.
+            let (faces, skip) = if prev == HULL {
+                (4, 4)
+            } else {
+                // Neighbours are distinct cells; prev is one of them.
+                debug_assert_eq!(nb.iter().filter(|&&x| x == prev).count(), 1);
+                let back = usize::from(nb[1] == prev)
+                    + 2 * usize::from(nb[2] == prev)
+                    + 3 * usize::from(nb[3] == prev);
+                (3, back.wrapping_sub(start) & 3)
+            };
+            for j in 0..faces {
+                let i = (start + j + usize::from(j >= skip)) & 3;
+                let n = nb[i];
                 let mut q = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
                 q[i] = &pp;
                 if self.kernel.orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
