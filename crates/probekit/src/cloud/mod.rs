@@ -140,7 +140,6 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
         builder.insert(v);
     }
     let (tets, neighbors) = builder.finish();
-    let (tets, neighbors) = spatial_tet_order(&sorted, &order, tets, neighbors);
     Ok(Tetrahedralization {
         tets,
         neighbors,
@@ -241,65 +240,6 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
         keyed[w[0]..w[1]].sort_unstable();
     }
     keyed.into_iter().map(|(_, i)| i).collect()
-}
-
-/// Renumbers tetrahedra along a Morton curve of their centroids, so that
-/// neighbouring tetrahedra are close in memory (the runtime walk touches a few
-/// neighbours per query; scattered builder slots cost a cache miss per step),
-/// and maps the vertices from builder numbering (`pts`, every point a vertex)
-/// to input indices (`rank`). Ties between equal Morton codes keep `tets` order.
-fn spatial_tet_order(
-    pts: &[P3],
-    rank: &[u32],
-    tets: Vec<[u32; 4]>,
-    neighbors: Vec<[u32; 4]>,
-) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in pts {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let scale: [f64; 3] =
-        std::array::from_fn(|k| ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE));
-    let keyed: Vec<(u64, u32)> = tets
-        .iter()
-        .enumerate()
-        .map(|(t, v)| {
-            let q = |k: usize| {
-                let c = v.iter().map(|&i| pts[i as usize][k]).sum::<f64>() * 0.25;
-                (((c - lo[k]) * scale[k]) as u64).min((1 << 21) - 1)
-            };
-            (
-                spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2),
-                t as u32,
-            )
-        })
-        .collect();
-    let keyed = bucket_sort_by_key(keyed, 63);
-    let mut new_of_old = vec![0u32; tets.len()];
-    for (new, &(_, old)) in keyed.iter().enumerate() {
-        new_of_old[old as usize] = new as u32;
-    }
-    let out_tets = keyed
-        .iter()
-        .map(|&(_, old)| tets[old as usize].map(|i| rank[i as usize]))
-        .collect();
-    let out_nbrs = keyed
-        .iter()
-        .map(|&(_, old)| {
-            neighbors[old as usize].map(|n| {
-                if n == HULL {
-                    HULL
-                } else {
-                    new_of_old[n as usize]
-                }
-            })
-        })
-        .collect();
-    (out_tets, out_nbrs)
 }
 
 /// Sorts `(key, value)` pairs by key, then value, for keys below `2^bits`:
@@ -456,13 +396,34 @@ impl<'a> Builder<'a> {
             .collect())
     }
 
+    /// Asks the CPU to start loading cell `c`'s record (no effect on results).
+    /// The flood stalls on each new neighbour record otherwise; a record is 36
+    /// bytes and may straddle two cache lines, so both ends are requested.
+    #[inline(always)]
+    fn prefetch_cell(&self, c: u32) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(cell) = self.cells.get(c as usize) {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let p = (cell as *const Cell).cast::<i8>();
+            // SAFETY: a prefetch never faults and changes no memory; `p` and
+            // `p + 35` lie inside the live record `cell` (36 bytes).
+            #[allow(unused_unsafe)]
+            unsafe {
+                _mm_prefetch(p, _MM_HINT_T0);
+                _mm_prefetch(p.wrapping_add(std::mem::size_of::<Cell>() - 1), _MM_HINT_T0);
+            }
+        }
+    }
+
     /// Index of `c` in the neighbour list of `n`.
     #[inline(always)]
     fn back_index(&self, n: u32, c: u32) -> usize {
         let nb = &self.cells[n as usize].n;
-        (0..4)
-            .find(|&j| nb[j] == c)
-            .expect("neighbour relation is symmetric")
+        // Exactly one entry is c (the neighbour relation is symmetric and a
+        // cell's four neighbours are distinct): sum index × match, branch-free
+        // (a search loop mispredicts on the random position).
+        debug_assert_eq!(nb.iter().filter(|&&x| x == c).count(), 1);
+        usize::from(nb[1] == c) + 2 * usize::from(nb[2] == c) + 3 * usize::from(nb[3] == c)
     }
 
     /// A cell in conflict with `p`: walk to the cell containing it, or to the
@@ -484,14 +445,32 @@ impl<'a> Builder<'a> {
             if v.contains(&INF) {
                 return c;
             }
+            let nb = self.cells[c as usize].n;
+            // The next step (or the flood, if p is in c) reads one of the
+            // neighbours: overlap its load with the orientation tests. (prev
+            // is prefetched too: it is in cache, and a test would mispredict.)
+            for n in nb {
+                self.prefetch_cell(n);
+            }
             let start = (self.rng.next() & 3) as usize;
-            for j in 0..4 {
-                let i = (start + j) & 3;
-                let n = self.cells[c as usize].n[i];
-                if n == prev {
-                    // p is on the positive side of the face we came through.
-                    continue;
-                }
+            // p is on the positive side of the face we came through (the one
+            // with neighbour prev, at index `back`): visit the others in
+            // the order start, start + 1, … (mod 4), skipping `back` by
+            // index arithmetic rather than a test per face, whose outcome
+            // (a random position) the branch predictor gets wrong.
+            let (faces, skip) = if prev == HULL {
+                (4, 4)
+            } else {
+                // Neighbours are distinct cells; prev is one of them.
+                debug_assert_eq!(nb.iter().filter(|&&x| x == prev).count(), 1);
+                let back = usize::from(nb[1] == prev)
+                    + 2 * usize::from(nb[2] == prev)
+                    + 3 * usize::from(nb[3] == prev);
+                (3, back.wrapping_sub(start) & 3)
+            };
+            for j in 0..faces {
+                let i = (start + j + usize::from(j >= skip)) & 3;
+                let n = nb[i];
                 let mut q = [self.p(v[0]), self.p(v[1]), self.p(v[2]), self.p(v[3])];
                 q[i] = &pp;
                 if self.kernel.orient3d(q[0], q[1], q[2], q[3]) == Orientation::Negative {
@@ -575,6 +554,11 @@ impl<'a> Builder<'a> {
                 if s != gout {
                     if self.conflict(n, p) {
                         self.cells[n as usize].stamp = gin;
+                        // n is popped next (DFS); start loading its neighbours'
+                        // records (its own is in cache after the conflict test).
+                        for m in self.cells[n as usize].n {
+                            self.prefetch_cell(m);
+                        }
                         stack.push(n);
                         continue;
                     }
@@ -651,22 +635,56 @@ impl<'a> Builder<'a> {
         self.faces = faces;
     }
 
-    /// Drops infinite and free cells and renumbers neighbours; vertices stay
-    /// in builder numbering.
+    /// The finite cells as output tetrahedra, ordered along a Morton curve of
+    /// their centroids, so that neighbouring tetrahedra are close in memory
+    /// (the runtime walk touches a few neighbours per query; scattered builder
+    /// slots cost a cache miss per step), with vertices mapped from builder
+    /// numbering to input indices (`rank`) and neighbours renumbered
+    /// ([`HULL`] for infinite cells). Ties between equal Morton codes keep
+    /// slot order.
+    ///
+    /// Reads the cells directly: one sort of `(key, slot)` and one pass that
+    /// gathers each cell's vertices and neighbours from its record.
     fn finish(self) -> (Vec<[u32; 4]>, Vec<[u32; 4]>) {
-        let mut remap = vec![HULL; self.cells.len()];
-        let mut tets = Vec::new();
-        for (c, Cell { v, .. }) in self.cells.iter().enumerate() {
-            if v[0] != FREE && !v.contains(&INF) {
-                remap[c] = tets.len() as u32;
-                tets.push(*v);
+        let pts = self.pts;
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in pts {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
             }
         }
-        let mut neighbors = Vec::with_capacity(tets.len());
-        for (c, cell) in self.cells.iter().enumerate() {
-            if remap[c] != HULL {
-                neighbors.push(cell.n.map(|n| remap[n as usize]));
-            }
+        let scale: [f64; 3] = std::array::from_fn(|k| {
+            ((1u64 << 21) - 1) as f64 / (hi[k] - lo[k]).max(f64::MIN_POSITIVE)
+        });
+        let keyed: Vec<(u64, u32)> = self
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.v[0] != FREE && !c.v.contains(&INF))
+            .map(|(slot, c)| {
+                let q = |k: usize| {
+                    let m = c.v.iter().map(|&i| pts[i as usize][k]).sum::<f64>() * 0.25;
+                    (((m - lo[k]) * scale[k]) as u64).min((1 << 21) - 1)
+                };
+                (
+                    spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2),
+                    slot as u32,
+                )
+            })
+            .collect();
+        let keyed = bucket_sort_by_key(keyed, 63);
+        let mut new_of_old = vec![HULL; self.cells.len()];
+        for (new, &(_, old)) in keyed.iter().enumerate() {
+            new_of_old[old as usize] = new as u32;
+        }
+        let mut tets = Vec::with_capacity(keyed.len());
+        let mut neighbors = Vec::with_capacity(keyed.len());
+        for &(_, old) in &keyed {
+            let c = &self.cells[old as usize];
+            tets.push(c.v.map(|i| self.rank[i as usize]));
+            neighbors.push(c.n.map(|n| new_of_old[n as usize]));
         }
         (tets, neighbors)
     }
