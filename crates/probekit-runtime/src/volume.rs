@@ -17,7 +17,10 @@
 //!   gradients (no cross derivatives): weight `Π_a H₀(t_a)` with
 //!   `H₀(t) = 1 − 3t² + 2t³`, plus the tangent terms
 //!   `Σ_a (p − c_s)_a (1 − t_a)² Π_{b≠a} H₀(t_b) · ∂_a v_s`. Exact for any
-//!   field `f(x) + g(y) + h(z)` with cubic `f, g, h` (tested).
+//!   field `f(x) + g(y) + h(z)` with cubic `f, g, h` (tested). Bands a file
+//!   stores no gradients for (a lower gradient order) use the trilinear
+//!   weight instead: a Hermite patch with zero slopes is a smoothstep, flat
+//!   at every sample.
 //! * [`Interp::InverseDistance`]: the seed's fallback, `1/distance` weights over
 //!   the 8 corners of the leaf containing `p` (continuous inside a leaf only).
 //! * [`Interp::LeafTrilinear`]: the naive octree lookup (trilinear over the
@@ -159,6 +162,9 @@ pub struct Volume {
     coeffs: Vec<Vec3>,
     /// `(s·3 + axis)·n + c`, padded with zeros to `n` coefficients.
     grads: Option<Vec<Vec3>>,
+    /// Coefficients per sample that have stored gradients (`order²` of the
+    /// gradient section; `n` when complete, 0 without gradients).
+    grad_n: usize,
     layout: Layout,
 }
 
@@ -180,6 +186,10 @@ impl Volume {
         if coeffs.len() != count * n {
             return Err(VolumeError::NotAVolume("coefficient count mismatch"));
         }
+        let grad_n = file
+            .gradients
+            .as_ref()
+            .map_or(0, |g| (g.order * g.order) as usize);
         let grads = match &file.gradients {
             None => None,
             Some(g) => {
@@ -217,6 +227,7 @@ impl Volume {
             positions: file.positions.clone(),
             coeffs,
             grads,
+            grad_n,
             layout,
         })
     }
@@ -313,7 +324,9 @@ impl Volume {
         out.fill(Vec3::ZERO);
         let (bmin, bmax) = self.bounds();
         let p = p.clamp(bmin, bmax);
-        let mut wsum = 0.0f32;
+        // [main weight sum, trilinear weight sum of tricubic's bands
+        // without gradients].
+        let mut wsum = [0.0f32; 2];
         match &self.layout {
             Layout::Grid { min, max, res } => {
                 let mut i0 = [0usize; 3];
@@ -399,10 +412,17 @@ impl Volume {
                 }
             }
         }
-        if wsum > 0.0 && wsum.is_finite() {
-            let inv = 1.0 / wsum;
-            for o in out.iter_mut() {
-                *o *= inv;
+        let flat_from = if interp == Interp::Tricubic {
+            self.grad_n
+        } else {
+            n
+        };
+        for (o, w) in [(0..flat_from, wsum[0]), (flat_from..n, wsum[1])] {
+            if w > 0.0 && w.is_finite() {
+                let inv = 1.0 / w;
+                for c in o {
+                    out[c] *= inv;
+                }
             }
         }
         Ok(())
@@ -437,10 +457,10 @@ impl Volume {
     }
 
     #[inline]
-    fn idw(&self, s: usize, p: Vec3, out: &mut [Vec3], wsum: &mut f32) {
+    fn idw(&self, s: usize, p: Vec3, out: &mut [Vec3], wsum: &mut [f32; 2]) {
         let dist = (p - self.positions[s]).length().max(1e-6);
         let w = 1.0 / dist;
-        *wsum += w;
+        wsum[0] += w;
         let v = &self.coeffs[s * self.n..(s + 1) * self.n];
         for (o, c) in out.iter_mut().zip(v) {
             *o += *c * w;
@@ -456,7 +476,7 @@ impl Volume {
         d: Vec3,
         h: Vec3,
         out: &mut [Vec3],
-        wsum: &mut f32,
+        wsum: &mut [f32; 2],
     ) {
         let n = self.n;
         let mut t = [0.0f32; 3];
@@ -473,7 +493,7 @@ impl Volume {
             Interp::Tricubic => {
                 let h0 = t.map(|t| 1.0 - t * t * (3.0 - 2.0 * t));
                 let w = h0[0] * h0[1] * h0[2];
-                *wsum += w;
+                wsum[0] += w;
                 let tan = [
                     d.x * (1.0 - t[0]).powi(2) * h0[1] * h0[2],
                     d.y * (1.0 - t[1]).powi(2) * h0[0] * h0[2],
@@ -483,13 +503,21 @@ impl Volume {
                 let gx = &g[(s * 3) * n..(s * 3 + 1) * n];
                 let gy = &g[(s * 3 + 1) * n..(s * 3 + 2) * n];
                 let gz = &g[(s * 3 + 2) * n..(s * 3 + 3) * n];
-                for c in 0..n {
+                let gn = self.grad_n.min(n);
+                for c in 0..gn {
                     out[c] += v[c] * w + gx[c] * tan[0] + gy[c] * tan[1] + gz[c] * tan[2];
+                }
+                if gn < n {
+                    let wl = (1.0 - t[0]) * (1.0 - t[1]) * (1.0 - t[2]);
+                    wsum[1] += wl;
+                    for c in gn..n {
+                        out[c] += v[c] * wl;
+                    }
                 }
             }
             Interp::Taylor => {
                 let w = (1.0 - t[0]) * (1.0 - t[1]) * (1.0 - t[2]);
-                *wsum += w;
+                wsum[0] += w;
                 let g = self.grads.as_ref().expect("checked by sample_sh");
                 let gx = &g[(s * 3) * n..(s * 3 + 1) * n];
                 let gy = &g[(s * 3 + 1) * n..(s * 3 + 2) * n];
@@ -500,7 +528,7 @@ impl Volume {
             }
             _ => {
                 let w = (1.0 - t[0]) * (1.0 - t[1]) * (1.0 - t[2]);
-                *wsum += w;
+                wsum[0] += w;
                 for (o, c) in out.iter_mut().zip(v) {
                     *o += *c * w;
                 }

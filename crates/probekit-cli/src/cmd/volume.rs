@@ -125,7 +125,7 @@ pub struct VolumeArgs {
     #[arg(long)]
     pub gradient_step: Option<f32>,
     /// Store the gradients of the first N bands only (default: all of
-    /// `--order`); the others are extrapolated flat. 1 = the DC term's
+    /// `--order`); the others are interpolated trilinearly. 1 = the DC term's
     /// gradient, 3 RGB vectors per sample instead of 27 for L2.
     #[arg(long)]
     pub gradient_order: Option<u32>,

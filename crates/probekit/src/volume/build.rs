@@ -879,8 +879,8 @@ fn finish(
 }
 
 /// Keeps only the first `order` bands of a volume's stored gradients (the
-/// runtime treats the missing bands' gradients as zero: Taylor and tricubic
-/// extrapolate those bands flat). Gradients cost `3·order²` RGB vectors per
+/// runtime interpolates the other bands trilinearly, under Taylor and
+/// tricubic alike). Gradients cost `3·order²` RGB vectors per
 /// sample, 3× the L2 coefficients themselves; most of the irradiance's
 /// change is in the low bands (BENCHMARKS.md, "Gradient order"). A file
 /// without gradients, or with `order` at least theirs, is left unchanged.

@@ -193,57 +193,85 @@ fn central_differences_match_the_closed_form_sphere_light_gradient() {
 }
 
 /// `truncate_gradients` keeps each (sample, axis) group's first `order²`
-/// gradients, and the runtime extrapolates the dropped bands flat: Taylor
-/// of the truncated file equals Taylor of the full file in bands 0–1 and
-/// trilinear in band 2 (Taylor with a zero gradient is trilinear), at
-/// random points. Order 0 is refused; a larger order or a file without
-/// gradients is left alone.
+/// gradients, and the runtime interpolates the dropped bands trilinearly:
+/// Taylor and tricubic of the truncated file equal those of the full file
+/// in bands 0–1 and trilinear in band 2 (Taylor with a zero gradient is
+/// trilinear; tricubic switches to the trilinear weight), at random points
+/// of a grid and of an octree. Order 0 is refused; a larger order or a
+/// file without gradients is left alone.
 #[test]
 fn truncated_gradients_keep_the_low_bands_and_flatten_the_rest() {
     let src = lights_no_slab(3);
     let (min, max) = (Vec3::new(-0.5, -0.5, -0.5), Vec3::new(0.5, 0.5, 0.5));
-    let (full, _) =
-        build_uniform(&src, &common(min, max, GradientMode::Analytic), [3, 3, 3]).unwrap();
-    let mut cut = full.clone();
-    truncate_gradients(&mut cut, 2).unwrap();
-    let (gf, gc) = (
-        full.gradients.as_ref().unwrap(),
-        cut.gradients.as_ref().unwrap(),
-    );
-    assert_eq!((gf.order, gc.order), (3, 2));
-    assert_eq!(gc.data.len(), 27 * 3 * 4);
-    for (a, b) in gf.data.chunks_exact(9).zip(gc.data.chunks_exact(4)) {
-        assert_eq!(&a[..4], b);
-    }
-    let (vf, vc) = (
-        Volume::from_file(&full).unwrap(),
-        Volume::from_file(&cut).unwrap(),
-    );
-    let mut rng = Rng(5);
-    // How much the gradients change each band group (the test is void if
-    // Taylor equals trilinear anyway).
-    let mut moved = [0.0f32; 2];
-    for _ in 0..50 {
-        let p = Vec3::new(rng.next(), rng.next(), rng.next()) - 0.5;
-        let (mut tf, mut tc, mut tl) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9], [Vec3::ZERO; 9]);
-        vf.sample_sh(p, Interp::Taylor, &mut tf).unwrap();
-        vc.sample_sh(p, Interp::Taylor, &mut tc).unwrap();
-        vf.sample_sh(p, Interp::Trilinear, &mut tl).unwrap();
-        for k in 0..9 {
-            let want = if k < 4 { tf[k] } else { tl[k] };
-            assert!((tc[k] - want).abs().max_element() < 1e-4, "{p} coeff {k}");
-            let m = &mut moved[(k >= 4) as usize];
-            *m = m.max((tf[k] - tl[k]).abs().max_element());
+    let c = common(min, max, GradientMode::Analytic);
+    let (grid, _) = build_uniform(&src, &c, [3, 3, 3]).unwrap();
+    let (tree, _) = build_adaptive(
+        &src,
+        &AdaptiveSettings {
+            geometry: false,
+            prediction_tolerance: Some(0.05),
+            ..geometry_only(c, 3)
+        },
+    )
+    .unwrap();
+    let depths: Vec<u32> = tree
+        .octree
+        .as_ref()
+        .unwrap()
+        .nodes
+        .iter()
+        .map(|n| n.depth)
+        .collect();
+    assert!(depths.contains(&1) && depths.contains(&3), "a graded tree");
+    for full in [grid, tree] {
+        let count = full.positions.len();
+        let mut cut = full.clone();
+        truncate_gradients(&mut cut, 2).unwrap();
+        let (gf, gc) = (
+            full.gradients.as_ref().unwrap(),
+            cut.gradients.as_ref().unwrap(),
+        );
+        assert_eq!((gf.order, gc.order), (3, 2));
+        assert_eq!(gc.data.len(), count * 3 * 4);
+        for (a, b) in gf.data.chunks_exact(9).zip(gc.data.chunks_exact(4)) {
+            assert_eq!(&a[..4], b);
         }
+        let (vf, vc) = (
+            Volume::from_file(&full).unwrap(),
+            Volume::from_file(&cut).unwrap(),
+        );
+        let mut rng = Rng(5);
+        // How much the gradients change each band group (the test is void
+        // if the gradient terms vanish anyway).
+        let mut moved = [0.0f32; 2];
+        for _ in 0..100 {
+            let p = rng.point(min, max);
+            for interp in [Interp::Taylor, Interp::Tricubic] {
+                let (mut tf, mut tc, mut tl) = ([Vec3::ZERO; 9], [Vec3::ZERO; 9], [Vec3::ZERO; 9]);
+                vf.sample_sh(p, interp, &mut tf).unwrap();
+                vc.sample_sh(p, interp, &mut tc).unwrap();
+                vf.sample_sh(p, Interp::Trilinear, &mut tl).unwrap();
+                for k in 0..9 {
+                    let want = if k < 4 { tf[k] } else { tl[k] };
+                    assert!(
+                        (tc[k] - want).abs().max_element() < 1e-4,
+                        "{interp:?} {p} coeff {k}: {} vs {want}",
+                        tc[k]
+                    );
+                    let m = &mut moved[(k >= 4) as usize];
+                    *m = m.max((tf[k] - tl[k]).abs().max_element());
+                }
+            }
+        }
+        assert!(moved[0] > 1e-2 && moved[1] > 1e-3, "{moved:?}");
+        assert!(matches!(
+            truncate_gradients(&mut cut.clone(), 0),
+            Err(VolumeBuildError::BadGradientOrder(0))
+        ));
+        let mut same = full.clone();
+        truncate_gradients(&mut same, 5).unwrap();
+        assert_eq!(same, full);
     }
-    assert!(moved[0] > 1e-2 && moved[1] > 1e-3, "{moved:?}");
-    assert!(matches!(
-        truncate_gradients(&mut cut.clone(), 0),
-        Err(VolumeBuildError::BadGradientOrder(0))
-    ));
-    let mut same = full.clone();
-    truncate_gradients(&mut same, 5).unwrap();
-    assert_eq!(same, full);
     let (mut plain, _) =
         build_uniform(&src, &common(min, max, GradientMode::None), [3, 3, 3]).unwrap();
     let before = plain.clone();
