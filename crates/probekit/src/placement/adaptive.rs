@@ -22,7 +22,9 @@
 //!    ([`light_shells`]), where the `1/d²` fall-off needs probes closer
 //!    together than a uniform pool offers.
 //! 2. **Seed set.** `budget / 8` pool points by farthest-point sampling, so
-//!    the coarse cloud spans the free space, including its corners.
+//!    the coarse cloud spans the free space, including its corners; a point
+//!    hidden from a chosen one counts four times as far from it, so closets
+//!    and rooms behind walls get seeds of their own.
 //! 3. **Greedy insertion.** Tetrahedralize the probes, interpolate at every
 //!    pool point that is not a probe, and score it by the squared irradiance
 //!    error averaged over all normals, which for radiance SH `L` and the
@@ -57,6 +59,7 @@
 
 use super::{LeakSettings, PlacementError, State};
 use crate::bake::sampling::SampleRng;
+use crate::cloud::cell_visibility::segment_clear;
 use crate::cloud::tetrahedralize;
 use crate::scene::{Aabb, Light, LightKind, Scene};
 use crate::trace::Ray;
@@ -694,9 +697,21 @@ impl Adaptive<'_, '_, '_> {
     }
 }
 
+/// Factor on the distance between two pool points that cannot see each
+/// other, in the seed set's farthest-point sampling ([`farthest_points`]).
+const OCCLUDED_DISTANCE_FACTOR: f32 = 4.0;
+
 /// Farthest-point sampling of `k` pool points, starting from the one
-/// nearest the box's minimum corner.
-fn farthest_points(pos: &[Vec3], start: Vec3, k: usize) -> Vec<usize> {
+/// nearest the box's minimum corner. With a tracer, a point hidden from a
+/// chosen one (a surface on the segment between them) counts
+/// [`OCCLUDED_DISTANCE_FACTOR`] times as far from it, so rooms and closets
+/// behind walls get seeds of their own even when they are close in space.
+fn farthest_points(
+    pos: &[Vec3],
+    start: Vec3,
+    k: usize,
+    tracer: Option<&crate::trace::Tracer<'_>>,
+) -> Vec<usize> {
     if pos.is_empty() {
         return Vec::new();
     }
@@ -708,9 +723,27 @@ fn farthest_points(pos: &[Vec3], start: Vec3, k: usize) -> Vec<usize> {
                 .then(a.cmp(&b))
         })
         .unwrap_or(0);
-    let mut d: Vec<f32> = pos.iter().map(|p| p.distance_squared(pos[first])).collect();
-    let mut out = vec![first];
-    while out.len() < k.min(pos.len()) {
+    let mut d = vec![f32::INFINITY; pos.len()];
+    let mut out = Vec::new();
+    let mut next = first;
+    loop {
+        out.push(next);
+        let c = pos[next];
+        d.par_iter_mut().zip(pos).for_each(|(dj, p)| {
+            let e = p.distance_squared(c);
+            if e < *dj {
+                let hidden = tracer.is_some_and(|t| !segment_clear(t, c, *p));
+                let f = if hidden {
+                    OCCLUDED_DISTANCE_FACTOR * OCCLUDED_DISTANCE_FACTOR
+                } else {
+                    1.0
+                };
+                *dj = dj.min(e * f);
+            }
+        });
+        if out.len() >= k.min(pos.len()) {
+            break;
+        }
         let (i, _) = d
             .iter()
             .enumerate()
@@ -719,10 +752,7 @@ fn farthest_points(pos: &[Vec3], start: Vec3, k: usize) -> Vec<usize> {
         if d[i] <= 0.0 {
             break;
         }
-        out.push(i);
-        for (j, dj) in d.iter_mut().enumerate() {
-            *dj = dj.min(pos[j].distance_squared(pos[i]));
-        }
+        next = i;
     }
     out
 }
@@ -801,7 +831,13 @@ pub(super) fn adaptive(
         normals: leak_normals(),
         floor,
     };
-    for i in farthest_points(&a.pool.pos, bbox.min, (budget / 8).max(8)) {
+    let seeds = farthest_points(
+        &a.pool.pos,
+        bbox.min,
+        (budget / 8).max(8),
+        Some(a.st.baker.tracer()),
+    );
+    for i in seeds {
         a.push_pool(i);
     }
     progress("adaptive", a.st.positions.len(), budget);
@@ -1179,6 +1215,40 @@ mod tests {
         assert!(emitter_layers(&scene, &bbox, f32::NAN, 7, 30).is_empty());
     }
 
+    /// A closet behind a wall, nearer to the first seed than the room's far
+    /// end: Euclidean farthest-point sampling spends its second seed on the
+    /// far end and reaches the closet only later; with the tracer the
+    /// closet's points count four times as far, so the second seed goes
+    /// there.
+    #[test]
+    fn farthest_points_seed_a_closet_behind_a_wall_first() {
+        // Wall x = 0.50…0.52 across the whole 1 m × 1 m section.
+        let scene = crate::scene::tests_support::boxes_scene(&[(
+            Vec3::new(0.5, -1.0, -1.0),
+            Vec3::new(0.52, 2.0, 2.0),
+        )]);
+        let tracer = crate::trace::Tracer::new(&scene);
+        let mut pts = Vec::new();
+        for i in 0..=40 {
+            for j in 0..=4 {
+                for k in 0..=4 {
+                    let x = i as f32 * 0.1;
+                    if (0.45..=0.57).contains(&x) {
+                        continue;
+                    }
+                    pts.push(Vec3::new(x, j as f32 * 0.25, k as f32 * 0.25));
+                }
+            }
+        }
+        let in_closet = |i: usize| pts[i].x < 0.5;
+        let start = Vec3::new(1.0, 0.0, 0.0);
+        let plain = farthest_points(&pts, start, 2, None);
+        assert!(!in_closet(plain[1]), "{:?}", pts[plain[1]]);
+        let seen = farthest_points(&pts, start, 2, Some(&tracer));
+        assert_eq!(seen[0], plain[0]);
+        assert!(in_closet(seen[1]), "{:?}", pts[seen[1]]);
+    }
+
     /// The Cornell box's case: the box layer ([`BOUNDARY_SNAP`] under the
     /// ceiling at y = 1.99) is exactly 5 cm under a light hanging 1 cm
     /// below it; a pool point there keeps its clearance, one 2 mm higher
@@ -1204,7 +1274,7 @@ mod tests {
                 Vec3::new(r.next_f32(), r.next_f32(), r.next_f32())
             })
             .collect();
-        let k = farthest_points(&pts, Vec3::ZERO, 8);
+        let k = farthest_points(&pts, Vec3::ZERO, 8, None);
         assert_eq!(k.len(), 8);
         // 8 points by FPS in a unit cube are pairwise farther apart than
         // 0.5 (the cube's corners are 1 apart; random 8 would not be).
