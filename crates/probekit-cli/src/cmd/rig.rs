@@ -69,7 +69,8 @@ pub struct RigArgs {
     #[arg(long, default_value_t = 1.0)]
     pub target: f32,
     /// Write the comparison picture (all rig types + exact, error heat
-    /// maps) here, and the zone picture beside it as <stem>_zones.png.
+    /// maps) here, and the zone picture beside it as STEM_zones.png (STEM: this
+    /// file's name without its extension).
     #[arg(long)]
     pub render: Option<PathBuf>,
     /// Write the fitted rig (sample points, fitting matrix, transition

@@ -72,7 +72,7 @@ pub fn reference(
         .collect()
 }
 
-/// The reference irradiance `probekit eval` uses ([`reference`] at 3 %
+/// The reference irradiance `probekit eval` uses ([`reference()`] at 3 %
 /// relative precision), read from `cache` when that file holds exactly one
 /// RGB `f32` triple per point (little-endian), else computed and written
 /// there (a failed write is ignored: the cache is only an optimisation).

@@ -64,7 +64,7 @@ pub enum PlacementMethod {
         /// round falls below this (e.g. 0.05).
         tolerance: f32,
         /// Add shells of candidates around positional lights
-        /// ([`adaptive`]'s module docs). Lowers the error near small bright
+        /// (the `adaptive` placement module docs). Lowers the error near small bright
         /// lights, but draws probes from the rest of the scene: on the demo
         /// at small budgets it raised p95 and leaks (docs/bench/placement.md).
         light_shells: bool,
