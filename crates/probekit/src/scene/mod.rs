@@ -73,6 +73,11 @@ impl Aabb {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
+    /// True when the closed boxes share a point (touching counts).
+    pub fn overlaps(&self, other: &Aabb) -> bool {
+        self.min.cmple(other.max).all() && self.max.cmpge(other.min).all()
+    }
+
     /// `max − min`.
     pub fn size(&self) -> Vec3 {
         self.max - self.min

@@ -654,3 +654,44 @@ fn shared_scene_files_load() {
     }
     assert_eq!(seen, 3);
 }
+
+/// `Aabb::overlaps` against a brute-force search for a shared point on a
+/// 0.25 grid (the boxes' corners lie on it, so a shared point, if any, is a
+/// grid point): touching faces, edges and corners count, disjoint boxes do
+/// not, and the test is symmetric.
+#[test]
+fn aabb_overlap_matches_a_search_for_a_shared_point() {
+    let b = |lo: [f32; 3], hi: [f32; 3]| Aabb {
+        min: Vec3::from(lo),
+        max: Vec3::from(hi),
+    };
+    let unit = b([0.0; 3], [1.0; 3]);
+    let others = [
+        b([0.5; 3], [2.0; 3]),
+        b([1.0, 0.0, 0.0], [2.0, 1.0, 1.0]),
+        b([1.0, 1.0, 0.0], [2.0, 2.0, 1.0]),
+        b([1.0; 3], [2.0; 3]),
+        b([1.25, 0.0, 0.0], [2.0, 1.0, 1.0]),
+        b([0.25, 0.25, -1.0], [0.5, 0.5, -0.25]),
+        b([-1.0; 3], [2.0; 3]),
+    ];
+    let grid = |a: &Aabb| {
+        let mut pts = Vec::new();
+        for i in -8..=12 {
+            for j in -8..=12 {
+                for k in -8..=12 {
+                    let p = Vec3::new(i as f32, j as f32, k as f32) * 0.25;
+                    if a.contains(p) {
+                        pts.push(p);
+                    }
+                }
+            }
+        }
+        pts
+    };
+    for o in &others {
+        let shared = grid(&unit).iter().any(|p| o.contains(*p));
+        assert_eq!(unit.overlaps(o), shared, "{o:?}");
+        assert_eq!(o.overlaps(&unit), shared, "{o:?}");
+    }
+}

@@ -26,7 +26,7 @@
 
 use super::source::{central_difference, central_points, Captured, VolumeSource};
 use crate::bake::{BakeError, Baker, CaptureSettings};
-use crate::scene::{LightKind, Scene};
+use crate::scene::{Aabb, LightKind, Scene};
 use crate::sh::compare::spherical_fibonacci;
 use crate::trace::Ray;
 use glam::Vec3;
@@ -46,7 +46,7 @@ pub struct BakerSource<'s> {
     /// The scene's emissive triangles.
     emissive: Vec<[Vec3; 3]>,
     /// Boxes of its positional lights (their radius around the position).
-    light_boxes: Vec<(Vec3, Vec3)>,
+    light_boxes: Vec<Aabb>,
     /// Rays per point of the harmonic-mean-depth heuristic (default 64).
     pub depth_rays: usize,
     dirs: Vec<Vec3>,
@@ -233,9 +233,8 @@ impl VolumeSource for BakerSource<'_> {
     /// An emissive triangle (exact overlap test) or a positional light's
     /// box overlaps the cell.
     fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
-        self.light_boxes
-            .iter()
-            .any(|(a, b)| a.cmple(max).all() && b.cmpge(min).all())
+        let cell = Aabb { min, max };
+        self.light_boxes.iter().any(|b| b.overlaps(&cell))
             || self
                 .emissive
                 .iter()
@@ -263,14 +262,14 @@ impl VolumeSource for BakerSource<'_> {
 
 /// Boxes of `scene`'s point, spot, sphere and disk lights: their radius
 /// around their position (directional lights have no position).
-fn light_boxes(scene: &Scene) -> Vec<(Vec3, Vec3)> {
+fn light_boxes(scene: &Scene) -> Vec<Aabb> {
     scene
         .lights
         .iter()
         .filter(|l| l.kind != LightKind::Directional && l.position.is_finite())
         .map(|l| {
             let r = Vec3::splat(l.radius.max(0.0));
-            (l.position - r, l.position + r)
+            Aabb::new(l.position - r, l.position + r)
         })
         .collect()
 }

@@ -2,6 +2,7 @@
 //! (the path-traced capture of a scene plugs in here) and [`LightsDemo`], an
 //! analytic source made of sphere lights and occluding slabs.
 
+use crate::scene::Aabb;
 use crate::sh::lights::sphere_light_sh_and_gradient;
 use crate::sh::ShRgb;
 use glam::Vec3;
@@ -247,9 +248,14 @@ impl VolumeSource for LightsDemo {
 
     /// A light's ball (its radius around its centre) overlaps the box.
     fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
+        let cell = Aabb { min, max };
         self.lights.iter().any(|l| {
             let r = Vec3::splat(l.radius);
-            (l.center - r).cmple(max).all() && (l.center + r).cmpge(min).all()
+            Aabb {
+                min: l.center - r,
+                max: l.center + r,
+            }
+            .overlaps(&cell)
         })
     }
 

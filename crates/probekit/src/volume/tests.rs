@@ -1248,8 +1248,8 @@ impl VolumeSource for ConstantWithEmitter {
         p.iter().map(|_| exact(vec![Vec3::ONE])).collect()
     }
     fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
-        let (a, b) = (EMITTER - 0.01, EMITTER + 0.01);
-        a.cmple(max).all() && b.cmpge(min).all()
+        crate::scene::Aabb::new(EMITTER - 0.01, EMITTER + 0.01)
+            .overlaps(&crate::scene::Aabb { min, max })
     }
 }
 
