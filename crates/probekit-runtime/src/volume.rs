@@ -186,12 +186,8 @@ impl Volume {
         if coeffs.len() != count * n {
             return Err(VolumeError::NotAVolume("coefficient count mismatch"));
         }
-        let grad_n = file
-            .gradients
-            .as_ref()
-            .map_or(0, |g| (g.order * g.order) as usize);
-        let grads = match &file.gradients {
-            None => None,
+        let (grads, grad_n) = match &file.gradients {
+            None => (None, 0),
             Some(g) => {
                 let gn = (g.order * g.order) as usize;
                 if gn > n || g.data.len() != count * 3 * gn {
@@ -201,7 +197,7 @@ impl Volume {
                 for s in 0..count * 3 {
                     out[s * n..s * n + gn].copy_from_slice(&g.data[s * gn..(s + 1) * gn]);
                 }
-                Some(out)
+                (Some(out), gn)
             }
         };
         let layout = if let Some(o) = &file.octree {
@@ -503,7 +499,7 @@ impl Volume {
                 let gx = &g[(s * 3) * n..(s * 3 + 1) * n];
                 let gy = &g[(s * 3 + 1) * n..(s * 3 + 2) * n];
                 let gz = &g[(s * 3 + 2) * n..(s * 3 + 3) * n];
-                let gn = self.grad_n.min(n);
+                let gn = self.grad_n; // ≤ n (checked by `from_file`)
                 for c in 0..gn {
                     out[c] += v[c] * w + gx[c] * tan[0] + gy[c] * tan[1] + gz[c] * tan[2];
                 }
