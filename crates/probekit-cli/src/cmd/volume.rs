@@ -174,6 +174,42 @@ fn resolution(a: &VolumeArgs, min: Vec3, max: Vec3) -> Result<[u32; 3]> {
     })
 }
 
+/// The gradient mode of `--gradients`, `--gradient-step` and
+/// `--gradient-order`, checked before any scene is loaded.
+fn gradient_mode(a: &VolumeArgs) -> Result<GradientMode> {
+    if a.gradient_step.is_some() && a.gradients.as_deref() != Some("central") {
+        bail!("{}: --gradient-step needs --gradients central", a.scene);
+    }
+    if a.gradient_order.is_some() && a.gradients.is_none() {
+        bail!("{}: --gradient-order needs --gradients", a.scene);
+    }
+    if a.gradient_order
+        .is_some_and(|g| g == 0 || g as usize > a.order)
+    {
+        bail!(
+            "{}: --gradient-order must be in 1..=--order ({})",
+            a.scene,
+            a.order
+        );
+    }
+    Ok(match a.gradients.as_deref() {
+        None => GradientMode::None,
+        Some("central") => match a.gradient_step {
+            Some(h) if !(h.is_finite() && h > 0.0) => {
+                bail!(
+                    "{}: --gradient-step {h}: need a positive length in metres",
+                    a.scene
+                )
+            }
+            h => GradientMode::Central {
+                step: h.unwrap_or(0.0),
+            },
+        },
+        Some("analytic") => GradientMode::Analytic,
+        Some(o) => bail!("{}: --gradients {o}: expected central or analytic", a.scene),
+    })
+}
+
 /// Runs `probekit volume`.
 pub fn run(a: &VolumeArgs) -> Result<()> {
     if !(1..=probekit::sh::MAX_ORDER).contains(&a.order) {
@@ -183,10 +219,11 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             probekit::sh::MAX_ORDER
         );
     }
+    let gradients = gradient_mode(a)?;
     if a.scene == "builtin:lights-demo" {
         let src = LightsDemo::demo(a.order);
         let (min, max) = parse_box(a, LightsDemo::demo_box())?;
-        return build_and_write(a, &src, min, max, 0.5, None);
+        return build_and_write(a, &src, gradients, min, max, 0.5, None);
     }
     if a.gradients.as_deref() == Some("analytic") {
         bail!(
@@ -232,7 +269,7 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
     };
     let src = src.with_max_offset(0.25 * finest);
     let thr = src.validity_threshold();
-    let r = build_and_write(a, &src, min, max, thr, Some(&pb));
+    let r = build_and_write(a, &src, gradients, min, max, thr, Some(&pb));
     if let Some(e) = src.take_error() {
         bail!("{}: capture failed: {e}", a.scene);
     }
@@ -242,42 +279,12 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
 fn build_and_write(
     a: &VolumeArgs,
     src: &dyn VolumeSource,
+    gradients: GradientMode,
     min: Vec3,
     max: Vec3,
     validity_threshold: f32,
     pb: Option<&ProgressBar>,
 ) -> Result<()> {
-    if a.gradient_step.is_some() && a.gradients.as_deref() != Some("central") {
-        bail!("{}: --gradient-step needs --gradients central", a.scene);
-    }
-    if a.gradient_order.is_some() && a.gradients.is_none() {
-        bail!("{}: --gradient-order needs --gradients", a.scene);
-    }
-    if a.gradient_order
-        .is_some_and(|g| g == 0 || g as usize > a.order)
-    {
-        bail!(
-            "{}: --gradient-order must be in 1..=--order ({})",
-            a.scene,
-            a.order
-        );
-    }
-    let gradients = match a.gradients.as_deref() {
-        None => GradientMode::None,
-        Some("central") => match a.gradient_step {
-            Some(h) if !(h.is_finite() && h > 0.0) => {
-                bail!(
-                    "{}: --gradient-step {h}: need a positive length in metres",
-                    a.scene
-                )
-            }
-            h => GradientMode::Central {
-                step: h.unwrap_or(0.0),
-            },
-        },
-        Some("analytic") => GradientMode::Analytic,
-        Some(o) => bail!("{}: --gradients {o}: expected central or analytic", a.scene),
-    };
     let common = CommonSettings {
         min,
         max,
