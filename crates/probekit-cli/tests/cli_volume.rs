@@ -73,6 +73,13 @@ fn volume_bake_and_export() {
     assert!(dir.path().join("b.json").exists());
 }
 
+/// `probekit volume builtin:lights-demo -o x.probes` followed by `rest`.
+fn lights_demo(rest: &[&'static str]) -> Vec<&'static str> {
+    let mut v = vec!["volume", "builtin:lights-demo", "-o", "x.probes"];
+    v.extend_from_slice(rest);
+    v
+}
+
 /// Adaptive bake and bad input: one line naming the problem, exit code 1.
 #[test]
 fn volume_adaptive_and_errors() {
@@ -163,22 +170,8 @@ fn volume_adaptive_and_errors() {
             "--cell",
             "1",
         ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--uniform",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--uniform",
-            "--resolution",
-            "1,2",
-        ],
+        lights_demo(&["--uniform"]),
+        lights_demo(&["--uniform", "--resolution", "1,2"]),
         vec![
             "export",
             "missing.probes",
@@ -187,52 +180,18 @@ fn volume_adaptive_and_errors() {
             "-o",
             "x.ktx2",
         ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--adaptive",
-            "--roots",
-            "0,1,1",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--adaptive",
-            "--roots",
-            "2,1",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--uniform",
-            "--cell",
-            "1",
-            "--gradient-step",
-            "0.1",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
+        lights_demo(&["--adaptive", "--roots", "0,1,1"]),
+        lights_demo(&["--adaptive", "--roots", "2,1"]),
+        lights_demo(&["--uniform", "--cell", "1", "--gradient-step", "0.1"]),
+        lights_demo(&[
             "--uniform",
             "--cell",
             "1",
             "--gradients",
             "central",
             "--gradient-step=-0.1",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
+        ]),
+        lights_demo(&[
             "--uniform",
             "--cell",
             "1",
@@ -240,18 +199,8 @@ fn volume_adaptive_and_errors() {
             "analytic",
             "--gradient-order",
             "0",
-        ],
-        vec![
-            "volume",
-            "builtin:lights-demo",
-            "-o",
-            "x.probes",
-            "--uniform",
-            "--cell",
-            "1",
-            "--gradient-order",
-            "2",
-        ],
+        ]),
+        lights_demo(&["--uniform", "--cell", "1", "--gradient-order", "2"]),
     ] {
         let o = probekit(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
