@@ -155,8 +155,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         };
         // The swept clouds get the evaluated file's visibility data (less
         // what the flags turn off) and its query flags, so the curves blend
-        // as the file does.
-        a.visibility.check()?;
+        // as the file does (the flags were checked by `apply` above).
         let mut kinds = VisibilityBake::like(&file, settings.seed);
         if a.visibility.no_visibility {
             kinds = VisibilityBake::none();
@@ -170,10 +169,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             &a.budgets,
             &settings,
             &kinds,
-            // `apply` fails only where `check` does.
-            &|p| {
-                let _checked = a.visibility.apply(p);
-            },
+            &|p| a.visibility.set(p),
             &pts,
             &truth,
             &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),

@@ -106,7 +106,7 @@ pub struct VisibilityArgs {
 
 impl VisibilityArgs {
     /// Checks the values (a finite bias, a sharpness of at most 16).
-    pub fn check(&self) -> Result<()> {
+    fn check(&self) -> Result<()> {
         if let Some(b) = self.visibility_bias.filter(|b| !b.is_finite()) {
             bail!("--visibility-bias {b}: expected a finite distance in metres");
         }
@@ -120,6 +120,12 @@ impl VisibilityArgs {
     /// after [`Self::check`].
     pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
         self.check()?;
+        self.set(p);
+        Ok(())
+    }
+
+    /// [`Self::apply`] without the check, for settings already checked.
+    pub fn set(&self, p: &mut probekit::placement::eval::Predictor) {
         if let probekit::placement::eval::Predictor::Cloud(c) = p {
             c.set_visibility(!self.no_visibility);
             c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
@@ -132,6 +138,5 @@ impl VisibilityArgs {
                 }
             }
         }
-        Ok(())
     }
 }
