@@ -461,12 +461,7 @@ impl<'a> Builder<'a> {
             let (faces, skip) = if prev == HULL {
                 (4, 4)
             } else {
-                // Neighbours are distinct cells; prev is one of them.
-                debug_assert_eq!(nb.iter().filter(|&&x| x == prev).count(), 1);
-                let back = usize::from(nb[1] == prev)
-                    + 2 * usize::from(nb[2] == prev)
-                    + 3 * usize::from(nb[3] == prev);
-                (3, back.wrapping_sub(start) & 3)
+                (3, self.back_index(c, prev).wrapping_sub(start) & 3)
             };
             for j in 0..faces {
                 let i = (start + j + usize::from(j >= skip)) & 3;
