@@ -131,6 +131,56 @@ fn seed_placements_bake_and_record_their_parameters() {
     }
 }
 
+/// `bake --seed` seeds adaptive placement too (its pool jitter, spawns and
+/// captures): another seed, other positions; the same seed, the same bytes.
+#[test]
+fn bake_seed_seeds_adaptive_placement() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let bake = |seed: &str, name: &str| {
+        let out = dir.path().join(name);
+        json(&probekit(&[
+            "bake",
+            &scene,
+            "--budget",
+            "16",
+            "--seed",
+            seed,
+            "--no-visibility",
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ]));
+        out
+    };
+    let positions = |p: &Path| {
+        let j = dir.path().join("export.json");
+        let o = probekit(&[
+            "export",
+            p.to_str().unwrap(),
+            "--format",
+            "json",
+            "-o",
+            j.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&j).unwrap()).unwrap();
+        v["probes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["position"].to_string())
+            .collect::<Vec<_>>()
+    };
+    let (a, a2, b) = (
+        bake("1", "a.probes"),
+        bake("1", "a2.probes"),
+        bake("2", "b.probes"),
+    );
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&a2).unwrap());
+    assert_ne!(positions(&a), positions(&b));
+}
+
 #[test]
 fn eval_compare_and_sweep_plot() {
     let dir = tempfile::tempdir().unwrap();

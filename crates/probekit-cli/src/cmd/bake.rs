@@ -238,11 +238,25 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             "--placement {o}: expected grid, manual, adaptive, spawn-merge or gradient-ascent"
         ),
     };
+    // The capture settings the user asked for (seed, bounces, order,
+    // samples); placement captures with them too (at most
+    // `PLACEMENT_SAMPLES` each), so `--seed` gives another placement.
+    let mut placement_settings = CaptureSettings::from_scene(&scene);
+    placement_settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
+    if let Some(b) = a.bounces {
+        placement_settings.bounces = b;
+    }
+    if let Some(o) = a.order {
+        placement_settings.order = o;
+    }
+    if let Some(s) = a.seed {
+        placement_settings.seed = s;
+    }
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
-        a.seed003.place(&scene, &a.scene, method, a.budget)?
+        a.seed003
+            .place(&scene, &a.scene, method, a.budget, &placement_settings)?
     } else if method == "adaptive" {
         let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
-        let settings = CaptureSettings::from_scene(&scene);
         let pb = ProgressBar::new(a.budget as u64);
         pb.set_style(
             ProgressStyle::with_template(
@@ -258,7 +272,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 tolerance: a.tolerance,
                 light_shells: a.light_shells,
             },
-            &settings,
+            &placement_settings,
             &|phase, done, total| {
                 pb.set_message(phase.to_string());
                 pb.set_length(total as u64);
@@ -287,17 +301,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         };
         (pts, param)
     };
-    let mut settings = CaptureSettings::from_scene(&scene);
-    settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
-    if let Some(b) = a.bounces {
-        settings.bounces = b;
-    }
-    if let Some(o) = a.order {
-        settings.order = o;
-    }
-    if let Some(s) = a.seed {
-        settings.seed = s;
-    }
+    let mut settings = placement_settings;
     settings.split_direct = a.indirect_only;
     settings.groups = a.groups;
     let mut sj = settings_json(&settings, codec);
@@ -697,26 +701,27 @@ impl Seed003Args {
         })
     }
 
-    /// Places probes with `name` in the scene's bake box; returns the
-    /// positions and the placement parameters for the file's metadata
-    /// (the method's parameters plus the probe `count`).
+    /// Places probes with `name` in the scene's bake box, capturing with
+    /// `settings` (at most `PLACEMENT_SAMPLES` each); returns the positions
+    /// and the placement parameters for the file's metadata (the method's
+    /// parameters plus the probe `count`).
     pub fn place(
         &self,
         scene: &Scene,
         scene_name: &str,
         name: &str,
         budget: usize,
+        settings: &CaptureSettings,
     ) -> Result<(Vec<Vec3>, serde_json::Value)> {
         use probekit::placement::PlacementMethod;
         let method = self.method(name, budget)?;
         let baker = probekit::bake::Baker::new(scene).with_context(|| scene_name.to_string())?;
-        let settings = CaptureSettings::from_scene(scene);
         let pb = ProgressBar::new(budget as u64);
         let placed = probekit::placement::place(
             &baker,
             scene.bake_box(),
             &method,
-            &settings,
+            settings,
             &|_, done, total| {
                 pb.set_length(total as u64);
                 pb.set_position(done as u64)
