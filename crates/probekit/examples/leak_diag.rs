@@ -11,11 +11,15 @@
 //! capture AT the point evaluated for its normal (pure SH truncation error),
 //! (d) the same tetrahedron's probes recaptured at `--hi` samples and
 //! interpolated with the same weights (interpolation error without noise),
+//! (e) the file's probes blended with an exact segment test at the point in
+//! place of the cell visibility (what a finer lattice could reach at most),
 //! plus each vertex: weight, irradiance in the file and at `--hi`, and
-//! whether the segment point→vertex is blocked by geometry.
+//! whether the segment point→vertex is blocked by geometry. A last line
+//! counts the leaks shown and those (e) leaves.
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
+use probekit::cloud::cell_visibility::segment_clear;
 use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
 use probekit::scene::Scene;
 use probekit::trace::Ray;
@@ -68,6 +72,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         "mean truth luminance {mean:.4}; leak floor 0.01·mean = {:.4}",
         0.01 * mean
     );
+    let (mut shown, mut exact_left) = (0usize, 0usize);
     for (i, p) in pts.iter().enumerate() {
         let (t, e) = (truth[i], predicted[i]);
         if !is_leak(e, t, mean) {
@@ -95,10 +100,30 @@ fn main() -> Result<(), Box<dyn Error>> {
                 d.add_scaled(&caps[k].sh, w[k]);
             }
         }
+        // (e): the file's probes blended with the cell visibility replaced
+        // by an exact segment test at the point (moments kept).
+        let mut ex = ShRgb::zeros(order);
+        let mut ex_sum = 0.0;
+        for k in 0..4 {
+            let vis = cloud
+                .visibility_maps()
+                .map_or(1.0, |m| m.visibility(verts[k], vpos[k], p.position));
+            if bary[k] > 0.0 && segment_clear(baker.tracer(), vpos[k], p.position) {
+                ex.add_scaled(&sh_of(verts[k]), bary[k] * vis);
+                ex_sum += bary[k] * vis;
+            }
+        }
+        let exact = (ex_sum > 0.0).then(|| {
+            ex.scale(1.0 / ex_sum);
+            ex.irradiance(p.normal)
+        });
+        let exact_leaks = exact.is_none_or(|e| is_leak(e, t, mean));
+        shown += 1;
+        exact_left += usize::from(exact_leaks);
         let c = at.sh.irradiance(p.normal);
         let dd = d.irradiance(p.normal);
         println!(
-            "point {i} {:?} p={:.3?} n={:.2?}\n  (a) truth {:.4} (b) file interp {:.4} (c) SH@point {hi} {:.4} (d) hi-sample interp {:.4}   [leak threshold {:.4}]",
+            "point {i} {:?} p={:.3?} n={:.2?}\n  (a) truth {:.4} (b) file interp {:.4} (c) SH@point {hi} {:.4} (d) hi-sample interp {:.4} (e) exact-visibility interp {}   [leak threshold {:.4}]",
             regions,
             p.position,
             p.normal,
@@ -106,6 +131,11 @@ fn main() -> Result<(), Box<dyn Error>> {
             lum(e),
             lum(c),
             lum(dd),
+            exact.map_or("none visible".to_string(), |e| format!(
+                "{:.4}{}",
+                lum(e),
+                if exact_leaks { " (leaks)" } else { "" }
+            )),
             leak_threshold(t, mean)
         );
         for k in 0..4 {
@@ -136,5 +166,6 @@ fn main() -> Result<(), Box<dyn Error>> {
             );
         }
     }
+    println!("{shown} leaks shown; {exact_left} of them leak with exact visibility (e)");
     Ok(())
 }
