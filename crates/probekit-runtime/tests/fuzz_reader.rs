@@ -31,6 +31,7 @@ fn seeds() -> Vec<Vec<u8>> {
         rig.to_bytes().unwrap(),
         groups_file().to_bytes().unwrap(),
         compact_volume_file().to_bytes().unwrap(),
+        cvis_file().to_bytes().unwrap(),
     ]
 }
 

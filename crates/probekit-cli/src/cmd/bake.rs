@@ -110,7 +110,7 @@ pub struct BakeArgs {
     /// (`VISM`, visibility-aware blending at run time; 1..=64).
     #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
     pub visibility_res: u32,
-    /// Lattice subdivision of the per-cell visibility bits (`CVIS`, 1..=8;
+    /// Lattice subdivision of the per-cell visibility bits (`CVSP`, 1..=8;
     /// 0: none): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
     /// points of the cell.
     #[arg(long, default_value_t = probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION)]

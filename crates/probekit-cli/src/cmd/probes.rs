@@ -229,7 +229,9 @@ pub struct InspectArgs {
 /// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
 /// up to rounding, which light points outside the hull from far probes)
 /// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
-/// `cell_visibility`: `{"subdivision"}` of the `CVIS` section, or null);
+/// `cell_visibility`: `{"subdivision","cells","stored_cells"}` of the
+/// `CVSP` / `CVIS` section — cells in all, and those not clear, which have a
+/// record — or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -267,6 +269,8 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             })),
             "cell_visibility": file.cell_visibility.as_ref().map(|c| serde_json::json!({
                 "subdivision": c.subdivision(),
+                "cells": c.tet_count() + c.hull_face_count(),
+                "stored_cells": c.record_count(),
             })),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
             "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),

@@ -90,7 +90,7 @@ pub struct VisibilityArgs {
     /// (distance moments and cell visibility).
     #[arg(long)]
     pub no_visibility: bool,
-    /// Clouds: blend without the file's cell visibility (`CVIS`) weighting.
+    /// Clouds: blend without the file's cell visibility (`CVSP`) weighting.
     #[arg(long)]
     pub no_cell_visibility: bool,
     /// Clouds: distance bias of the visibility test in metres (default

@@ -42,6 +42,11 @@
 //! `T(c_3) + T₂(c_2) + c_1` with the tetrahedral numbers
 //! `T(m) = m(m+1)(m+2)/6` and triangular numbers `T₂(m) = m(m+1)/2`; a hull
 //! face uses `T₂(c_2) + c_1` with `c_1 = n_0`, `c_2 = n_0 + n_1`.
+//!
+//! A cell whose every bit is 1 (*clear*: each corner sees the whole cell)
+//! is not stored: [`CellVisibility`] keeps a mask of the cells with a
+//! record and those records only (the file's `CVSP` section, format 1.5;
+//! `docs/file-format.md`).
 
 use crate::math;
 use crate::prelude::*;
@@ -50,9 +55,14 @@ use glam::Vec3;
 /// Largest lattice subdivision a file may hold.
 pub const MAX_CELL_SUBDIVISION: u32 = 8;
 
-/// Default lattice subdivision: 20 points per tetrahedron, 10 bytes per
-/// tetrahedron (about 65 bytes per probe on a Delaunay cloud).
-pub const DEFAULT_CELL_SUBDIVISION: u32 = 3;
+/// Default lattice subdivision: 35 points per tetrahedron, 18 bytes per
+/// tetrahedron that is not clear (sparse storage; on a 525-probe adaptive
+/// cloud of builtin:demo about 27 % of the tetrahedra, some 25 bytes per
+/// probe in all). Measured (BENCHMARKS.md, "Sparse cell visibility"): at
+/// `k` = 3 the interpolated bits let a bright probe behind a doorway's edge
+/// keep weight at closet points it cannot see; from `k` = 4 the closet
+/// leaks left are those an exact per-point segment test leaves too.
+pub const DEFAULT_CELL_SUBDIVISION: u32 = 4;
 
 /// Lattice points of a cell with `vertices` corners (3: hull face, 4:
 /// tetrahedron) at subdivision `k`.
@@ -181,31 +191,124 @@ pub fn kuhn_weights(bary: &[f32], k: u32) -> ([usize; 4], [f32; 4]) {
 
 /// Per-cell visibility bits of a probe cloud (see the module docs), ready to
 /// weight the blend: `c_v(p)` for each corner of the cell containing `p`.
+///
+/// Stored sparse: most cells of a cloud lie in open space, where every
+/// corner sees every lattice point (73 % of the tetrahedra of a 525-probe
+/// adaptive cloud of builtin:demo). Such a *clear* cell has no record; a
+/// mask holds one bit per cell (tetrahedra, then hull faces), set where the
+/// cell has a record, and the records of the other cells follow in cell
+/// order. A clear cell's corners all have `c_v = 1`, which is what its
+/// lattice bits would interpolate to, so storage does not change the blend.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellVisibility {
     k: u32,
     tets: usize,
     hull_faces: usize,
-    data: Vec<u8>,
+    /// Bit `i` (least significant first) set: cell `i` has a record.
+    mask: Vec<u8>,
+    /// Set mask bits before each 64-cell block (rank directory).
+    rank: Vec<u32>,
+    /// Records of the tetrahedra with a mask bit, then of such hull faces.
+    records: Vec<u8>,
+    /// Tetrahedra with a record.
+    tet_records: usize,
+    /// Cells with a record.
+    stored: usize,
+}
+
+/// Whether every used bit of a record with `vertices` corners at `k` is set.
+fn record_is_clear(record: &[u8], vertices: usize, k: u32) -> bool {
+    let used = vertices * lattice_len(vertices, k);
+    (0..used).all(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
+}
+
+/// Whether any padding bit (past the used ones) of a record is set.
+fn record_has_padding(record: &[u8], vertices: usize, k: u32) -> bool {
+    let used = vertices * lattice_len(vertices, k);
+    (used..record.len() * 8).any(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
 }
 
 impl CellVisibility {
-    /// Wraps `data`: `tets` tetrahedron records of [`record_bytes`]`(4, k)`
-    /// bytes, then `hull_faces` hull-face records of `record_bytes(3, k)`
-    /// bytes, in the mesh's tetrahedron and hull-face order. `None` if `k`
-    /// is outside `1..=`[`MAX_CELL_SUBDIVISION`] or the length does not match.
+    /// Wraps dense records: `tets` tetrahedron records of
+    /// [`record_bytes`]`(4, k)` bytes, then `hull_faces` hull-face records of
+    /// `record_bytes(3, k)` bytes, in the mesh's tetrahedron and hull-face
+    /// order; records with every used bit set are dropped (see the type
+    /// docs). `None` if `k` is outside `1..=`[`MAX_CELL_SUBDIVISION`] or the
+    /// length does not match.
     pub fn new(k: u32, tets: usize, hull_faces: usize, data: Vec<u8>) -> Option<Self> {
         if !(1..=MAX_CELL_SUBDIVISION).contains(&k) {
             return None;
         }
+        let (rb4, rb3) = (record_bytes(4, k), record_bytes(3, k));
         let len = tets
+            .checked_mul(rb4)?
+            .checked_add(hull_faces.checked_mul(rb3)?)?;
+        if data.len() != len {
+            return None;
+        }
+        let cells = tets.checked_add(hull_faces)?;
+        let mut mask = vec![0u8; cells.div_ceil(8)];
+        let mut records = Vec::new();
+        let (t, h) = data.split_at(tets * rb4);
+        let all = t
+            .chunks_exact(rb4)
+            .map(|r| (r, 4))
+            .chain(h.chunks_exact(rb3).map(|r| (r, 3)));
+        for (i, (r, vertices)) in all.enumerate() {
+            if !record_is_clear(r, vertices, k) {
+                mask[i >> 3] |= 1 << (i & 7);
+                records.extend_from_slice(r);
+            }
+        }
+        Self::from_sparse(k, tets, hull_faces, mask, records)
+    }
+
+    /// Wraps sparse storage (the `CVSP` section's arrays): `mask` of
+    /// `ceil((tets + hull_faces)/8)` bytes, bit `i` set when cell `i`
+    /// (tetrahedra, then hull faces) has a record, and `records`, the
+    /// records of those cells in order ([`record_bytes`]`(4, k)` bytes for a
+    /// tetrahedron, `record_bytes(3, k)` for a hull face). `None` if `k` is
+    /// outside `1..=`[`MAX_CELL_SUBDIVISION`] or a length does not match.
+    /// Canonical form (no padding bit set, no stored record clear) is
+    /// checked by [`CellVisibility::first_noncanonical`].
+    pub fn from_sparse(
+        k: u32,
+        tets: usize,
+        hull_faces: usize,
+        mask: Vec<u8>,
+        records: Vec<u8>,
+    ) -> Option<Self> {
+        if !(1..=MAX_CELL_SUBDIVISION).contains(&k) {
+            return None;
+        }
+        let cells = tets.checked_add(hull_faces)?;
+        if mask.len() != cells.div_ceil(8) {
+            return None;
+        }
+        let bit = |i: usize| mask[i >> 3] >> (i & 7) & 1 != 0;
+        let tet_records = (0..tets).filter(|&i| bit(i)).count();
+        let hull_records = (tets..cells).filter(|&i| bit(i)).count();
+        let len = tet_records
             .checked_mul(record_bytes(4, k))?
-            .checked_add(hull_faces.checked_mul(record_bytes(3, k))?)?;
-        (data.len() == len).then_some(Self {
+            .checked_add(hull_records.checked_mul(record_bytes(3, k))?)?;
+        if records.len() != len {
+            return None;
+        }
+        let mut rank = Vec::with_capacity(cells.div_ceil(64));
+        let mut count = 0u32;
+        for block in mask.chunks(8) {
+            rank.push(count);
+            count += block.iter().map(|b| b.count_ones()).sum::<u32>();
+        }
+        Some(Self {
             k,
             tets,
             hull_faces,
-            data,
+            mask,
+            rank,
+            records,
+            tet_records,
+            stored: tet_records + hull_records,
         })
     }
 
@@ -224,30 +327,85 @@ impl CellVisibility {
         self.hull_faces
     }
 
-    /// The raw records (see [`CellVisibility::new`]).
-    pub fn data(&self) -> &[u8] {
-        &self.data
+    /// The mask (see [`CellVisibility::from_sparse`]).
+    pub fn mask(&self) -> &[u8] {
+        &self.mask
     }
 
-    /// The index of the first record (tetrahedra first, then hull faces)
-    /// whose padding bits are not all zero, if any; a canonical file has
-    /// none.
-    pub fn first_nonzero_padding(&self) -> Option<usize> {
-        let rb4 = record_bytes(4, self.k);
-        let rb3 = record_bytes(3, self.k);
-        let used4 = 4 * lattice_len(4, self.k);
-        let used3 = 3 * lattice_len(3, self.k);
-        let dirty = |rec: &[u8], used: usize| {
-            (used..rec.len() * 8).any(|bit| rec[bit >> 3] >> (bit & 7) & 1 != 0)
-        };
-        let (tets, hull) = self.data.split_at(self.tets * rb4);
-        tets.chunks_exact(rb4)
-            .position(|r| dirty(r, used4))
-            .or_else(|| {
-                hull.chunks_exact(rb3)
-                    .position(|r| dirty(r, used3))
-                    .map(|i| self.tets + i)
+    /// The stored records (see [`CellVisibility::from_sparse`]).
+    pub fn records(&self) -> &[u8] {
+        &self.records
+    }
+
+    /// Cells with a record (not clear).
+    pub fn record_count(&self) -> usize {
+        self.stored
+    }
+
+    /// The dense records of [`CellVisibility::new`], clear cells included.
+    pub fn to_dense(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        for i in 0..self.tets + self.hull_faces {
+            let vertices = if i < self.tets { 4 } else { 3 };
+            match self.record(i) {
+                Some(r) => out.extend_from_slice(r),
+                None => {
+                    let mut r = vec![0u8; record_bytes(vertices, self.k)];
+                    for bit in 0..vertices * lattice_len(vertices, self.k) {
+                        r[bit >> 3] |= 1 << (bit & 7);
+                    }
+                    out.extend(r);
+                }
+            }
+        }
+        out
+    }
+
+    /// The index of the first cell (tetrahedra first, then hull faces) whose
+    /// storage is not canonical, if any: a stored record with a padding bit
+    /// set or with every used bit set (a clear cell has no record), or a
+    /// mask padding bit set (reported as the cell count). A canonical file
+    /// has none.
+    pub fn first_noncanonical(&self) -> Option<usize> {
+        let cells = self.tets + self.hull_faces;
+        let bad = (0..cells).find(|&i| {
+            let vertices = if i < self.tets { 4 } else { 3 };
+            self.record(i).is_some_and(|r| {
+                record_has_padding(r, vertices, self.k) || record_is_clear(r, vertices, self.k)
             })
+        });
+        bad.or_else(|| {
+            (cells..self.mask.len() * 8)
+                .any(|i| self.mask[i >> 3] >> (i & 7) & 1 != 0)
+                .then_some(cells)
+        })
+    }
+
+    /// Set mask bits before cell `i` (`i` < cell count).
+    fn rank_of(&self, i: usize) -> usize {
+        let block = i >> 6;
+        let full: u32 = self.mask[block * 8..i >> 3]
+            .iter()
+            .map(|b| b.count_ones())
+            .sum();
+        let part = (self.mask[i >> 3] & ((1u8 << (i & 7)) - 1)).count_ones();
+        (self.rank[block] + full + part) as usize
+    }
+
+    /// Cell `i`'s record (tetrahedra, then hull faces), `None` when clear.
+    fn record(&self, i: usize) -> Option<&[u8]> {
+        if self.mask[i >> 3] >> (i & 7) & 1 == 0 {
+            return None;
+        }
+        let r = self.rank_of(i);
+        let (rb4, rb3) = (record_bytes(4, self.k), record_bytes(3, self.k));
+        let start = if i < self.tets {
+            r * rb4
+        } else {
+            self.tet_records * rb4 + (r - self.tet_records) * rb3
+        };
+        let len = if i < self.tets { rb4 } else { rb3 };
+        Some(&self.records[start..start + len])
     }
 
     fn interpolate<const N: usize>(&self, record: &[u8], bary: &[f32; N]) -> [f32; N] {
@@ -266,28 +424,28 @@ impl CellVisibility {
     }
 
     /// Visibility `c_v(p) ∈ [0, 1]` of each corner of tetrahedron `tet` at
-    /// the point with barycentric coordinates `bary` in it (all 1 if `tet`
-    /// is out of range).
+    /// the point with barycentric coordinates `bary` in it (all 1 if the
+    /// cell is clear or `tet` is out of range).
     pub fn tet(&self, tet: u32, bary: &[f32; 4]) -> [f32; 4] {
-        let rb = record_bytes(4, self.k);
         let t = tet as usize;
         if t >= self.tets {
             return [1.0; 4];
         }
-        self.interpolate(&self.data[t * rb..(t + 1) * rb], bary)
+        self.record(t)
+            .map_or([1.0; 4], |r| self.interpolate(r, bary))
     }
 
     /// Visibility of each corner of hull face `face` at the point with
     /// barycentric coordinates `bary` on it (the closest hull point of a
-    /// point outside the hull; all 1 if `face` is out of range).
+    /// point outside the hull; all 1 if the cell is clear or `face` is out
+    /// of range).
     pub fn hull_face(&self, face: u32, bary: &[f32; 3]) -> [f32; 3] {
-        let start = self.tets * record_bytes(4, self.k);
-        let rb = record_bytes(3, self.k);
         let h = face as usize;
         if h >= self.hull_faces {
             return [1.0; 3];
         }
-        self.interpolate(&self.data[start + h * rb..start + (h + 1) * rb], bary)
+        self.record(self.tets + h)
+            .map_or([1.0; 3], |r| self.interpolate(r, bary))
     }
 }
 
@@ -431,6 +589,85 @@ mod tests {
         assert_eq!(cv.tet(7, &b), [1.0; 4]);
         assert!(CellVisibility::new(0, 1, 0, vec![0; 1]).is_none());
         assert!(CellVisibility::new(1, 2, 0, vec![0; 1]).is_none());
+    }
+
+    /// Reads corner `v`'s interpolated bit straight from a dense record.
+    fn dense_value(record: &[u8], vertices: usize, k: u32, bary: &[f32], v: usize) -> f32 {
+        let (idx, w) = kuhn_weights(bary, k);
+        let len = lattice_len(vertices, k);
+        (0..vertices)
+            .filter(|&j| {
+                let bit = v * len + idx[j];
+                w[j] > 0.0 && record[bit >> 3] >> (bit & 7) & 1 != 0
+            })
+            .map(|j| w[j])
+            .sum()
+    }
+
+    proptest! {
+        /// Sparse storage answers every cell as its dense record does
+        /// (clear cells 1 everywhere), across many 64-cell rank blocks, and
+        /// gives the dense records back.
+        #[test]
+        fn sparse_storage_answers_like_the_dense_records(
+            seed in any::<u64>(),
+            k in 1u32..=4,
+            tets in 0usize..300,
+            hull in 0usize..90,
+            raw in prop::array::uniform4(0.01f32..1.0),
+        ) {
+            let mut state = seed | 1;
+            let mut next = move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                state
+            };
+            let mut dense = Vec::new();
+            let mut clear = 0;
+            for (n, count) in [(4usize, tets), (3, hull)] {
+                let used = n * lattice_len(n, k);
+                for _ in 0..count {
+                    let mut rec = vec![0u8; record_bytes(n, k)];
+                    let all = next() % 2 == 0;
+                    clear += usize::from(all);
+                    for bit in 0..used {
+                        if all || next() % 4 != 0 {
+                            rec[bit >> 3] |= 1 << (bit & 7);
+                        }
+                    }
+                    dense.extend(rec);
+                }
+            }
+            let cv = CellVisibility::new(k, tets, hull, dense.clone()).unwrap();
+            prop_assert!(cv.record_count() <= tets + hull - clear);
+            prop_assert_eq!(cv.first_noncanonical(), None);
+            prop_assert_eq!(cv.to_dense(), dense.clone());
+            let s: f32 = raw.iter().sum();
+            let b4 = raw.map(|x| x / s);
+            let s3: f32 = raw[..3].iter().sum();
+            let b3 = [raw[0] / s3, raw[1] / s3, raw[2] / s3];
+            let (rb4, rb3) = (record_bytes(4, k), record_bytes(3, k));
+            for t in 0..tets {
+                let rec = &dense[t * rb4..(t + 1) * rb4];
+                let got = cv.tet(t as u32, &b4);
+                for (v, &g) in got.iter().enumerate() {
+                    // A clear cell is exactly 1; its all-ones record sums
+                    // the Kuhn weights, 1 up to rounding.
+                    let want = dense_value(rec, 4, k, &b4, v);
+                    prop_assert!((g - want).abs() <= 1e-6, "tet {} v {}: {} {}", t, v, g, want);
+                }
+            }
+            for h in 0..hull {
+                let at = tets * rb4 + h * rb3;
+                let rec = &dense[at..at + rb3];
+                let got = cv.hull_face(h as u32, &b3);
+                for (v, &g) in got.iter().enumerate() {
+                    let want = dense_value(rec, 3, k, &b3, v);
+                    prop_assert!((g - want).abs() <= 1e-6, "face {} v {}: {} {}", h, v, g, want);
+                }
+            }
+        }
     }
 
     #[test]

@@ -12,11 +12,12 @@ pub const VERSION_MAJOR: u16 = 1;
 /// Newest minor version this reader knows (1.1 added `LGRP`, light
 /// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
 /// distance moments for visibility-aware blending; 1.4 added `CVIS`, per-cell
-/// lattice visibility). Files with a larger minor load; their unknown sections are
+/// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse). Files
+/// with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 4;
+pub const VERSION_MINOR: u16 = 5;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
@@ -38,6 +39,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 }
 
 /// The lowest minor version whose section set includes every id in `ids`:
+/// 5 if `CVSP` ([`SectionId::CELL_VISIBILITY_SPARSE`]) is present, else
 /// 4 if `CVIS` ([`SectionId::CELL_VISIBILITY`]) is present, else
 /// 3 if `VISM` ([`SectionId::VISIBILITY`]) is present, else 2 if `OCTC`
 /// ([`SectionId::OCTREE_COMPACT`]) is, else 1 if `LGRP`
@@ -45,6 +47,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
     ids.into_iter()
         .map(|id| match id {
+            SectionId::CELL_VISIBILITY_SPARSE => 5,
             SectionId::CELL_VISIBILITY => 4,
             SectionId::VISIBILITY => 3,
             SectionId::OCTREE_COMPACT => 2,
@@ -124,11 +127,16 @@ impl SectionId {
     /// Per-cell lattice visibility bits of a probe cloud (format 1.4;
     /// [`crate::cloud::cell_visibility`]).
     pub const CELL_VISIBILITY: Self = Self::from_fourcc(*b"CVIS");
+    /// The same bits stored sparse: a mask of the cells with a record, then
+    /// their records; clear cells (every probe sees every lattice point)
+    /// have none (format 1.5; [`crate::cloud::CellVisibility`]). The writer
+    /// writes this form; a file holds at most one of `CVIS` and `CVSP`.
+    pub const CELL_VISIBILITY_SPARSE: Self = Self::from_fourcc(*b"CVSP");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 14] = [
+    pub const KNOWN: [Self; 15] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -142,6 +150,7 @@ impl SectionId {
         Self::LIGHT_GROUPS,
         Self::VISIBILITY,
         Self::CELL_VISIBILITY,
+        Self::CELL_VISIBILITY_SPARSE,
         Self::METADATA,
     ];
 
@@ -173,6 +182,7 @@ impl SectionId {
             Self::LIGHT_GROUPS => "light_groups",
             Self::VISIBILITY => "visibility",
             Self::CELL_VISIBILITY => "cell_visibility",
+            Self::CELL_VISIBILITY_SPARSE => "cell_visibility",
             Self::HEADER => "header",
             _ => return None,
         })

@@ -14,7 +14,9 @@ use super::{
     AxisModel, Gradients, LightGroup, Octree, OctreeNode, OuterCells, ProbeFile, ProbeFileKind,
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
-use crate::cloud::cell_visibility::{record_bytes, CellVisibility, MAX_CELL_SUBDIVISION};
+use crate::cloud::cell_visibility::{
+    lattice_len, record_bytes, CellVisibility, MAX_CELL_SUBDIVISION,
+};
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use bytemuck::Pod;
@@ -636,18 +638,72 @@ fn parse_visibility(s: &Sec<'_>) -> Result<super::DistanceMoments, FormatError> 
 
 fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
     let [tets, faces, k, _] = s.header()?;
-    if !(1..=MAX_CELL_SUBDIVISION).contains(&k) {
-        return Err(FormatError::InvalidValue {
-            id: s.id,
-            element: 0,
-            reason: "cell visibility subdivision outside 1..=8",
-        });
-    }
+    check_subdivision(s, k)?;
     let size = bytes_for(tets, record_bytes(4, k))
         .and_then(|a| bytes_for(faces, record_bytes(3, k)).and_then(|b| a.checked_add(b)));
     let [data] = s.arrays([size])?;
+    // Padding bits are checked here: the sparse form drops clear records.
+    let padded = |rec: &[u8], vertices: usize| {
+        let used = vertices * lattice_len(vertices, k);
+        (used..rec.len() * 8).any(|bit| rec[bit >> 3] >> (bit & 7) & 1 != 0)
+    };
+    let (t, h) = data.split_at(tets as usize * record_bytes(4, k));
+    let bad = t
+        .chunks_exact(record_bytes(4, k))
+        .position(|r| padded(r, 4))
+        .or_else(|| {
+            h.chunks_exact(record_bytes(3, k))
+                .position(|r| padded(r, 3))
+                .map(|i| tets as usize + i)
+        });
+    if let Some(element) = bad {
+        return Err(FormatError::InvalidValue {
+            id: s.id,
+            element: element as u64,
+            reason: "cell visibility record has padding bits set",
+        });
+    }
     CellVisibility::new(k, tets as usize, faces as usize, data.to_vec())
         .ok_or(FormatError::CountOverflow(s.id))
+}
+
+fn check_subdivision(s: &Sec<'_>, k: u32) -> Result<(), FormatError> {
+    if (1..=MAX_CELL_SUBDIVISION).contains(&k) {
+        Ok(())
+    } else {
+        Err(FormatError::InvalidValue {
+            id: s.id,
+            element: 0,
+            reason: "cell visibility subdivision outside 1..=8",
+        })
+    }
+}
+
+/// `CVSP` (1.5): a mask of one bit per cell, then the records of the cells
+/// whose bit is set.
+fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
+    let [tets, faces, k, _] = s.header()?;
+    check_subdivision(s, k)?;
+    let cells = (tets as usize).checked_add(faces as usize);
+    let ([mask], end) = s.arrays_at(SECTION_HEADER_LEN, [cells.map(|c| c.div_ceil(8))], false)?;
+    let bit = |i: usize| mask[i >> 3] >> (i & 7) & 1 != 0;
+    let t = (0..tets as usize).filter(|&i| bit(i)).count();
+    let h = (tets as usize..tets as usize + faces as usize)
+        .filter(|&i| bit(i))
+        .count();
+    let size = t.checked_mul(record_bytes(4, k)).and_then(|a| {
+        h.checked_mul(record_bytes(3, k))
+            .and_then(|b| a.checked_add(b))
+    });
+    let ([records], _) = s.arrays_at(end, [size], true)?;
+    CellVisibility::from_sparse(
+        k,
+        tets as usize,
+        faces as usize,
+        mask.to_vec(),
+        records.to_vec(),
+    )
+    .ok_or(FormatError::CountOverflow(s.id))
 }
 
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
@@ -684,7 +740,20 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
             SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
             SectionId::VISIBILITY => file.visibility = Some(parse_visibility(&s)?),
-            SectionId::CELL_VISIBILITY => file.cell_visibility = Some(parse_cell_visibility(&s)?),
+            SectionId::CELL_VISIBILITY | SectionId::CELL_VISIBILITY_SPARSE => {
+                if file.cell_visibility.is_some() {
+                    return Err(FormatError::InvalidValue {
+                        id: s.id,
+                        element: 0,
+                        reason: "both CVIS and CVSP: at most one cell visibility section",
+                    });
+                }
+                file.cell_visibility = Some(if raw.id == SectionId::CELL_VISIBILITY {
+                    parse_cell_visibility(&s)?
+                } else {
+                    parse_cell_visibility_sparse(&s)?
+                });
+            }
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.

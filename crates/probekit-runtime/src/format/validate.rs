@@ -388,10 +388,10 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         v.validate(probes)?;
     }
 
-    // Cell visibility (1.4): one record per tetrahedron (hull faces are
+    // Cell visibility (1.4, sparse 1.5): one cell per tetrahedron (hull faces are
     // counted against the mesh when a `ProbeCloud` is built).
     if let Some(c) = &f.cell_visibility {
-        let id = SectionId::CELL_VISIBILITY;
+        let id = SectionId::CELL_VISIBILITY_SPARSE;
         let tets = f
             .tetrahedra
             .as_ref()
@@ -399,11 +399,11 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         if c.tet_count() != tets.vertices.len() {
             return Err(count_mismatch(id, tets.vertices.len(), c.tet_count()));
         }
-        if let Some(k) = c.first_nonzero_padding() {
+        if let Some(k) = c.first_noncanonical() {
             return Err(FormatError::InvalidValue {
                 id,
                 element: k as u64,
-                reason: "cell visibility record has padding bits set",
+                reason: "cell visibility: a record with padding bits set, a stored record that is clear, or mask padding bits set",
             });
         }
     }

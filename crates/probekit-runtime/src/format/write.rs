@@ -284,8 +284,8 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
             c.subdivision(),
             0,
         ]);
-        s.bytes(c.data());
-        out.push((SectionId::CELL_VISIBILITY, s.finish()));
+        s.bytes(c.mask()).pad().bytes(c.records());
+        out.push((SectionId::CELL_VISIBILITY_SPARSE, s.finish()));
     }
 
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
@@ -312,8 +312,9 @@ impl ProbeFile {
     /// equal contents give equal bytes. The header's minor version is the
     /// lowest that holds the sections present
     /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
-    /// (1), a regular octree, written compactly as `OCTC` (2), or distance
-    /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3).
+    /// (1), a regular octree, written compactly as `OCTC` (2), distance
+    /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
+    /// or cell visibility, written sparse as `CVSP` (5).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;

@@ -850,3 +850,40 @@ pub fn compact_volume_file() -> ProbeFile {
     f.metadata = "{}".into();
     f
 }
+
+/// Cell-visibility subdivision of [`cvis_file`].
+pub const K: u32 = 2;
+/// Hull faces [`cvis_file`] claims (the file alone does not check them).
+pub const HULL: usize = 5;
+
+/// Dense records at `k = 2`: bits set in a fixed pattern, padding bits
+/// clear, and every third cell clear (all used bits set).
+pub fn dense_records(tets: usize) -> Vec<u8> {
+    let mut data = Vec::new();
+    let mut cell = 0;
+    for (n, count) in [(4usize, tets), (3, HULL)] {
+        let used = n * probekit_runtime::cloud::cell_visibility::lattice_len(n, K);
+        for r in 0..count {
+            let mut rec = vec![0u8; probekit_runtime::cloud::cell_visibility::record_bytes(n, K)];
+            for bit in 0..used {
+                if cell % 3 == 0 || (bit * 7 + r * 3) % 5 < 3 {
+                    rec[bit >> 3] |= 1 << (bit & 7);
+                }
+            }
+            data.extend(rec);
+            cell += 1;
+        }
+    }
+    data
+}
+
+/// `full_file()` with cell visibility from [`dense_records`] (written as
+/// the sparse `CVSP` section, format 1.5).
+pub fn cvis_file() -> ProbeFile {
+    let mut f = full_file();
+    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
+    f.cell_visibility = Some(
+        probekit_runtime::cloud::CellVisibility::new(K, tets, HULL, dense_records(tets)).unwrap(),
+    );
+    f
+}

@@ -1,4 +1,4 @@
-//! Baking per-cell visibility bits (the `CVIS` section) of a probe cloud:
+//! Baking per-cell visibility bits (the `CVSP` section) of a probe cloud:
 //! for every tetrahedron and hull face of the cloud's mesh, each corner
 //! probe, and each point of the cell's lattice of subdivision `k`, whether
 //! the segment from the probe to the point crosses a surface. The layout and
@@ -168,7 +168,11 @@ mod tests {
             let cv = bake_cell_visibility(&tracer, &mesh, k, &|_, _| {}).unwrap();
             assert_eq!(cv.tet_count(), mesh.tets().len());
             assert_eq!(cv.hull_face_count(), mesh.hull_face_count());
-            assert_eq!(cv.first_nonzero_padding(), None);
+            assert_eq!(cv.first_noncanonical(), None);
+            // Sparse: some cells clear (no record), some not.
+            let cells_total = cv.tet_count() + cv.hull_face_count();
+            assert!(cv.record_count() > 0 && cv.record_count() < cells_total);
+            let dense = cv.to_dense();
             let pos = mesh.positions();
             let mut hidden = 0;
             let cells = (0..mesh.tets().len())
@@ -182,7 +186,7 @@ mod tests {
             for probes in cells {
                 let n = probes.len();
                 let len = lattice_len(n, k);
-                let rec = &cv.data()[offset..offset + if n == 4 { rb4 } else { rb3 }];
+                let rec = &dense[offset..offset + if n == 4 { rb4 } else { rb3 }];
                 offset += rec.len();
                 for (l, num) in lattice_numerators(n, k).iter().enumerate() {
                     // The lattice point by its own formula, in f64.
@@ -200,7 +204,7 @@ mod tests {
                     }
                 }
             }
-            assert_eq!(offset, cv.data().len());
+            assert_eq!(offset, dense.len());
             assert!(hidden > 0, "some cells must straddle the wall");
         }
         assert!(matches!(

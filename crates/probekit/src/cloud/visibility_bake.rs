@@ -1,6 +1,6 @@
 //! Both kinds of a cloud's visibility data, baked together into a file as
 //! `probekit bake` stores them: distance moments (`VISM`,
-//! [`super::visibility`]) and cell visibility (`CVIS`,
+//! [`super::visibility`]) and cell visibility (`CVSP`,
 //! [`super::cell_visibility`]).
 //!
 //! `probekit bake`, `probekit eval --compare grid` (the grid gets what the
@@ -31,7 +31,7 @@ pub enum VisibilityBakeError {
 pub struct VisibilityBake {
     /// Distance moments (`VISM`) with these settings; `None`: none.
     pub moments: Option<VisibilitySettings>,
-    /// Cell visibility (`CVIS`) at this lattice subdivision (1..=8);
+    /// Cell visibility (`CVSP`) at this lattice subdivision (1..=8);
     /// `None`: none.
     pub cell_subdivision: Option<u32>,
 }
