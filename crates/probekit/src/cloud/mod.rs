@@ -720,11 +720,8 @@ pub fn hull_slivers(positions: &[Vec3], tets: &[[u32; 4]], neighbours: &[[u32; 4
         .zip(neighbours)
         .filter(|(_, n)| n.contains(&probekit_runtime::cloud::HULL))
         .filter_map(|(v, _)| {
-            let p: Vec<Vec3> = v
-                .iter()
-                .map(|&i| positions.get(i as usize).copied())
-                .collect::<Option<_>>()?;
-            Some(flatness([p[0], p[1], p[2], p[3]]))
+            let p = |k: usize| positions.get(v[k] as usize).copied();
+            Some(flatness([p(0)?, p(1)?, p(2)?, p(3)?]))
         })
         .filter(|&f| f < SLIVER_FLATNESS)
         .count()
