@@ -117,7 +117,11 @@ fn main() -> Result<(), Box<dyn Error>> {
             ex.scale(1.0 / ex_sum);
             ex.irradiance(p.normal)
         });
-        let exact_leaks = exact.is_none_or(|e| is_leak(e, t, mean));
+        // No visible probe counts as a leak (nothing to blend).
+        let exact_leaks = match exact {
+            Some(e) => is_leak(e, t, mean),
+            None => true,
+        };
         shown += 1;
         exact_left += usize::from(exact_leaks);
         let c = at.sh.irradiance(p.normal);
