@@ -41,6 +41,26 @@ pub const DEFAULT_SAMPLES: u32 = 1024;
 /// Default approximate probe count of the grid placement.
 pub const DEFAULT_GRID: usize = 256;
 
+/// The capture settings the flags ask for: the scene's, with `samples`
+/// (else the scene's `[bake] samples`, else [`DEFAULT_SAMPLES`]), `bounces`
+/// and `seed` applied where given.
+pub fn capture_settings(
+    scene: &Scene,
+    samples: Option<u32>,
+    bounces: Option<u32>,
+    seed: Option<u64>,
+) -> CaptureSettings {
+    let mut s = CaptureSettings::from_scene(scene);
+    s.samples = samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
+    if let Some(b) = bounces {
+        s.bounces = b;
+    }
+    if let Some(seed) = seed {
+        s.seed = seed;
+    }
+    s
+}
+
 /// Arguments of `probekit bake`.
 #[derive(Debug, Args)]
 pub struct BakeArgs {
@@ -241,16 +261,9 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     // The capture settings the user asked for (seed, bounces, order,
     // samples); placement captures with them too (at most
     // `PLACEMENT_SAMPLES` each), so `--seed` gives another placement.
-    let mut placement_settings = CaptureSettings::from_scene(&scene);
-    placement_settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
-    if let Some(b) = a.bounces {
-        placement_settings.bounces = b;
-    }
+    let mut placement_settings = capture_settings(&scene, a.samples, a.bounces, a.seed);
     if let Some(o) = a.order {
         placement_settings.order = o;
-    }
-    if let Some(s) = a.seed {
-        placement_settings.seed = s;
     }
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
         a.seed003

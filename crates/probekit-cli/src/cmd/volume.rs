@@ -11,13 +11,12 @@
 //! `builtin:lights-demo` (analytic sphere lights behind a slab, with
 //! closed-form gradients).
 
-use super::bake::DEFAULT_SAMPLES;
+use super::bake::capture_settings;
 use super::util::load_scene;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use probekit::bake::CaptureSettings;
 use probekit::format::write_probe_file;
 use probekit::volume::{
     build_adaptive, build_uniform, inspect_json, plot_depths, resolution_for_cell,
@@ -233,14 +232,7 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         );
     }
     let scene = load_scene(&a.scene)?;
-    let mut settings = CaptureSettings::from_scene(&scene);
-    settings.samples = a.samples.or(scene.bake.samples).unwrap_or(DEFAULT_SAMPLES);
-    if let Some(b) = a.bounces {
-        settings.bounces = b;
-    }
-    if let Some(s) = a.seed {
-        settings.seed = s;
-    }
+    let mut settings = capture_settings(&scene, a.samples, a.bounces, a.seed);
     settings.order = a.order;
     let bb = scene.bake_box();
     let (min, max) = parse_box(a, (bb.min, bb.max))?;

@@ -222,8 +222,10 @@ fn record_is_clear(record: &[u8], vertices: usize, k: u32) -> bool {
     (0..used).all(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
 }
 
-/// Whether any padding bit (past the used ones) of a record is set.
-fn record_has_padding(record: &[u8], vertices: usize, k: u32) -> bool {
+/// Whether any padding bit (past the `vertices · lattice_len` used ones) of
+/// a record with `vertices` corners at subdivision `k` is set; a canonical
+/// record has none.
+pub fn record_has_padding(record: &[u8], vertices: usize, k: u32) -> bool {
     let used = vertices * lattice_len(vertices, k);
     (used..record.len() * 8).any(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
 }

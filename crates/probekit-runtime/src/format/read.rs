@@ -15,7 +15,7 @@ use super::{
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
 use crate::cloud::cell_visibility::{
-    lattice_len, record_bytes, CellVisibility, MAX_CELL_SUBDIVISION,
+    record_bytes, record_has_padding, CellVisibility, MAX_CELL_SUBDIVISION,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -643,10 +643,7 @@ fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
         .and_then(|a| bytes_for(faces, record_bytes(3, k)).and_then(|b| a.checked_add(b)));
     let [data] = s.arrays([size])?;
     // Padding bits are checked here: the sparse form drops clear records.
-    let padded = |rec: &[u8], vertices: usize| {
-        let used = vertices * lattice_len(vertices, k);
-        (used..rec.len() * 8).any(|bit| rec[bit >> 3] >> (bit & 7) & 1 != 0)
-    };
+    let padded = |rec: &[u8], vertices: usize| record_has_padding(rec, vertices, k);
     let (t, h) = data.split_at(tets as usize * record_bytes(4, k));
     let bad = t
         .chunks_exact(record_bytes(4, k))
