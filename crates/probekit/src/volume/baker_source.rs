@@ -42,9 +42,11 @@ pub type Progress = dyn Fn(usize, usize) + Sync;
 pub struct BakerSource<'s> {
     baker: Baker<'s>,
     settings: CaptureSettings,
+    /// The scene's triangles, binned.
     bins: TriangleBins,
-    /// The scene's emissive triangles.
-    emissive: Vec<[Vec3; 3]>,
+    /// The scene's emissive triangles, binned: a cell's emitter test reads
+    /// only the triangles of the bins it overlaps.
+    emissive: TriangleBins,
     /// Boxes of its positional lights (their radius around the position).
     light_boxes: Vec<Aabb>,
     /// Rays per point of the harmonic-mean-depth heuristic (default 64).
@@ -80,13 +82,15 @@ impl<'s> BakerSource<'s> {
         Ok(Self {
             baker,
             settings,
-            bins: TriangleBins::new(scene),
-            emissive: scene
-                .emissive_triangles
-                .iter()
-                .filter_map(|e| scene.triangles.get(e.triangle as usize))
-                .map(|t| t.positions)
-                .collect(),
+            bins: TriangleBins::new(scene.triangles.iter().map(|t| t.positions).collect()),
+            emissive: TriangleBins::new(
+                scene
+                    .emissive_triangles
+                    .iter()
+                    .filter_map(|e| scene.triangles.get(e.triangle as usize))
+                    .map(|t| t.positions)
+                    .collect(),
+            ),
             light_boxes: light_boxes(scene),
             depth_rays: 64,
             dirs: spherical_fibonacci(64),
@@ -227,18 +231,14 @@ impl VolumeSource for BakerSource<'_> {
     /// boundary cell — it causes no discontinuity inside the cell.
     fn contains_geometry(&self, min: Vec3, max: Vec3) -> bool {
         let pad = (max - min) * 1e-3;
-        self.bins.overlaps(self.baker.scene(), min + pad, max - pad)
+        self.bins.overlaps(min + pad, max - pad)
     }
 
     /// An emissive triangle (exact overlap test) or a positional light's
     /// box overlaps the cell.
     fn contains_emitter(&self, min: Vec3, max: Vec3) -> bool {
         let cell = Aabb { min, max };
-        self.light_boxes.iter().any(|b| b.overlaps(&cell))
-            || self
-                .emissive
-                .iter()
-                .any(|t| triangle_box_overlap(*t, min, max))
+        self.light_boxes.iter().any(|b| b.overlaps(&cell)) || self.emissive.overlaps(min, max)
     }
 
     fn depth_harmonic_mean(&self, p: Vec3) -> f32 {
@@ -274,9 +274,11 @@ fn light_boxes(scene: &Scene) -> Vec<Aabb> {
         .collect()
 }
 
-/// Triangles binned by their boxes into a uniform grid over the scene
-/// bounds (about 32 bins along the longest axis).
+/// Triangles binned by their boxes into a uniform grid over their bounds
+/// (about 32 bins along the longest axis): the scene's, for the geometry
+/// test, and its emissive ones, for the emitter test.
 struct TriangleBins {
+    tris: Vec<[Vec3; 3]>,
     min: Vec3,
     cell: Vec3,
     res: [usize; 3],
@@ -284,16 +286,19 @@ struct TriangleBins {
 }
 
 impl TriangleBins {
-    fn new(scene: &Scene) -> Self {
+    /// Bins `tris` on a grid of at most 32 cells along the longest axis of
+    /// their bounding box (each triangle in every bin its box overlaps).
+    fn new(tris: Vec<[Vec3; 3]>) -> Self {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for t in &scene.triangles {
-            for p in t.positions {
-                lo = lo.min(p);
-                hi = hi.max(p);
+        for t in &tris {
+            for p in t {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
             }
         }
-        if scene.triangles.is_empty() {
+        if tris.is_empty() {
             return Self {
+                tris,
                 min: Vec3::ZERO,
                 cell: Vec3::ONE,
                 res: [1; 3],
@@ -308,13 +313,13 @@ impl TriangleBins {
         let cell = size / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         let mut bins = vec![Vec::new(); res[0] * res[1] * res[2]];
         let me = Self {
+            tris: Vec::new(),
             min: lo,
             cell,
             res,
             bins: Vec::new(),
         };
-        for (i, t) in scene.triangles.iter().enumerate() {
-            let [a, b, c] = t.positions;
+        for (i, &[a, b, c]) in tris.iter().enumerate() {
             let (i0, i1) = me.range(a.min(b).min(c), a.max(b).max(c));
             for z in i0[2]..=i1[2] {
                 for y in i0[1]..=i1[1] {
@@ -324,7 +329,7 @@ impl TriangleBins {
                 }
             }
         }
-        Self { bins, ..me }
+        Self { tris, bins, ..me }
     }
 
     /// Bin index ranges (inclusive) covering `[lo, hi]`, clamped.
@@ -336,8 +341,10 @@ impl TriangleBins {
         (f(lo), f(hi))
     }
 
-    fn overlaps(&self, scene: &Scene, min: Vec3, max: Vec3) -> bool {
-        if scene.triangles.is_empty() {
+    /// Whether any triangle intersects the closed box `[min, max]`
+    /// ([`triangle_box_overlap`]).
+    fn overlaps(&self, min: Vec3, max: Vec3) -> bool {
+        if self.tris.is_empty() {
             return false;
         }
         let (i0, i1) = self.range(min, max);
@@ -345,7 +352,7 @@ impl TriangleBins {
             for y in i0[1]..=i1[1] {
                 for x in i0[0]..=i1[0] {
                     for &t in &self.bins[x + self.res[0] * (y + self.res[1] * z)] {
-                        if triangle_box_overlap(scene.triangles[t as usize].positions, min, max) {
+                        if triangle_box_overlap(self.tris[t as usize], min, max) {
                             return true;
                         }
                     }
@@ -387,4 +394,39 @@ pub fn triangle_box_overlap(tri: [Vec3; 3], min: Vec3, max: Vec3) -> bool {
         }
     }
     !separated(edges[0].cross(edges[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The binned test answers like testing every triangle, for boxes
+        /// inside, across and outside the triangles' bounds.
+        #[test]
+        fn binned_overlap_equals_brute_force(
+            raw in prop::collection::vec(prop::array::uniform9(-2.0f32..2.0), 0..40),
+            boxes in prop::collection::vec(
+                (prop::array::uniform3(-3.0f32..3.0), prop::array::uniform3(0.0f32..1.5)),
+                1..40,
+            ),
+        ) {
+            // Small triangles around random centres, so bins matter.
+            let tris: Vec<[Vec3; 3]> = raw
+                .iter()
+                .map(|r| {
+                    let c = Vec3::new(r[0], r[1], r[2]);
+                    [c, c + 0.3 * Vec3::new(r[3], r[4], r[5]), c + 0.3 * Vec3::new(r[6], r[7], r[8])]
+                })
+                .collect();
+            let bins = TriangleBins::new(tris.clone());
+            for (lo, size) in &boxes {
+                let min = Vec3::from(*lo);
+                let max = min + Vec3::from(*size);
+                let brute = tris.iter().any(|t| triangle_box_overlap(*t, min, max));
+                prop_assert_eq!(bins.overlaps(min, max), brute, "{:?} {:?}", min, max);
+            }
+        }
+    }
 }
