@@ -111,6 +111,30 @@ fn bake_inspect_query_with_and_without_visibility() {
         ],
         "visibility-sharpness",
     );
+    // Brightness weighting changes the blend; 0 is the default; out of
+    // range is refused.
+    assert_ne!(
+        q("v.probes", &["--brightness-weight", "1"]),
+        q("v.probes", &[])
+    );
+    assert_eq!(
+        q("v.probes", &["--brightness-weight", "0"]),
+        q("v.probes", &[])
+    );
+    for bad in ["4.5", "nan", "-0.5"] {
+        fails_one_line(
+            d,
+            &[
+                "query",
+                "v.probes",
+                "--points",
+                "pts.csv",
+                &format!("--brightness-weight={bad}"),
+                "--json",
+            ],
+            "brightness-weight",
+        );
+    }
     // The flags are checked for volumes too (they ignore them), so a bad
     // value is never silently dropped.
     json(

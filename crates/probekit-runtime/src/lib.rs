@@ -56,6 +56,15 @@ mod math {
         #[cfg(not(feature = "std"))]
         return libm::cbrtf(x);
     }
+
+    /// `x.powf(y)`.
+    #[inline]
+    pub(crate) fn powf(x: f32, y: f32) -> f32 {
+        #[cfg(feature = "std")]
+        return x.powf(y);
+        #[cfg(not(feature = "std"))]
+        return libm::powf(x, y);
+    }
 }
 
 /// Hash maps with std; ordered maps (same lookups, no hasher) without.

@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility] [--seeds 1,2,3] [--seed S]
+//!     [--light-shells] [--visibility [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -16,7 +16,9 @@
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`) and cell
-//! visibility (`CVIS`) — as `probekit eval` does on such a file.
+//! visibility (`CVSP`) — as `probekit eval` does on such a file.
+//! `--brightness A` (with `--visibility`): and with brightness weighting
+//! `A` (`probekit eval --brightness-weight A`).
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and point count. Prints one line
@@ -57,6 +59,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let top = args.iter().any(|a| a == "--top");
     let shells = args.iter().any(|a| a == "--light-shells");
     let visibility = args.iter().any(|a| a == "--visibility");
+    let brightness: f32 = arg(&args, "--brightness", 0.0);
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let EvalSet {
@@ -94,6 +97,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             let mut cloud = ProbeCloud::new(mesh, order as u32, coeffs)?;
             cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
             cloud.set_cell_visibility_bits(Some(cells))?;
+            cloud.set_brightness_weighting(brightness)?;
             let mut ws = WalkState::new();
             pts.iter()
                 .map(|p| cloud.irradiance(p.position, p.normal, &mut ws))

@@ -102,16 +102,27 @@ pub struct VisibilityArgs {
     /// at most 16): higher drops partly hidden probes faster.
     #[arg(long)]
     pub visibility_sharpness: Option<u32>,
+    /// Clouds: brightness exponent α, 0 to 4 (default 0, off): each probe's
+    /// weight is divided by its mean irradiance to the power α, so one bright
+    /// probe does not light a dark cell (1: harmonic mean; fewer leaks, a low
+    /// bias next to lights; see `ProbeCloud::set_brightness_weighting`).
+    #[arg(long)]
+    pub brightness_weight: Option<f32>,
 }
 
 impl VisibilityArgs {
-    /// Checks the values (a finite bias, a sharpness of at most 16).
+    /// Checks the values (a finite bias, a sharpness of at most 16, a
+    /// brightness exponent in 0..=4).
     fn check(&self) -> Result<()> {
         if let Some(b) = self.visibility_bias.filter(|b| !b.is_finite()) {
             bail!("--visibility-bias {b}: expected a finite distance in metres");
         }
         if let Some(k) = self.visibility_sharpness.filter(|&k| k > 16) {
             bail!("--visibility-sharpness {k}: expected 0 to 16");
+        }
+        let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
+        if let Some(a) = self.brightness_weight.filter(|a| !(0.0..=max).contains(a)) {
+            bail!("--brightness-weight {a}: expected 0 to {max}");
         }
         Ok(())
     }
@@ -136,6 +147,10 @@ impl VisibilityArgs {
                 if let Some(m) = c.visibility_maps_mut() {
                     m.set_sharpness(k);
                 }
+            }
+            if let Some(a) = self.brightness_weight {
+                let in_range = c.set_brightness_weighting(a).is_ok();
+                debug_assert!(in_range, "checked by VisibilityArgs::check");
             }
         }
     }

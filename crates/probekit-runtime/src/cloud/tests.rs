@@ -356,3 +356,83 @@ fn invalid_meshes_are_typed_errors() {
         Err(CloudError::LengthMismatch { .. })
     ));
 }
+
+/// A cloud on the `k` Kuhn grid, L1, with probe `i`'s DC radiance
+/// `dc(i)` (grey) and pseudo-random higher bands.
+fn grey_cloud(k: u32, dc: &dyn Fn(usize) -> f32) -> ProbeCloud {
+    let mesh = grid_mesh(k);
+    let mut g = Lcg(7);
+    let coeffs: Vec<Vec3> = (0..mesh.positions().len())
+        .flat_map(|i| {
+            let mut c = vec![Vec3::splat(dc(i))];
+            c.extend((0..3).map(|_| g.v(-0.1, 0.1)));
+            c
+        })
+        .collect();
+    ProbeCloud::new(mesh, 2, coeffs).unwrap()
+}
+
+/// Brightness weighting at α = 1 blends the probes' mean irradiance to the
+/// weighted harmonic mean `(Σ b_i/Ē_i)⁻¹` (computed here from the
+/// barycentric weights alone); at α = 0 the weights are barycentric, and
+/// with equal probes they are barycentric whatever α.
+#[test]
+fn brightness_weighting_blends_the_harmonic_mean() {
+    let dc = |i: usize| 0.05 + (i * 37 % 11) as f32;
+    let mut cloud = grey_cloud(2, &dc);
+    let mut g = Lcg(3);
+    let mut ws = WalkState::new();
+    for _ in 0..200 {
+        let p = g.v(0.01, 1.99);
+        let (idx, bary) = cloud.mesh().weights_at(p, &mut ws);
+        cloud.set_brightness_weighting(0.0).unwrap();
+        let (i0, w0) = cloud.weights_at(p, &mut ws);
+        assert_eq!((i0, w0), (idx, bary));
+        cloud.set_brightness_weighting(1.0).unwrap();
+        let (i1, w1) = cloud.weights_at(p, &mut ws);
+        assert_eq!(i1, idx);
+        assert!((w1.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        let blended: f32 = (0..4).map(|k| w1[k] * dc(idx[k] as usize)).sum();
+        let inv: f32 = (0..4)
+            .filter(|&k| bary[k] > 0.0)
+            .map(|k| bary[k] / dc(idx[k] as usize))
+            .sum();
+        assert!(
+            (blended - 1.0 / inv).abs() <= 1e-4 * blended,
+            "{p}: {blended} vs harmonic {}",
+            1.0 / inv
+        );
+    }
+    let mut same = grey_cloud(2, &|_| 2.0);
+    same.set_brightness_weighting(2.5).unwrap();
+    for _ in 0..50 {
+        let p = g.v(0.01, 1.99);
+        let (_, bary) = same.mesh().weights_at(p, &mut ws);
+        let (_, w) = same.weights_at(p, &mut ws);
+        for k in 0..4 {
+            assert!((w[k] - bary[k]).abs() < 1e-5, "{p}: {w:?} vs {bary:?}");
+        }
+    }
+}
+
+/// A black probe (DC 0) is floored, not divided by: finite weights that sum
+/// to 1; out-of-range exponents are typed errors and change nothing.
+#[test]
+fn brightness_weighting_floors_black_probes_and_refuses_bad_exponents() {
+    let mut cloud = grey_cloud(2, &|i| if i % 2 == 0 { 0.0 } else { 1.0 });
+    cloud.set_brightness_weighting(1.0).unwrap();
+    let mut ws = WalkState::new();
+    let mut g = Lcg(11);
+    for _ in 0..100 {
+        let (_, w) = cloud.weights_at(g.v(0.01, 1.99), &mut ws);
+        assert!(w.iter().all(|x| x.is_finite() && *x >= 0.0), "{w:?}");
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+    }
+    for bad in [-0.5, f32::NAN, 4.5, f32::INFINITY] {
+        assert!(matches!(
+            cloud.set_brightness_weighting(bad),
+            Err(ProbeCloudError::BrightnessExponent(_))
+        ));
+        assert_eq!(cloud.brightness_weighting(), 1.0);
+    }
+}
