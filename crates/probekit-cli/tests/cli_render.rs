@@ -24,9 +24,8 @@ fn render_json_png_and_errors() {
             "--json",
         ],
     );
-    let j = json(
-        d,
-        &[
+    let render = |extra: &[&str]| {
+        let base = [
             "render",
             "--probes",
             "t.probes",
@@ -39,8 +38,10 @@ fn render_json_png_and_errors() {
             "--samples",
             "32",
             "--json",
-        ],
-    );
+        ];
+        json(d, &[&base[..], extra].concat())
+    };
+    let j = render(&[]);
     assert_eq!(j["output"], "r.png");
     assert_eq!(j["probes"], baked["probes"]);
     let (w, h) = (j["width"].as_u64().unwrap(), j["height"].as_u64().unwrap());
@@ -53,6 +54,29 @@ fn render_json_png_and_errors() {
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     let be = |i: usize| u32::from_be_bytes(png[i..i + 4].try_into().unwrap()) as u64;
     assert_eq!((be(16), be(20)), (w, h));
+
+    // Brightness weighting reaches the test object's blend; out of range
+    // is refused before any work.
+    let rmse = |alpha: &str| {
+        render(&["--brightness-weight", alpha])["rel_rmse"]
+            .as_f64()
+            .unwrap()
+    };
+    let plain = j["rel_rmse"].as_f64().unwrap();
+    assert_eq!(rmse("0"), plain);
+    assert_ne!(rmse("1"), plain);
+    fails_one_line(
+        d,
+        &[
+            "render",
+            "--probes",
+            "t.probes",
+            "-o",
+            "x.png",
+            "--brightness-weight=9",
+        ],
+        "brightness-weight",
+    );
 
     // A mesh test object: a 0.5 m cube (OBJ) in room B, the camera aimed at it.
     let mut obj = String::new();

@@ -44,6 +44,10 @@ pub struct RenderArgs {
     /// Most path samples per ground-truth point.
     #[arg(long, default_value_t = 1024)]
     pub samples: u32,
+    /// Clouds: brightness exponent of the test object's blend, 0 to 4
+    /// (default 0, off; as `query --brightness-weight`).
+    #[arg(long, default_value_t = 0.0)]
+    pub brightness_weight: f32,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -117,6 +121,13 @@ pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
 
 /// Runs `probekit render`.
 pub fn run(a: &RenderArgs) -> Result<()> {
+    let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
+    if !(0.0..=max).contains(&a.brightness_weight) {
+        bail!(
+            "--brightness-weight {}: expected 0 to {max}",
+            a.brightness_weight
+        );
+    }
     let file = load_probes(&a.probes)?;
     let scene = load_scene(&a.scene)?;
     let object = match a.object.as_str() {
@@ -131,6 +142,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         show_probes: a.show_probes,
         samples: a.samples,
         bounces: bake_bounces(&file, &scene),
+        brightness_weight: a.brightness_weight,
         ..RenderSettings::default()
     };
     let what = format!("{} with {}", a.scene, a.probes.display());

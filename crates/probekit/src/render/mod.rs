@@ -149,6 +149,10 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Diffuse albedo of the test object.
     pub albedo: f32,
+    /// Clouds: brightness exponent of the test object's blend
+    /// ([`ProbeCloud::set_brightness_weighting`]; 0, the default, is off).
+    /// Volumes ignore it.
+    pub brightness_weight: f32,
 }
 
 impl Default for RenderSettings {
@@ -163,6 +167,7 @@ impl Default for RenderSettings {
             bounces: 3,
             seed: 1,
             albedo: 0.8,
+            brightness_weight: 0.0,
         }
     }
 }
@@ -382,14 +387,25 @@ pub fn render(
     if !(settings.albedo.is_finite() && settings.albedo >= 0.0) {
         return Err(RenderError::BadSettings("albedo must be ≥ 0".into()));
     }
-    let source = Source::from_file(file)?;
-    // Walls are shaded without visibility weighting (module docs): a second
-    // view of the cloud with both kinds off, only when the first has one on.
+    let mut source = Source::from_file(file)?;
+    if let Source::Cloud(c) = &mut source {
+        c.set_brightness_weighting(settings.brightness_weight)
+            .map_err(|e| RenderError::BadSettings(e.to_string()))?;
+    }
+    // Walls are shaded without visibility or brightness weighting (module
+    // docs): a second view of the cloud with them off, only when the first
+    // has one on.
     let unweighted = match &source {
-        Source::Cloud(c) if c.visibility_enabled() || c.cell_visibility_enabled() => {
+        Source::Cloud(c)
+            if c.visibility_enabled()
+                || c.cell_visibility_enabled()
+                || c.brightness_weighting() > 0.0 =>
+        {
             let mut c = c.clone();
             c.set_visibility(false);
             c.set_cell_visibility(false);
+            c.set_brightness_weighting(0.0)
+                .map_err(|e| RenderError::BadSettings(e.to_string()))?;
             Some(Source::Cloud(c))
         }
         _ => None,
