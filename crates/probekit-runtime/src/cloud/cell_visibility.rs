@@ -216,10 +216,16 @@ pub struct CellVisibility {
     stored: usize,
 }
 
+/// Bit `i` of `bytes`, least significant bit of each byte first (the order
+/// of records and masks).
+fn bit(bytes: &[u8], i: usize) -> bool {
+    bytes[i >> 3] >> (i & 7) & 1 != 0
+}
+
 /// Whether every used bit of a record with `vertices` corners at `k` is set.
 fn record_is_clear(record: &[u8], vertices: usize, k: u32) -> bool {
     let used = vertices * lattice_len(vertices, k);
-    (0..used).all(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
+    (0..used).all(|i| bit(record, i))
 }
 
 /// Whether any padding bit (past the `vertices · lattice_len` used ones) of
@@ -227,7 +233,24 @@ fn record_is_clear(record: &[u8], vertices: usize, k: u32) -> bool {
 /// record has none.
 pub fn record_has_padding(record: &[u8], vertices: usize, k: u32) -> bool {
     let used = vertices * lattice_len(vertices, k);
-    (used..record.len() * 8).any(|bit| record[bit >> 3] >> (bit & 7) & 1 != 0)
+    (used..record.len() * 8).any(|i| bit(record, i))
+}
+
+/// Bytes of `tets` tetrahedron records and `hull_faces` hull-face records at
+/// subdivision `k` (dense: every cell; sparse: the stored ones); `None` on
+/// overflow.
+pub fn records_len(k: u32, tets: usize, hull_faces: usize) -> Option<usize> {
+    tets.checked_mul(record_bytes(4, k))?
+        .checked_add(hull_faces.checked_mul(record_bytes(3, k))?)
+}
+
+/// Cells whose bit is set in a sparse `mask` (see
+/// [`CellVisibility::from_sparse`]): among the `tets` tetrahedra, and among
+/// the `hull_faces` hull faces after them. `mask` must hold
+/// `tets + hull_faces` bits.
+pub fn stored_counts(mask: &[u8], tets: usize, hull_faces: usize) -> (usize, usize) {
+    let count = |r: core::ops::Range<usize>| r.filter(|&i| bit(mask, i)).count();
+    (count(0..tets), count(tets..tets + hull_faces))
 }
 
 impl CellVisibility {
@@ -241,13 +264,10 @@ impl CellVisibility {
         if !(1..=MAX_CELL_SUBDIVISION).contains(&k) {
             return None;
         }
-        let (rb4, rb3) = (record_bytes(4, k), record_bytes(3, k));
-        let len = tets
-            .checked_mul(rb4)?
-            .checked_add(hull_faces.checked_mul(rb3)?)?;
-        if data.len() != len {
+        if data.len() != records_len(k, tets, hull_faces)? {
             return None;
         }
+        let (rb4, rb3) = (record_bytes(4, k), record_bytes(3, k));
         let cells = tets.checked_add(hull_faces)?;
         let mut mask = vec![0u8; cells.div_ceil(8)];
         let mut records = Vec::new();
@@ -287,13 +307,8 @@ impl CellVisibility {
         if mask.len() != cells.div_ceil(8) {
             return None;
         }
-        let bit = |i: usize| mask[i >> 3] >> (i & 7) & 1 != 0;
-        let tet_records = (0..tets).filter(|&i| bit(i)).count();
-        let hull_records = (tets..cells).filter(|&i| bit(i)).count();
-        let len = tet_records
-            .checked_mul(record_bytes(4, k))?
-            .checked_add(hull_records.checked_mul(record_bytes(3, k))?)?;
-        if records.len() != len {
+        let (tet_records, hull_records) = stored_counts(&mask, tets, hull_faces);
+        if records.len() != records_len(k, tet_records, hull_records)? {
             return None;
         }
         let mut rank = Vec::with_capacity(cells.div_ceil(64));
@@ -346,19 +361,19 @@ impl CellVisibility {
 
     /// The dense records of [`CellVisibility::new`], clear cells included.
     pub fn to_dense(&self) -> Vec<u8> {
+        // A clear record per corner count: every used bit set.
+        let clear = |vertices: usize| {
+            let mut r = vec![0u8; record_bytes(vertices, self.k)];
+            for i in 0..vertices * lattice_len(vertices, self.k) {
+                r[i >> 3] |= 1 << (i & 7);
+            }
+            r
+        };
+        let (clear4, clear3) = (clear(4), clear(3));
         let mut out = Vec::new();
         for i in 0..self.tets + self.hull_faces {
-            let vertices = if i < self.tets { 4 } else { 3 };
-            match self.record(i) {
-                Some(r) => out.extend_from_slice(r),
-                None => {
-                    let mut r = vec![0u8; record_bytes(vertices, self.k)];
-                    for bit in 0..vertices * lattice_len(vertices, self.k) {
-                        r[bit >> 3] |= 1 << (bit & 7);
-                    }
-                    out.extend(r);
-                }
-            }
+            let empty = if i < self.tets { &clear4 } else { &clear3 };
+            out.extend_from_slice(self.record(i).unwrap_or(empty));
         }
         out
     }
@@ -378,7 +393,7 @@ impl CellVisibility {
         });
         bad.or_else(|| {
             (cells..self.mask.len() * 8)
-                .any(|i| self.mask[i >> 3] >> (i & 7) & 1 != 0)
+                .any(|i| bit(&self.mask, i))
                 .then_some(cells)
         })
     }
@@ -396,7 +411,7 @@ impl CellVisibility {
 
     /// Cell `i`'s record (tetrahedra, then hull faces), `None` when clear.
     fn record(&self, i: usize) -> Option<&[u8]> {
-        if self.mask[i >> 3] >> (i & 7) & 1 == 0 {
+        if !bit(&self.mask, i) {
             return None;
         }
         let r = self.rank_of(i);
@@ -416,8 +431,7 @@ impl CellVisibility {
         let mut out = [0.0f32; N];
         for (v, o) in out.iter_mut().enumerate() {
             for j in 0..N {
-                let bit = v * len + idx[j];
-                if w[j] > 0.0 && record[bit >> 3] >> (bit & 7) & 1 != 0 {
+                if w[j] > 0.0 && bit(record, v * len + idx[j]) {
                     *o += w[j];
                 }
             }

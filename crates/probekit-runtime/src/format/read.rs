@@ -15,7 +15,8 @@ use super::{
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
 use crate::cloud::cell_visibility::{
-    record_bytes, record_has_padding, CellVisibility, MAX_CELL_SUBDIVISION,
+    record_bytes, record_has_padding, records_len, stored_counts, CellVisibility,
+    MAX_CELL_SUBDIVISION,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -639,9 +640,7 @@ fn parse_visibility(s: &Sec<'_>) -> Result<super::DistanceMoments, FormatError> 
 fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
     let [tets, faces, k, _] = s.header()?;
     check_subdivision(s, k)?;
-    let size = bytes_for(tets, record_bytes(4, k))
-        .and_then(|a| bytes_for(faces, record_bytes(3, k)).and_then(|b| a.checked_add(b)));
-    let [data] = s.arrays([size])?;
+    let [data] = s.arrays([records_len(k, tets as usize, faces as usize)])?;
     // Padding bits are checked here: the sparse form drops clear records.
     let padded = |rec: &[u8], vertices: usize| record_has_padding(rec, vertices, k);
     let (t, h) = data.split_at(tets as usize * record_bytes(4, k));
@@ -683,16 +682,8 @@ fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatErr
     check_subdivision(s, k)?;
     let cells = (tets as usize).checked_add(faces as usize);
     let ([mask], end) = s.arrays_at(SECTION_HEADER_LEN, [cells.map(|c| c.div_ceil(8))], false)?;
-    let bit = |i: usize| mask[i >> 3] >> (i & 7) & 1 != 0;
-    let t = (0..tets as usize).filter(|&i| bit(i)).count();
-    let h = (tets as usize..tets as usize + faces as usize)
-        .filter(|&i| bit(i))
-        .count();
-    let size = t.checked_mul(record_bytes(4, k)).and_then(|a| {
-        h.checked_mul(record_bytes(3, k))
-            .and_then(|b| a.checked_add(b))
-    });
-    let ([records], _) = s.arrays_at(end, [size], true)?;
+    let (t, h) = stored_counts(mask, tets as usize, faces as usize);
+    let ([records], _) = s.arrays_at(end, [records_len(k, t, h)], true)?;
     CellVisibility::from_sparse(
         k,
         tets as usize,
