@@ -3,7 +3,7 @@
 //! [--samples N] [--json]`: the scene lit by the probes beside the same
 //! path-traced, and the error (library: [`probekit::render`]).
 
-use super::util::{load_probes, load_scene};
+use super::util::{check_brightness_weight, load_probes, load_scene};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
@@ -121,13 +121,7 @@ pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
 
 /// Runs `probekit render`.
 pub fn run(a: &RenderArgs) -> Result<()> {
-    let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
-    if !(0.0..=max).contains(&a.brightness_weight) {
-        bail!(
-            "--brightness-weight {}: expected 0 to {max}",
-            a.brightness_weight
-        );
-    }
+    check_brightness_weight(a.brightness_weight)?;
     let file = load_probes(&a.probes)?;
     let scene = load_scene(&a.scene)?;
     let object = match a.object.as_str() {

@@ -110,6 +110,17 @@ pub struct VisibilityArgs {
     pub brightness_weight: Option<f32>,
 }
 
+/// Checks a `--brightness-weight` value: the range
+/// `ProbeCloud::set_brightness_weighting` accepts (NaN refused), so a bad
+/// value fails before any work, for volumes too.
+pub fn check_brightness_weight(a: f32) -> Result<()> {
+    let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
+    if !(0.0..=max).contains(&a) {
+        bail!("--brightness-weight {a}: expected 0 to {max}");
+    }
+    Ok(())
+}
+
 impl VisibilityArgs {
     /// Checks the values (a finite bias, a sharpness of at most 16, a
     /// brightness exponent in 0..=4).
@@ -120,9 +131,8 @@ impl VisibilityArgs {
         if let Some(k) = self.visibility_sharpness.filter(|&k| k > 16) {
             bail!("--visibility-sharpness {k}: expected 0 to 16");
         }
-        let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
-        if let Some(a) = self.brightness_weight.filter(|a| !(0.0..=max).contains(a)) {
-            bail!("--brightness-weight {a}: expected 0 to {max}");
+        if let Some(a) = self.brightness_weight {
+            check_brightness_weight(a)?;
         }
         Ok(())
     }
