@@ -4,7 +4,7 @@
 //! walk), coherent queries (one object moving in small steps, warm state),
 //! and batched queries outside the hull (closest-hull-point outer cells);
 //! and the cost of visibility weighting (`cloud_visibility`: distance
-//! moments, cell visibility, both).
+//! moments, cell visibility, both, and both with fitted probe weights).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -155,6 +155,12 @@ fn visibility(c: &mut Criterion) {
     cloud
         .set_cell_visibility_bits(Some(CellVisibility::new(k, tets, faces, bits).unwrap()))
         .unwrap();
+    // Fitted probe weights, switched on for the last case only.
+    cloud
+        .set_probe_weights(Some(
+            (0..probes).map(|i| 0.25 + (i % 9) as f32 * 0.3).collect(),
+        ))
+        .unwrap();
     let path: Vec<Vec3> = (0..10_000)
         .map(|i| {
             let t = i as f32 * 1e-3;
@@ -167,14 +173,22 @@ fn visibility(c: &mut Criterion) {
         .collect();
     let mut g = c.benchmark_group("cloud_visibility");
     g.throughput(Throughput::Elements(path.len() as u64));
-    for (moments, cells) in [(false, false), (true, false), (false, true), (true, true)] {
+    for (moments, cells, weights) in [
+        (false, false, false),
+        (true, false, false),
+        (false, true, false),
+        (true, true, false),
+        (true, true, true),
+    ] {
         cloud.set_visibility(moments);
         cloud.set_cell_visibility(cells);
-        let name = match (moments, cells) {
-            (false, false) => "irradiance_visibility_off",
-            (true, false) => "irradiance_moments",
-            (false, true) => "irradiance_cells",
-            (true, true) => "irradiance_moments_and_cells",
+        cloud.set_probe_weighting(weights);
+        let name = match (moments, cells, weights) {
+            (false, false, _) => "irradiance_visibility_off",
+            (true, false, _) => "irradiance_moments",
+            (false, true, _) => "irradiance_cells",
+            (true, true, false) => "irradiance_moments_and_cells",
+            (true, true, true) => "irradiance_moments_cells_and_weights",
         };
         g.bench_function(name, |b| {
             b.iter(|| {

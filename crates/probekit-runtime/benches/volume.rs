@@ -43,6 +43,7 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
         groups: Vec::new(),
         visibility: None,
         cell_visibility: None,
+        probe_weights: None,
         metadata: String::new(),
     }
 }

@@ -32,6 +32,7 @@ fn seeds() -> Vec<Vec<u8>> {
         groups_file().to_bytes().unwrap(),
         compact_volume_file().to_bytes().unwrap(),
         cvis_file().to_bytes().unwrap(),
+        weights_file().to_bytes().unwrap(),
     ]
 }
 

@@ -50,7 +50,7 @@ pub mod cell_visibility;
 pub mod probes;
 pub mod visibility;
 pub use cell_visibility::CellVisibility;
-pub use probes::{ProbeCloud, ProbeCloudError, MAX_BRIGHTNESS_EXPONENT};
+pub use probes::{ProbeCloud, ProbeCloudError, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE};
 pub use visibility::VisibilityMaps;
 
 /// Neighbour marker for a face on the convex hull, as in the baker's output.

@@ -48,6 +48,19 @@ pub enum ProbeCloudError {
     /// The brightness exponent is not a number in `0..=`[`MAX_BRIGHTNESS_EXPONENT`].
     #[error("brightness exponent {0}: expected 0 to 4")]
     BrightnessExponent(f32),
+    /// The fitted probe weights do not cover the probes, or one is outside
+    /// [`PROBE_WEIGHT_RANGE`] (or not a number).
+    #[error("probe weights: {count} given for {probes} probes, or probe {index}'s weight {value} is outside 1e-6..=1e6")]
+    ProbeWeights {
+        /// Weights given.
+        count: usize,
+        /// Probes of the cloud.
+        probes: usize,
+        /// First probe whose weight is out of range (0 when the count is wrong).
+        index: usize,
+        /// Its weight (NaN when the count is wrong).
+        value: f32,
+    },
     /// The coefficients could not be decoded.
     #[error(transparent)]
     Format(#[from] FormatError),
@@ -70,7 +83,16 @@ pub struct ProbeCloud {
     /// Brightness exponent `α` of [`ProbeCloud::set_brightness_weighting`]
     /// (0: off).
     brightness: f32,
+    /// Fitted per-probe blend weights ([`ProbeCloud::set_probe_weights`]).
+    probe_weights: Option<Vec<f32>>,
+    probe_weights_on: bool,
 }
+
+/// The range a fitted probe weight ([`ProbeCloud::set_probe_weights`], the
+/// file's `PWGT` section) must lie in: positive, finite, and far enough from
+/// 0 and infinity that four of them times the other factors neither
+/// underflow nor overflow an `f32` sum.
+pub const PROBE_WEIGHT_RANGE: core::ops::RangeInclusive<f32> = 1e-6..=1e6;
 
 /// Largest brightness exponent [`ProbeCloud::set_brightness_weighting`]
 /// accepts.
@@ -94,6 +116,9 @@ impl ProbeCloud {
         }
         if let Some(c) = &file.cell_visibility {
             cloud.set_cell_visibility_bits(Some(c.clone()))?;
+        }
+        if let Some(w) = &file.probe_weights {
+            cloud.set_probe_weights(Some(w.clone()))?;
         }
         Ok(cloud)
     }
@@ -131,6 +156,8 @@ impl ProbeCloud {
             cells: None,
             cells_on: true,
             brightness: 0.0,
+            probe_weights: None,
+            probe_weights_on: true,
         })
     }
 
@@ -253,6 +280,75 @@ impl ProbeCloud {
         self.brightness
     }
 
+    /// Attaches (or with `None` removes) fitted per-probe blend weights
+    /// `s_i`, one per probe, each in [`PROBE_WEIGHT_RANGE`]: probe `i`'s
+    /// blend weight is multiplied by `s_i` before the renormalization of
+    /// [`ProbeCloud::weights_at`]. The blend stays a convex combination of
+    /// the probes' SH, exact for a constant field, and continuous: on a
+    /// face the fourth probe's barycentric weight is 0, so both cells blend
+    /// the face's three probes alike. `probekit bake` fits them to path-traced
+    /// points (`probekit::cloud::blend_fit`, the file's `PWGT` section), so
+    /// that a probe whose light should not reach its neighbours' space — one
+    /// standing in a doorway, seeing a lit corridor, beside a dark closet —
+    /// counts less. All weights 1 is the plain blend.
+    pub fn set_probe_weights(&mut self, weights: Option<Vec<f32>>) -> Result<(), ProbeCloudError> {
+        if let Some(w) = &weights {
+            let bad = (w.len() != self.probe_count())
+                .then_some((0, f32::NAN))
+                .or_else(|| {
+                    w.iter()
+                        .position(|x| !PROBE_WEIGHT_RANGE.contains(x))
+                        .map(|i| (i, w[i]))
+                });
+            if let Some((index, value)) = bad {
+                return Err(ProbeCloudError::ProbeWeights {
+                    count: w.len(),
+                    probes: self.probe_count(),
+                    index,
+                    value,
+                });
+            }
+        }
+        self.probe_weights = weights;
+        Ok(())
+    }
+
+    /// The fitted probe weights, if the cloud has them (whether or not they
+    /// are switched on).
+    pub fn probe_weights(&self) -> Option<&[f32]> {
+        self.probe_weights.as_deref()
+    }
+
+    /// Switches the fitted probe weights on (the default) or off; without
+    /// weights it has no effect.
+    pub fn set_probe_weighting(&mut self, on: bool) {
+        self.probe_weights_on = on;
+    }
+
+    /// True when queries apply fitted probe weights (present and on).
+    pub fn probe_weighting_enabled(&self) -> bool {
+        self.probe_weights_on && self.probe_weights.is_some()
+    }
+
+    /// `s_i·Ē_i^−α` for the cell's probes with a non-zero weight in `bary`:
+    /// the fitted probe weight (1 when absent or off) times the brightness
+    /// factor (1 when off or when no probe is bright); 1 in unused slots.
+    fn probe_factors(&self, probes: &[u32; 4], bary: &[f32; 4]) -> [f32; 4] {
+        let mut f = self.brightness_factors(probes, bary);
+        if let Some(s) = self
+            .probe_weights
+            .as_ref()
+            .filter(|_| self.probe_weights_on)
+        {
+            for k in 0..4 {
+                if bary[k] != 0.0 {
+                    f[k] *= s[probes[k] as usize];
+                }
+            }
+        }
+        f
+    }
+
     /// `Ē_i^−α` for the cell's probes with a non-zero weight in `bary`
     /// (1 elsewhere, and everywhere when off or when no probe is bright).
     fn brightness_factors(&self, probes: &[u32; 4], bary: &[f32; 4]) -> [f32; 4] {
@@ -282,15 +378,21 @@ impl ProbeCloud {
     /// [`TetMesh::weights_at`] (tetrahedron or outer cell), times each
     /// probe's cell visibility `c_i(p)` ([`super::cell_visibility`]) and
     /// Chebyshev visibility `v_i(p)` ([`super::visibility`]) where present
-    /// and on, and the brightness factor `f_i = Ē_i^−α` when
-    /// [`ProbeCloud::set_brightness_weighting`] is on, renormalized:
+    /// and on, and the factor `f_i = s_i·Ē_i^−α`: the fitted probe weight
+    /// `s_i` ([`ProbeCloud::set_probe_weights`]) when present and on, and the
+    /// brightness factor when [`ProbeCloud::set_brightness_weighting`] is
+    /// on; renormalized:
     /// `b_i·c_i·v_i·f_i / Σ_j b_j·c_j·v_j·f_j`. Where no probe of the cell
     /// sees `p` (the sum is 0) it falls back to `b_i·v_i·f_i`, then
     /// `b_i·f_i`, then `b_i`. Unused slots have weight 0. No allocation.
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
         let maps = self.visibility.as_ref().filter(|_| self.visibility_on);
         let cells = self.cells.as_ref().filter(|_| self.cells_on);
-        if maps.is_none() && cells.is_none() && self.brightness <= 0.0 {
+        if maps.is_none()
+            && cells.is_none()
+            && self.brightness <= 0.0
+            && !self.probe_weighting_enabled()
+        {
             return self.mesh.weights_at(p, state);
         }
         let (probes, bary, c) = match self.mesh.locate(p, state) {
@@ -327,7 +429,7 @@ impl ProbeCloud {
             let sum: f32 = w.iter().sum();
             (sum.is_finite() && sum > 0.0).then(|| w.map(|x| x / sum))
         };
-        let f = self.brightness_factors(&probes, &bary);
+        let f = self.probe_factors(&probes, &bary);
         let bcv = core::array::from_fn(|k| bary[k] * c[k] * v[k] * f[k]);
         let w = normalized(bcv)
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k] * f[k])))

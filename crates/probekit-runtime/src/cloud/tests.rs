@@ -436,3 +436,148 @@ fn brightness_weighting_floors_black_probes_and_refuses_bad_exponents() {
         assert_eq!(cloud.brightness_weighting(), 1.0);
     }
 }
+
+/// Fitted probe weights: the blend is `b_i·s_i / Σ b_j·s_j` (checked
+/// against the mesh's barycentric weights, summed here), all-ones weights
+/// are the plain blend bit for bit, equal probes are reproduced whatever the
+/// weights, the weights can be switched off, and bad weights are typed
+/// errors that change nothing.
+#[test]
+fn probe_weights_multiply_the_barycentric_weights() {
+    let dc = |i: usize| 0.5 + (i * 13 % 7) as f32;
+    let mut cloud = grey_cloud(3, &dc);
+    let n = cloud.probe_count();
+    let s: Vec<f32> = (0..n).map(|i| 0.01 + (i * 29 % 17) as f32 * 0.7).collect();
+    let mut g = Lcg(5);
+    let mut ws = WalkState::new();
+    let pts: Vec<Vec3> = (0..300).map(|_| g.v(0.01, 3.99)).collect();
+    let plain: Vec<_> = pts.iter().map(|&p| cloud.weights_at(p, &mut ws)).collect();
+    cloud.set_probe_weights(Some(vec![1.0; n])).unwrap();
+    for (p, want) in pts.iter().zip(&plain) {
+        assert_eq!(cloud.weights_at(*p, &mut ws), *want);
+    }
+    cloud.set_probe_weights(Some(s.clone())).unwrap();
+    assert!(cloud.probe_weighting_enabled());
+    for &p in &pts {
+        let (idx, bary) = cloud.mesh().weights_at(p, &mut ws);
+        let (i, w) = cloud.weights_at(p, &mut ws);
+        assert_eq!(i, idx);
+        let sum: f32 = (0..4).map(|k| bary[k] * s[idx[k] as usize]).sum();
+        for k in 0..4 {
+            let want = bary[k] * s[idx[k] as usize] / sum;
+            assert!(
+                (w[k] - want).abs() < 1e-5,
+                "{p}: {w:?}, want slot {k} {want}"
+            );
+        }
+    }
+    cloud.set_probe_weighting(false);
+    for (p, want) in pts.iter().zip(&plain) {
+        assert_eq!(cloud.weights_at(*p, &mut ws), *want);
+    }
+    cloud.set_probe_weighting(true);
+    // Equal probes are reproduced exactly, whatever the weights.
+    let one = [
+        Vec3::splat(2.0),
+        Vec3::new(0.1, -0.2, 0.3),
+        Vec3::splat(-0.05),
+        Vec3::X,
+    ];
+    let mut same = ProbeCloud::new(grid_mesh(3), 2, one.repeat(n)).unwrap();
+    same.set_probe_weights(Some(s.clone())).unwrap();
+    for &p in &pts[..50] {
+        for nrm in [Vec3::Y, -Vec3::X, Vec3::new(0.6, 0.0, 0.8)] {
+            let want = probekit_sh::irradiance(&one, nrm);
+            let e = same.irradiance(p, nrm, &mut ws);
+            assert!((e - want).abs().max_element() < 1e-5, "{p}: {e} vs {want}");
+        }
+    }
+    // Bad weights.
+    for bad in [
+        vec![1.0; n - 1],
+        {
+            let mut v = vec![1.0; n];
+            v[3] = 0.0;
+            v
+        },
+        {
+            let mut v = vec![1.0; n];
+            v[5] = f32::NAN;
+            v
+        },
+        {
+            let mut v = vec![1.0; n];
+            v[0] = 2e6;
+            v
+        },
+        {
+            let mut v = vec![1.0; n];
+            v[1] = -1.0;
+            v
+        },
+    ] {
+        assert!(matches!(
+            cloud.set_probe_weights(Some(bad)),
+            Err(ProbeCloudError::ProbeWeights { .. })
+        ));
+        assert_eq!(cloud.probe_weights(), Some(&s[..]));
+    }
+    cloud.set_probe_weights(None).unwrap();
+    assert!(!cloud.probe_weighting_enabled());
+}
+
+/// With probe weights the blend is continuous across every interior face:
+/// just inside either cell, the weights of the face's three probes agree
+/// and the fourth's vanish.
+#[test]
+fn probe_weights_keep_the_blend_continuous_across_faces() {
+    let mut cloud = grey_cloud(3, &|i| 1.0 + i as f32);
+    let n = cloud.probe_count();
+    cloud
+        .set_probe_weights(Some((0..n).map(|i| 0.05 + (i * 7 % 5) as f32).collect()))
+        .unwrap();
+    let mesh = cloud.mesh().clone();
+    let pos = mesh.positions();
+    let mut g = Lcg(9);
+    let mut ws = WalkState::new();
+    let mut checked = 0;
+    for (t, (tet, nb)) in mesh.tets().iter().zip(mesh.neighbors()).enumerate() {
+        for (f, &n) in nb.iter().enumerate() {
+            if n == HULL {
+                continue;
+            }
+            let face: Vec<u32> = (0..4).filter(|&k| k != f).map(|k| tet[k]).collect();
+            // A random point of the face, and its normal offset both ways.
+            let (a, b) = (g.f(), g.f());
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
+            let [p0, p1, p2] = [0, 1, 2].map(|k| pos[face[k] as usize]);
+            let q = p0 + a * (p1 - p0) + b * (p2 - p0);
+            let nrm = (p1 - p0).cross(p2 - p0).normalize() * 1e-4;
+            let blend = |p: Vec3, ws: &mut WalkState| {
+                let (i, w) = cloud.weights_at(p, ws);
+                let mut m = HashMap::new();
+                for k in 0..4 {
+                    *m.entry(i[k]).or_insert(0.0f32) += w[k];
+                }
+                m
+            };
+            let (x, y) = (blend(q + nrm, &mut ws), blend(q - nrm, &mut ws));
+            for v in &face {
+                let (wx, wy) = (
+                    x.get(v).copied().unwrap_or(0.0),
+                    y.get(v).copied().unwrap_or(0.0),
+                );
+                assert!(
+                    (wx - wy).abs() < 2e-3,
+                    "tet {t} face {f} probe {v}: {wx} vs {wy}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}

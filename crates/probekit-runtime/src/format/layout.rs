@@ -12,12 +12,13 @@ pub const VERSION_MAJOR: u16 = 1;
 /// Newest minor version this reader knows (1.1 added `LGRP`, light
 /// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
 /// distance moments for visibility-aware blending; 1.4 added `CVIS`, per-cell
-/// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse). Files
+/// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse; 1.6
+/// added `PWGT`, fitted per-probe blend weights). Files
 /// with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 5;
+pub const VERSION_MINOR: u16 = 6;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
@@ -39,6 +40,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 }
 
 /// The lowest minor version whose section set includes every id in `ids`:
+/// 6 if `PWGT` ([`SectionId::PROBE_WEIGHTS`]) is present, else
 /// 5 if `CVSP` ([`SectionId::CELL_VISIBILITY_SPARSE`]) is present, else
 /// 4 if `CVIS` ([`SectionId::CELL_VISIBILITY`]) is present, else
 /// 3 if `VISM` ([`SectionId::VISIBILITY`]) is present, else 2 if `OCTC`
@@ -47,6 +49,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
     ids.into_iter()
         .map(|id| match id {
+            SectionId::PROBE_WEIGHTS => 6,
             SectionId::CELL_VISIBILITY_SPARSE => 5,
             SectionId::CELL_VISIBILITY => 4,
             SectionId::VISIBILITY => 3,
@@ -132,11 +135,14 @@ impl SectionId {
     /// have none (format 1.5; [`crate::cloud::CellVisibility`]). The writer
     /// writes this form; a file holds at most one of `CVIS` and `CVSP`.
     pub const CELL_VISIBILITY_SPARSE: Self = Self::from_fourcc(*b"CVSP");
+    /// Fitted per-probe blend weights of a cloud, one `f32` per probe
+    /// (format 1.6; [`crate::cloud::ProbeCloud::set_probe_weights`]).
+    pub const PROBE_WEIGHTS: Self = Self::from_fourcc(*b"PWGT");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 15] = [
+    pub const KNOWN: [Self; 16] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -151,6 +157,7 @@ impl SectionId {
         Self::VISIBILITY,
         Self::CELL_VISIBILITY,
         Self::CELL_VISIBILITY_SPARSE,
+        Self::PROBE_WEIGHTS,
         Self::METADATA,
     ];
 
@@ -183,6 +190,7 @@ impl SectionId {
             Self::VISIBILITY => "visibility",
             Self::CELL_VISIBILITY => "cell_visibility",
             Self::CELL_VISIBILITY_SPARSE => "cell_visibility",
+            Self::PROBE_WEIGHTS => "probe_weights",
             Self::HEADER => "header",
             _ => return None,
         })

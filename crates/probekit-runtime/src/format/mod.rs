@@ -335,6 +335,11 @@ pub struct ProbeFile {
     /// Per-cell lattice visibility bits of a cloud's tetrahedra and hull
     /// faces (`CVIS`, format 1.4; `None`: no section).
     pub cell_visibility: Option<CellVisibility>,
+    /// Fitted per-probe blend weights of a cloud (`PWGT`, format 1.6; one
+    /// per probe, each in [`crate::cloud::PROBE_WEIGHT_RANGE`]; `None`: no
+    /// section, every probe weighs 1). See
+    /// [`crate::cloud::ProbeCloud::set_probe_weights`].
+    pub probe_weights: Option<Vec<f32>>,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -366,6 +371,7 @@ impl ProbeFile {
             groups: Vec::new(),
             visibility: None,
             cell_visibility: None,
+            probe_weights: None,
             metadata: String::new(),
         }
     }

@@ -694,6 +694,17 @@ fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatErr
     .ok_or(FormatError::CountOverflow(s.id))
 }
 
+/// `PWGT` (1.6): one little-endian `f32` per probe (range checked by
+/// [`super::validate`]).
+fn parse_probe_weights(s: &Sec<'_>) -> Result<Vec<f32>, FormatError> {
+    let [count, ..] = s.header()?;
+    let [data] = s.arrays([bytes_for(count, 4)])?;
+    Ok(data
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
@@ -742,6 +753,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
                     parse_cell_visibility_sparse(&s)?
                 });
             }
+            SectionId::PROBE_WEIGHTS => file.probe_weights = Some(parse_probe_weights(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.

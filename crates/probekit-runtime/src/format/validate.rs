@@ -408,6 +408,31 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
+    // Fitted probe weights (1.6): one per probe of a cloud, each in range.
+    if let Some(w) = &f.probe_weights {
+        let id = SectionId::PROBE_WEIGHTS;
+        if f.kind != ProbeFileKind::Cloud {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: 0,
+                reason: "probe weights belong to a probe cloud",
+            });
+        }
+        if w.len() != probes {
+            return Err(count_mismatch(id, probes, w.len()));
+        }
+        if let Some(k) = w
+            .iter()
+            .position(|x| !crate::cloud::PROBE_WEIGHT_RANGE.contains(x))
+        {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: k as u64,
+                reason: "probe weight outside 1e-6..=1e6 or not a number",
+            });
+        }
+    }
+
     match f.kind {
         ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
             Err(FormatError::MissingSection(SectionId::GRID))

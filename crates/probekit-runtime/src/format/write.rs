@@ -288,6 +288,14 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::CELL_VISIBILITY_SPARSE, s.finish()));
     }
 
+    if let Some(w) = &f.probe_weights {
+        let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, 0, 0, 0]);
+        for x in w {
+            s.bytes(&x.to_le_bytes());
+        }
+        out.push((SectionId::PROBE_WEIGHTS, s.finish()));
+    }
+
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
     s.bytes(f.metadata.as_bytes());
     out.push((SectionId::METADATA, s.finish()));
@@ -314,7 +322,8 @@ impl ProbeFile {
     /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
     /// (1), a regular octree, written compactly as `OCTC` (2), distance
     /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
-    /// or cell visibility, written sparse as `CVSP` (5).
+    /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
+    /// weights, `PWGT` (6).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;

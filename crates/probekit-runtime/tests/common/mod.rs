@@ -887,3 +887,11 @@ pub fn cvis_file() -> ProbeFile {
     );
     f
 }
+
+/// [`cvis_file`] with fitted probe weights (`PWGT`, format 1.6).
+pub fn weights_file() -> ProbeFile {
+    let mut f = cvis_file();
+    let n = f.positions.len();
+    f.probe_weights = Some((0..n).map(|i| 0.25 + 0.5 * i as f32).collect());
+    f
+}

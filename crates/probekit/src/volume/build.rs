@@ -871,6 +871,7 @@ fn finish(
         groups: Vec::new(),
         visibility: None,
         cell_visibility: None,
+        probe_weights: None,
         metadata: String::new(),
     };
     structure(&mut file);

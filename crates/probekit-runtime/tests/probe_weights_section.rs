@@ -1,0 +1,102 @@
+//! Fitted probe weights: `PWGT` (format 1.6) round trips at minor 6 with the
+//! bytes of the documented layout, reaches [`ProbeCloud`], and hostile
+//! sections (out-of-range or non-finite weights, wrong counts, a non-cloud
+//! file, truncation, byte mutations) are refused with typed errors, never a
+//! panic.
+
+mod common;
+
+use common::*;
+use probekit_runtime::cloud::ProbeCloud;
+use probekit_runtime::format::*;
+
+#[test]
+fn probe_weights_round_trip_at_minor_6_with_the_documented_bytes() {
+    let f = weights_file();
+    let w = f.probe_weights.clone().unwrap();
+    let bytes = f.to_bytes().unwrap();
+    assert_eq!(minor_of(&bytes), 6);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    let (off, len) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
+    // Header [count, 0, 0, 0], then one little-endian f32 per probe, padded to 16.
+    assert_eq!(len, 16 + (4 * w.len()).div_ceil(16) * 16);
+    let word =
+        |i: usize| u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap());
+    assert_eq!(
+        [word(0), word(1), word(2), word(3)],
+        [w.len() as u32, 0, 0, 0]
+    );
+    for (i, x) in w.iter().enumerate() {
+        assert_eq!(f32::from_bits(word(4 + i)), *x);
+    }
+    assert_eq!(
+        file_bytes_by_section(&bytes).unwrap()["probe_weights"],
+        len as u64
+    );
+    // Without the section the file is what it was before 1.6.
+    let mut old = f.clone();
+    old.probe_weights = None;
+    assert_eq!(old.to_bytes().unwrap(), cvis_file().to_bytes().unwrap());
+    assert_eq!(minor_of(&old.to_bytes().unwrap()), 5);
+}
+
+#[test]
+fn a_loaded_cloud_blends_with_the_files_weights() {
+    // `full_file`'s tetrahedra with weights (`cvis_file`'s bits are a
+    // format fixture, not the mesh's hull).
+    let mut f = full_file();
+    f.probe_weights = weights_file().probe_weights;
+    let cloud =
+        ProbeCloud::from_file(&ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap()).unwrap();
+    assert_eq!(cloud.probe_weights(), f.probe_weights.as_deref());
+    assert!(cloud.probe_weighting_enabled());
+}
+
+#[test]
+fn bad_probe_weights_are_typed_errors() {
+    let good = weights_file().to_bytes().unwrap();
+    let (off, _) = find_section(&good, SectionId::PROBE_WEIGHTS);
+    for (k, bad) in [
+        (0usize, f32::NAN),
+        (1, 0.0),
+        (2, -1.0),
+        (3, 2e6),
+        (4, f32::INFINITY),
+        (0, 1e-7),
+    ] {
+        let r = load_patched(&good, |b| put_u32(b, off + 16 + 4 * k, bad.to_bits()));
+        assert!(
+            matches!(
+                r,
+                Err(FormatError::InvalidValue { id: SectionId::PROBE_WEIGHTS, element, .. }) if element == k as u64
+            ),
+            "{bad} at {k}: {r:?}"
+        );
+    }
+    // The writer refuses them too.
+    let mut f = weights_file();
+    f.probe_weights.as_mut().unwrap()[2] = f32::NAN;
+    assert!(f.to_bytes().is_err());
+    // One weight fewer than probes.
+    let mut f = weights_file();
+    f.probe_weights.as_mut().unwrap().pop();
+    assert!(f.validate().is_err());
+    let r = load_patched(&good, |b| put_u32(b, off, 4));
+    assert!(r.is_err(), "{r:?}");
+    // Only clouds have probe weights.
+    let mut f = weights_file();
+    f.kind = ProbeFileKind::Rig;
+    assert!(matches!(
+        f.validate(),
+        Err(FormatError::InvalidValue {
+            id: SectionId::PROBE_WEIGHTS,
+            ..
+        })
+    ));
+}
+
+#[test]
+fn hostile_probe_weight_sections_never_panic() {
+    let good = weights_file().to_bytes().unwrap();
+    hostile_section_variants(&good, SectionId::PROBE_WEIGHTS, 400, 0x9e37);
+}
