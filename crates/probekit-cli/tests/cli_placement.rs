@@ -223,9 +223,9 @@ fn eval_compare_and_sweep_plot() {
     // A grid of the file's probe count, less cells inside the wall.
     let (gn, n) = (g["probes"].as_u64().unwrap(), v["probes"].as_u64().unwrap());
     assert!(gn >= 4 && gn <= n, "{v}");
-    // The grid is baked with the file's visibility data and blended with
-    // the same flags: `--no-visibility` on a file with visibility gives the
-    // grid figures of a file baked without it.
+    // The grid is baked with the file's visibility data and probe weights
+    // and blended with the same flags: `--no-visibility --no-probe-weights`
+    // on a file with both gives the grid figures of a file baked without.
     let plain = dir.path().join("plain.probes");
     json(&probekit(&[
         "bake",
@@ -233,12 +233,13 @@ fn eval_compare_and_sweep_plot() {
         "--grid",
         "20",
         "--no-visibility",
+        "--no-probe-weights",
         "-o",
         plain.to_str().unwrap(),
         "--json",
     ]));
     assert_eq!(
-        eval_compare(p, &["--no-visibility"])["compare"]["grid"],
+        eval_compare(p, &["--no-visibility", "--no-probe-weights"])["compare"]["grid"],
         eval_compare(plain.to_str().unwrap(), &[])["compare"]["grid"]
     );
     let o = probekit(&[

@@ -4,12 +4,42 @@
 
 mod common;
 use common::{fails_one_line, json, run};
+use std::path::Path;
+
+/// Query points near the demo's dividing wall (both sides), in room A and
+/// in room B, as `pts.csv` in `d`.
+fn write_points(d: &Path) {
+    std::fs::write(
+        d.join("pts.csv"),
+        "x,y,z,nx,ny,nz\n3.9,1.2,2.0,1,0,0\n4.25,1.2,2.0,-1,0,0\n1.0,1.5,1.0,0,1,0\n6.5,0.5,3.5,0,0,-1\n",
+    )
+    .unwrap();
+}
+
+/// `query FILE --points pts.csv --json EXTRA...`'s irradiance array.
+fn query(d: &Path, file: &str, extra: &[&str]) -> serde_json::Value {
+    json(
+        d,
+        &[&["query", file, "--points", "pts.csv", "--json"][..], extra].concat(),
+    )["irradiance"]
+        .clone()
+}
 
 #[test]
 fn bake_inspect_query_with_and_without_visibility() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let common = ["bake", "--grid", "40", "--samples", "32", "--bounces", "1"];
+    // Visibility alone here (probe weights: the next test).
+    let common = [
+        "bake",
+        "--grid",
+        "40",
+        "--samples",
+        "32",
+        "--bounces",
+        "1",
+        "--no-probe-weights",
+    ];
     json(
         d,
         &[
@@ -54,18 +84,8 @@ fn bake_inspect_query_with_and_without_visibility() {
 
     // Near the demo's dividing wall a query differs with visibility on and
     // off; --no-visibility on the file with moments equals the file without.
-    std::fs::write(
-        d.join("pts.csv"),
-        "x,y,z,nx,ny,nz\n3.9,1.2,2.0,1,0,0\n4.25,1.2,2.0,-1,0,0\n1.0,1.5,1.0,0,1,0\n",
-    )
-    .unwrap();
-    let q = |f: &str, extra: &[&str]| {
-        json(
-            d,
-            &[&["query", f, "--points", "pts.csv", "--json"][..], extra].concat(),
-        )["irradiance"]
-            .clone()
-    };
+    write_points(d);
+    let q = |f: &str, extra: &[&str]| query(d, f, extra);
     assert_eq!(q("v.probes", &["--no-visibility"]), q("n.probes", &[]));
     assert_eq!(
         q("n.probes", &[]),
@@ -175,4 +195,70 @@ fn bake_inspect_query_with_and_without_visibility() {
     assert!(run(d, &["query", "v.probes", "--at", "1,1,1", "--json"])
         .status
         .success());
+}
+
+/// `bake` fits probe weights (`PWGT`) by default, `inspect` reports them,
+/// `query` uses them unless `--no-probe-weights`, the metadata records the
+/// fit's settings, and bad fit settings are one-line errors.
+#[test]
+fn bake_fits_probe_weights_and_query_uses_them() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let common = ["bake", "--grid", "40", "--samples", "32", "--bounces", "1"];
+    let fit = ["--fit-points", "4", "--fit-samples", "16"];
+    json(
+        d,
+        &[&common[..], &fit[..], &["-o", "w.probes", "--json"]].concat(),
+    );
+    json(
+        d,
+        &[
+            &common[..],
+            &["-o", "p.probes", "--no-probe-weights", "--json"],
+        ]
+        .concat(),
+    );
+    let w = json(d, &["inspect", "w.probes", "--json"]);
+    let p = json(d, &["inspect", "p.probes", "--json"]);
+    let probes = w["probes"].as_u64().unwrap();
+    assert_eq!(w["probes"], p["probes"]);
+    // 16-byte header + one f32 per probe, padded to 16.
+    assert_eq!(
+        w["bytes_by_section"]["probe_weights"].as_u64().unwrap(),
+        16 + (4 * probes).div_ceil(16) * 16
+    );
+    let pw = &w["probe_weights"];
+    let (lo, mid, hi) = (
+        pw["min"].as_f64().unwrap(),
+        pw["median"].as_f64().unwrap(),
+        pw["max"].as_f64().unwrap(),
+    );
+    assert!(0.0 < lo && lo <= mid && mid <= hi && hi <= 1e6, "{pw}");
+    assert!(lo < hi, "some weight moved: {pw}");
+    assert!(p["probe_weights"].is_null());
+    assert!(p["bytes_by_section"].get("probe_weights").is_none());
+    let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
+    assert!(
+        meta.contains("\"probe_weights\":{\"points_per_probe\":4"),
+        "{meta}"
+    );
+
+    write_points(d);
+    let q = |f: &str, extra: &[&str]| query(d, f, extra);
+    assert_eq!(q("w.probes", &["--no-probe-weights"]), q("p.probes", &[]));
+    assert_ne!(q("w.probes", &[]), q("p.probes", &[]));
+
+    for (flag, bad) in [
+        ("--fit-points", "0"),
+        ("--fit-samples", "0"),
+        ("--fit-regularization", "-1"),
+        ("--fit-regularization", "nan"),
+    ] {
+        fails_one_line(
+            d,
+            &[&common[..], &["-o", "x.probes", &format!("{flag}={bad}")]].concat(),
+            flag,
+        );
+    }
+    assert!(!d.join("x.probes").exists());
 }

@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility [--brightness A]] [--seeds 1,2,3] [--seed S]
+//!     [--light-shells] [--visibility [--no-weights] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -15,8 +15,9 @@
 //! `--seeds`: the evaluation points of several seeds pooled (default 1).
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
-//! `probekit bake` stores by default — distance moments (`VISM`) and cell
-//! visibility (`CVSP`) — as `probekit eval` does on such a file.
+//! `probekit bake` stores by default — distance moments (`VISM`), cell
+//! visibility (`CVSP`) and probe weights fitted with the default settings
+//! (`PWGT`; `--no-weights`: none) — as `probekit eval` does on such a file.
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`).
 //!
@@ -27,6 +28,7 @@
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
+use probekit::cloud::blend_fit::{capture_training_set, fit_probe_weights, BlendFitSettings};
 use probekit::cloud::cell_visibility::bake_cell_visibility;
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
@@ -60,6 +62,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let shells = args.iter().any(|a| a == "--light-shells");
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);
+    let weights = !args.iter().any(|a| a == "--no-weights");
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let EvalSet {
@@ -98,6 +101,13 @@ fn main() -> Result<(), Box<dyn Error>> {
             cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
             cloud.set_cell_visibility_bits(Some(cells))?;
             cloud.set_brightness_weighting(brightness)?;
+            if weights {
+                let fit = BlendFitSettings::new(s.seed);
+                let n = fit.points_per_probe as usize * pos.len();
+                let t = capture_training_set(&baker, &bbox, n, &s, false, &fit, &|_, _| {})?;
+                let w = fit_probe_weights(&cloud, &t, fit.regularization)?;
+                cloud.set_probe_weights(Some(w))?;
+            }
             let mut ws = WalkState::new();
             pts.iter()
                 .map(|p| cloud.irradiance(p.position, p.normal, &mut ws))

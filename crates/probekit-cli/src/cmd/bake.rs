@@ -25,6 +25,7 @@ use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
+use probekit::cloud::blend_fit::BlendFitSettings;
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
 };
@@ -136,9 +137,23 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION)]
     pub cell_visibility: u32,
     /// Do not bake distance moments or cell visibility (the cloud blends
-    /// without visibility).
+    /// without visibility; probe weights are still fitted unless
+    /// `--no-probe-weights`).
     #[arg(long)]
     pub no_visibility: bool,
+    /// Do not fit per-probe blend weights (`PWGT`).
+    #[arg(long)]
+    pub no_probe_weights: bool,
+    /// Training points per probe of the probe weight fit.
+    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_POINTS_PER_PROBE)]
+    pub fit_points: u32,
+    /// Path-traced samples per training point of the probe weight fit.
+    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_FIT_SAMPLES)]
+    pub fit_samples: u32,
+    /// Regularization `ρ` of the probe weight fit (≥ 0; larger keeps the
+    /// weights nearer 1).
+    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_REGULARIZATION)]
+    pub fit_regularization: f32,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -334,6 +349,24 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         }
     }
     sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, |k| serde_json::json!(k));
+    let weights = (!a.no_probe_weights).then_some(BlendFitSettings {
+        points_per_probe: a.fit_points,
+        samples: a.fit_samples,
+        regularization: a.fit_regularization,
+        seed: settings.seed,
+    });
+    if let Some(w) = &weights {
+        if w.points_per_probe == 0 || w.samples == 0 {
+            bail!("--fit-points and --fit-samples: expected at least 1");
+        }
+        if !(w.regularization >= 0.0 && w.regularization.is_finite()) {
+            bail!(
+                "--fit-regularization {}: expected a finite number ≥ 0",
+                w.regularization
+            );
+        }
+    }
+    sj["probe_weights"] = weights.map_or(serde_json::Value::Null, |w| w.to_json());
     let meta = BakeMetadata::new(
         format!("{:016x}", scene.content_hash()),
         Placement {
@@ -375,24 +408,17 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             light_groups(&groups, out.settings.order, codec).with_context(|| outname.clone())?;
         f
     };
-    // Cell visibility needs every probe's tetrahedra: not in shard parts
-    // (`merge --scene` bakes it).
-    let cells = cells.filter(|_| a.shard.is_none());
+    // Cell visibility and probe weights need every probe's tetrahedra: not
+    // in shard parts (`merge --scene` bakes them).
+    let whole = a.shard.is_none();
     let kinds = VisibilityBake {
         moments: vis,
-        cell_subdivision: cells,
+        cell_subdivision: cells.filter(|_| whole),
+        probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
-        let (pm, pc) = (counting_bar(MOMENTS_BAR), counting_bar(CELLS_BAR));
-        // One tracer (one BVH build) for both kinds.
-        let tracer = probekit::trace::Tracer::new(&scene);
-        kinds
-            .bake_into(&tracer, &mut file, &|d, t| advance(&pm, d, t), &|d, t| {
-                advance(&pc, d, t)
-            })
-            .with_context(|| format!("{}: visibility data", outname))?;
-        pm.finish_and_clear();
-        pc.finish_and_clear();
+        bake_blend_data(&scene, &kinds, &settings, &mut file)
+            .with_context(|| format!("{}: visibility data and probe weights", outname))?;
     }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
@@ -463,9 +489,32 @@ fn part_file(
     Ok(f)
 }
 
-/// Progress-bar templates of the two visibility bakes.
+/// Progress-bar templates of the two visibility bakes and the weight fit.
 const MOMENTS_BAR: &str = "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed";
 const CELLS_BAR: &str = "cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed";
+const FIT_BAR: &str = "probe weights: {bar:40} {pos}/{len} training points  {elapsed} elapsed";
+
+/// Bakes what `kinds` selects into `file` — visibility data, then probe
+/// weights fitted to that blend — with progress bars; one baker (one BVH
+/// build) for all.
+fn bake_blend_data(
+    scene: &probekit::scene::Scene,
+    kinds: &VisibilityBake,
+    capture: &probekit::bake::CaptureSettings,
+    file: &mut ProbeFile,
+) -> Result<()> {
+    let baker = probekit::bake::Baker::new(scene)?;
+    let (pm, pc) = (counting_bar(MOMENTS_BAR), counting_bar(CELLS_BAR));
+    kinds.bake_into(baker.tracer(), file, &|d, t| advance(&pm, d, t), &|d, t| {
+        advance(&pc, d, t)
+    })?;
+    pm.finish_and_clear();
+    pc.finish_and_clear();
+    let pf = counting_bar(FIT_BAR);
+    kinds.fit_weights_into(&baker, capture, file, &|d, t| advance(&pf, d, t))?;
+    pf.finish_and_clear();
+    Ok(())
+}
 
 /// A progress bar with `template` whose length [`advance`] sets.
 fn counting_bar(template: &str) -> ProgressBar {
@@ -607,10 +656,12 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec).with_context(|| out.clone())?;
     file.visibility = moments;
-    if let Some(k) = head.meta.settings["cell_visibility"].as_u64() {
+    let cells = head.meta.settings["cell_visibility"].as_u64();
+    let weights = &head.meta.settings["probe_weights"];
+    if cells.is_some() || weights.is_object() {
         let Some(scene_name) = &a.scene else {
             bail!(
-                "{}: baked with cell visibility, which merge bakes over all probes: pass --scene",
+                "{}: baked with cell visibility or probe weights, which merge bakes over all probes: pass --scene",
                 head.name
             );
         };
@@ -618,17 +669,42 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         if format!("{:016x}", scene.content_hash()) != head.meta.scene_hash {
             bail!("{scene_name}: not the scene {} was baked from", head.name);
         }
-        let tracer = probekit::trace::Tracer::new(&scene);
-        let pb = counting_bar(CELLS_BAR);
-        let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
-            &tracer,
-            &file,
-            k as u32,
-            &|d, t| advance(&pb, d, t),
-        )
-        .with_context(|| out.clone())?;
-        pb.finish_and_clear();
-        file.cell_visibility = Some(cells);
+        let baker = probekit::bake::Baker::new(&scene).with_context(|| scene_name.clone())?;
+        if let Some(k) = cells {
+            let pb = counting_bar(CELLS_BAR);
+            let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
+                baker.tracer(),
+                &file,
+                k as u32,
+                &|d, t| advance(&pb, d, t),
+            )
+            .with_context(|| out.clone())?;
+            pb.finish_and_clear();
+            file.cell_visibility = Some(cells);
+        }
+        if weights.is_object() {
+            // The parts' capture settings, as the bake recorded them (a
+            // part's metadata wraps the bake's).
+            let (capture, _) = probekit::placement::sweep::settings_from_metadata(
+                &serde_json::json!({ "settings": head.meta.settings }).to_string(),
+                &probekit::bake::CaptureSettings::from_scene(&scene),
+            );
+            let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));
+            let pb = counting_bar(FIT_BAR);
+            file.probe_weights = Some(
+                probekit::cloud::blend_fit::fit_file_probe_weights(
+                    &baker,
+                    &file,
+                    &scene.bake_box(),
+                    &capture,
+                    capture.split_direct,
+                    &fit,
+                    &|d, t| advance(&pb, d, t),
+                )
+                .with_context(|| out.clone())?,
+            );
+            pb.finish_and_clear();
+        }
     }
     file.validate().with_context(|| out.clone())?;
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;

@@ -133,10 +133,14 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             let ctx = || format!("{scene_name}: --compare grid");
             let mut g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec)
                 .with_context(ctx)?;
-            // The grid gets the visibility data the evaluated file has, so
-            // both blend the same way.
-            VisibilityBake::like(&file, settings.seed)
+            // The grid gets the visibility data and probe weights the
+            // evaluated file has, so both blend the same way.
+            let kinds = VisibilityBake::like(&file, settings.seed);
+            kinds
                 .bake_into(baker.tracer(), &mut g, &|_, _| {}, &|_, _| {})
+                .with_context(ctx)?;
+            kinds
+                .fit_weights_into(&baker, &settings, &mut g, &|_, _| {})
                 .with_context(ctx)?;
             let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
@@ -158,9 +162,13 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         // as the file does (the flags were checked by `apply` above).
         let mut kinds = VisibilityBake::like(&file, settings.seed);
         if a.visibility.no_visibility {
-            kinds = VisibilityBake::none();
+            kinds.moments = None;
+            kinds.cell_subdivision = None;
         } else if a.visibility.no_cell_visibility {
             kinds.cell_subdivision = None;
+        }
+        if a.visibility.no_probe_weights {
+            kinds.probe_weights = None;
         }
         let rows = sweep(
             &baker,

@@ -225,13 +225,15 @@ pub struct InspectArgs {
 }
 
 /// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra","hull_slivers",
-/// "basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","placement","scene_hash"}`
+/// "basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","probe_weights",
+/// "placement","scene_hash"}`
 /// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
 /// up to rounding, which light points outside the hull from far probes)
 /// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
 /// `cell_visibility`: `{"subdivision","cells","stored_cells"}` of the
 /// `CVSP` / `CVIS` section — cells in all, and those not clear, which have a
-/// record — or null);
+/// record — or null; `probe_weights`: `{"min","median","max","below_half",
+/// "above_two"}` of the fitted weights (`PWGT`), or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -272,6 +274,17 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
                 "cells": c.tet_count() + c.hull_face_count(),
                 "stored_cells": c.record_count(),
             })),
+            "probe_weights": file.probe_weights.as_ref().filter(|w| !w.is_empty()).map(|w| {
+                let mut s = w.clone();
+                s.sort_by(f32::total_cmp);
+                serde_json::json!({
+                    "min": s[0],
+                    "median": s[s.len() / 2],
+                    "max": s[s.len() - 1],
+                    "below_half": s.iter().filter(|&&x| x < 0.5).count(),
+                    "above_two": s.iter().filter(|&&x| x > 2.0).count(),
+                })
+            }),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
             "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),
             "part": part,

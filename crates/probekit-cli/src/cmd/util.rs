@@ -93,6 +93,10 @@ pub struct VisibilityArgs {
     /// Clouds: blend without the file's cell visibility (`CVSP`) weighting.
     #[arg(long)]
     pub no_cell_visibility: bool,
+    /// Clouds: blend without the file's fitted probe weights (`PWGT`; they
+    /// apply with or without `--no-visibility` otherwise).
+    #[arg(long)]
+    pub no_probe_weights: bool,
     /// Clouds: distance bias of the visibility test in metres (default
     /// 0.05): a point this much beyond the surface a probe sees still counts
     /// as seen.
@@ -150,6 +154,7 @@ impl VisibilityArgs {
         if let probekit::placement::eval::Predictor::Cloud(c) = p {
             c.set_visibility(!self.no_visibility);
             c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
+            c.set_probe_weighting(!self.no_probe_weights);
             if let Some(b) = self.visibility_bias {
                 c.set_visibility_bias(b);
             }

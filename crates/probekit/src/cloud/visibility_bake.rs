@@ -1,15 +1,19 @@
-//! Both kinds of a cloud's visibility data, baked together into a file as
-//! `probekit bake` stores them: distance moments (`VISM`,
-//! [`super::visibility`]) and cell visibility (`CVSP`,
-//! [`super::cell_visibility`]).
+//! What a cloud's blend uses beyond its probes, baked into a file as
+//! `probekit bake` stores it: distance moments (`VISM`,
+//! [`super::visibility`]), cell visibility (`CVSP`,
+//! [`super::cell_visibility`]) and, fitted to training points with both in
+//! place, per-probe blend weights (`PWGT`, [`super::blend_fit`]).
 //!
 //! `probekit bake`, `probekit eval --compare grid` (the grid gets what the
 //! evaluated file has) and the `--plot` sweep all go through
 //! [`VisibilityBake::bake_into`], so a cloud compared or plotted blends
-//! exactly as a baked one.
+//! exactly as a baked one; [`VisibilityBake::fit_weights_into`] then fits the
+//! probe weights.
 
+use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
 use super::cell_visibility::{bake_file_cell_visibility, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
+use crate::bake::{Baker, CaptureSettings};
 use crate::trace::Tracer;
 use probekit_runtime::format::ProbeFile;
 use thiserror::Error;
@@ -24,6 +28,9 @@ pub enum VisibilityBakeError {
     /// The cell visibility failed (subdivision, or the file's tetrahedra).
     #[error("cell visibility: {0}")]
     Cells(#[from] CellVisibilityError),
+    /// The probe weight fit failed.
+    #[error(transparent)]
+    Weights(#[from] BlendFitError),
 }
 
 /// Which visibility data to bake for a cloud.
@@ -34,6 +41,8 @@ pub struct VisibilityBake {
     /// Cell visibility (`CVSP`) at this lattice subdivision (1..=8);
     /// `None`: none.
     pub cell_subdivision: Option<u32>,
+    /// Fitted probe weights (`PWGT`) with these settings; `None`: none.
+    pub probe_weights: Option<BlendFitSettings>,
 }
 
 impl VisibilityBake {
@@ -42,26 +51,38 @@ impl VisibilityBake {
         Self {
             moments: None,
             cell_subdivision: None,
+            probe_weights: None,
         }
     }
 
     /// The kinds `file` stores, with its settings: the moments' resolution
-    /// and distance clamp (ray jitter from `seed`, default rays per texel)
-    /// and the cells' subdivision. For a second cloud that should blend as
-    /// `file` does (`eval --compare grid`, the `--plot` sweep).
+    /// and distance clamp (ray jitter from `seed`, default rays per texel),
+    /// the cells' subdivision, and probe weights fitted with the settings
+    /// its metadata records (`settings.probe_weights`; the defaults with
+    /// `seed` where absent). For a second cloud that should blend as `file`
+    /// does (`eval --compare grid`, the `--plot` sweep).
     pub fn like(file: &ProbeFile, seed: u64) -> Self {
+        let meta: serde_json::Value = serde_json::from_str(&file.metadata).unwrap_or_default();
         Self {
             moments: file.visibility.as_ref().map(|v| VisibilitySettings {
                 resolution: v.resolution,
                 ..VisibilitySettings::new(v.max_distance, seed)
             }),
             cell_subdivision: file.cell_visibility.as_ref().map(|c| c.subdivision()),
+            probe_weights: file.probe_weights.as_ref().map(|_| {
+                BlendFitSettings::from_json(
+                    &meta["settings"]["probe_weights"],
+                    &BlendFitSettings::new(seed),
+                )
+            }),
         }
     }
 
-    /// Bakes the selected kinds into `file` (a cloud with positions and,
-    /// for the cells, tetrahedra), replacing what it had; kinds not
-    /// selected are removed. `moments_progress(done, total)` counts probes,
+    /// Bakes the selected visibility kinds into `file` (a cloud with
+    /// positions and, for the cells, tetrahedra), replacing what it had;
+    /// kinds not selected are removed, and so are probe weights (fitted to
+    /// the old blend: [`VisibilityBake::fit_weights_into`] fits them anew).
+    /// `moments_progress(done, total)` counts probes,
     /// `cells_progress` cells and hull faces. Deterministic (any thread
     /// count).
     pub fn bake_into(
@@ -84,6 +105,35 @@ impl VisibilityBake {
             Some(k) => Some(bake_file_cell_visibility(tracer, file, k, cells_progress)?),
             None => None,
         };
+        file.probe_weights = None;
+        Ok(())
+    }
+
+    /// After [`VisibilityBake::bake_into`]: fits probe weights to the blend
+    /// `file` now has ([`fit_file_probe_weights`]), training points captured
+    /// with `capture` (indirect light only when `capture.split_direct`, as
+    /// the bake stores), when selected; removes them otherwise.
+    /// `progress(done, total)` counts training points. Deterministic (any
+    /// thread count).
+    pub fn fit_weights_into(
+        &self,
+        baker: &Baker,
+        capture: &CaptureSettings,
+        file: &mut ProbeFile,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
+        file.probe_weights = None;
+        if let Some(fit) = &self.probe_weights {
+            file.probe_weights = Some(fit_file_probe_weights(
+                baker,
+                file,
+                &baker.scene().bake_box(),
+                capture,
+                capture.split_direct,
+                fit,
+                progress,
+            )?);
+        }
         Ok(())
     }
 }
@@ -124,13 +174,17 @@ mod tests {
         let want = VisibilityBake {
             moments: Some(vs),
             cell_subdivision: Some(2),
+            probe_weights: None,
         };
+        a.probe_weights = Some(vec![2.0; pos.len()]);
         want.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
             .unwrap();
         let moments = bake_distance_moments(&tracer, &pos, &vs, &|_, _| {}).unwrap();
         assert_eq!(a.visibility.as_ref(), Some(&moments));
         let cells = bake_file_cell_visibility(&tracer, &a, 2, &|_, _| {}).unwrap();
         assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
+        // Weights fitted to the old blend are gone.
+        assert!(a.probe_weights.is_none());
         let like = VisibilityBake::like(&a, 7);
         assert_eq!(like.cell_subdivision, Some(2));
         assert_eq!(
@@ -147,6 +201,7 @@ mod tests {
         let bad = VisibilityBake {
             moments: None,
             cell_subdivision: Some(99),
+            probe_weights: None,
         };
         assert!(matches!(
             bad.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {}),

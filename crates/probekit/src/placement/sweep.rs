@@ -224,6 +224,7 @@ pub fn sweep(
                 .and_then(|method| place_and_bake(baker, bake_box, &method, settings, Codec::F32))
                 .and_then(|mut file| {
                     visibility.bake_into(baker.tracer(), &mut file, &|_, _| {}, &|_, _| {})?;
+                    visibility.fit_weights_into(baker, settings, &mut file, &|_, _| {})?;
                     let mut p = Predictor::from_file(&file, Interp::Trilinear)?;
                     configure(&mut p);
                     let pred = p.predict(points)?;
@@ -388,6 +389,11 @@ mod tests {
                 ..crate::cloud::visibility::VisibilitySettings::new(10.0, 1)
             }),
             cell_subdivision: Some(2),
+            probe_weights: Some(crate::cloud::blend_fit::BlendFitSettings {
+                points_per_probe: 2,
+                samples: 8,
+                ..crate::cloud::blend_fit::BlendFitSettings::new(3)
+            }),
         };
         let configure = |p: &mut Predictor| {
             if let Predictor::Cloud(c) = p {
@@ -411,6 +417,9 @@ mod tests {
         assert!(f.visibility.is_none() && f.cell_visibility.is_none());
         vis.bake_into(baker.tracer(), &mut f, &|_, _| {}, &|_, _| {})
             .unwrap();
+        vis.fit_weights_into(&baker, &s, &mut f, &|_, _| {})
+            .unwrap();
+        assert!(f.probe_weights.is_some());
         let mut p = Predictor::from_file(&f, Interp::Trilinear).unwrap();
         configure(&mut p);
         let by_hand = metrics(&p.predict(&pts).unwrap(), &truth, mean_luminance(&truth));

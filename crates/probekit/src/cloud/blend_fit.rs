@@ -1,0 +1,642 @@
+//! Fitted per-probe blend weights (`PWGT`): each probe of a cloud gets a
+//! weight `s_i > 0` that multiplies its blend weight before the
+//! renormalization ([`ProbeCloud::set_probe_weights`]), fitted so that the
+//! cloud predicts the light at path-traced *training points* better.
+//!
+//! **Why.** Visibility (distance moments, cell bits) drops the probes that
+//! do not see a point. What is left are leaks *in sight*: a probe standing in
+//! a doorway sees a lit corridor and carries its light into the dark closet
+//! behind the wall's edge, though it sees the point (`leak_diag` column (e):
+//! 27 of the 30 closet leaks of 525-probe demo clouds). A global rule — divide
+//! by brightness, [`ProbeCloud::set_brightness_weighting`] — removes them but
+//! flattens the gradients next to lights everywhere; a weight per probe,
+//! fitted to data, lowers the doorway probe and leaves the others alone.
+//!
+//! **The blend stays what the runtime and shaders do**: a convex
+//! combination of SH, continuous across faces (on a face the fourth probe's
+//! barycentric weight is 0, so per-probe factors agree on both sides) and
+//! exact for a constant field; it costs one multiply per probe per query.
+//! This is our own method, not from a paper; the closest published idea is
+//! DDGI's per-probe "probe relocation/state" (Majercik et al. 2021), which
+//! switches probes off rather than weighting them.
+//!
+//! **Training points** ([`capture_training_set`]): `points_per_probe × P`
+//! points drawn like `probekit eval`'s (free space of the bake box, at least
+//! 1 cm from surfaces) from their own seed stream, captured as radiance SH
+//! with the bake's light transport at [`BlendFitSettings::samples`].
+//!
+//! **Objective** ([`fit_probe_weights`]), over the training points `j`:
+//!
+//! ```text
+//! J(t) = (1/N) Σ_j ‖Ê_j(s) − E_j‖² / (‖E_j‖ + 0.01·mean_k ‖E_k‖)²  +  ρ Σ_i t_i²,   s_i = e^{t_i}
+//! ```
+//!
+//! `‖·‖` is the root-mean-square over all normals of the irradiance of the
+//! SH (`Σ_lm A_l² |c_lm|²`, `A_l` the clamped-cosine band factors, over 4π),
+//! `Ê_j(s)` the blend with weights `s` and `E_j` the captured point: a
+//! *relative* error, so every point counts alike and a dark closet's points
+//! weigh as much as the bright ones next to a light; the floor is
+//! `probekit eval`'s (1 % of the mean). `ρ` ([`BlendFitSettings::regularization`])
+//! keeps probes without evidence at 1. The minimizer is cyclic coordinate
+//! descent on `t_i` over a shrinking grid of steps (9 trial values per
+//! probe and sweep), `t_i ∈ [`[`LOG_WEIGHT_MIN`]`, `[`LOG_WEIGHT_MAX`]`]`;
+//! each trial re-evaluates only the points whose cell holds the probe, from
+//! a 4 × 4 Gram matrix per point (the squared error is a quadratic form in
+//! the normalized weights). Sequential and deterministic.
+//!
+//! Measured in BENCHMARKS.md ("Fitted probe weights").
+
+use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::placement::eval::sample_points;
+use crate::scene::Aabb;
+use glam::Vec3;
+use probekit_runtime::cloud::{ProbeCloud, ProbeCloudError, WalkState};
+use probekit_sh::convolve::clamped_cosine_band;
+use probekit_sh::ShRgb;
+use thiserror::Error;
+
+/// Smallest fitted log-weight `t_i` (`s_i = e^t ≈ 9·10⁻⁴`).
+pub const LOG_WEIGHT_MIN: f32 = -7.0;
+/// Largest fitted log-weight `t_i` (`s_i = e^t ≈ 20`).
+pub const LOG_WEIGHT_MAX: f32 = 3.0;
+/// Training points per probe by default.
+pub const DEFAULT_POINTS_PER_PROBE: u32 = 32;
+/// Samples per training point by default.
+pub const DEFAULT_FIT_SAMPLES: u32 = 128;
+/// Default `ρ` of the objective (see the module docs).
+pub const DEFAULT_REGULARIZATION: f32 = 1e-5;
+/// Seed stream of the training points (`"wfit"`), apart from `probekit
+/// eval`'s points of the same seed.
+const TRAINING_STREAM: u64 = 0x7766_6974;
+/// Capture index of the first training point: far above any probe's, so
+/// training points never share a probe's random numbers.
+const TRAINING_INDEX: usize = 1 << 32;
+/// Step sizes of the coordinate-descent sweeps, in `t`.
+const SWEEP_STEPS: [f32; 6] = [1.0, 0.5, 0.25, 0.25, 0.125, 0.0625];
+
+/// How to fit probe weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlendFitSettings {
+    /// Training points per probe (≥ 1).
+    pub points_per_probe: u32,
+    /// Path-traced samples per training point (≥ 1).
+    pub samples: u32,
+    /// `ρ` of the objective (≥ 0, finite).
+    pub regularization: f32,
+    /// Seed of the training points' positions (their capture uses the
+    /// capture settings' seed).
+    pub seed: u64,
+}
+
+impl BlendFitSettings {
+    /// The defaults with `seed`.
+    pub fn new(seed: u64) -> Self {
+        Self {
+            points_per_probe: DEFAULT_POINTS_PER_PROBE,
+            samples: DEFAULT_FIT_SAMPLES,
+            regularization: DEFAULT_REGULARIZATION,
+            seed,
+        }
+    }
+
+    /// The settings as `probekit bake` records them in the metadata.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "points_per_probe": self.points_per_probe,
+            "samples": self.samples,
+            "regularization": self.regularization,
+            "seed": self.seed,
+        })
+    }
+
+    /// Settings as [`BlendFitSettings::to_json`] wrote them, each field
+    /// falling back to `fallback`'s when absent or out of range.
+    pub fn from_json(v: &serde_json::Value, fallback: &Self) -> Self {
+        let u32_of = |k: &str| {
+            v[k].as_u64()
+                .filter(|&x| x > 0 && x <= u32::MAX as u64)
+                .map(|x| x as u32)
+        };
+        Self {
+            points_per_probe: u32_of("points_per_probe").unwrap_or(fallback.points_per_probe),
+            samples: u32_of("samples").unwrap_or(fallback.samples),
+            regularization: v["regularization"]
+                .as_f64()
+                .map(|x| x as f32)
+                .filter(|x| *x >= 0.0 && x.is_finite())
+                .unwrap_or(fallback.regularization),
+            seed: v["seed"].as_u64().unwrap_or(fallback.seed),
+        }
+    }
+
+    fn validate(&self) -> Result<(), BlendFitError> {
+        if self.points_per_probe == 0 {
+            return Err(BlendFitError::Settings(
+                "points per probe must be at least 1",
+            ));
+        }
+        if self.samples == 0 {
+            return Err(BlendFitError::Settings("samples must be at least 1"));
+        }
+        if !(self.regularization >= 0.0 && self.regularization.is_finite()) {
+            return Err(BlendFitError::Settings(
+                "regularization must be a finite number ≥ 0",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why probe weights cannot be fitted.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum BlendFitError {
+    /// A setting is out of range.
+    #[error("probe weight fit: {0}")]
+    Settings(&'static str),
+    /// Capturing the training points failed.
+    #[error("probe weight fit: training points: {0}")]
+    Capture(#[from] BakeError),
+    /// The cloud cannot be built from the file.
+    #[error("probe weight fit: {0}")]
+    Cloud(#[from] ProbeCloudError),
+    /// Training positions and SH differ in count, or an SH's order differs
+    /// from the cloud's.
+    #[error("probe weight fit: {0}")]
+    Mismatch(&'static str),
+    /// No training point fell in free space of the bake box.
+    #[error("probe weight fit: no training point in free space of the bake box")]
+    NoTrainingPoints,
+}
+
+/// Captured training points: positions (metres) and their radiance SH.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainingSet {
+    /// Where each point was captured.
+    pub positions: Vec<Vec3>,
+    /// Radiance SH at each point (all light, or indirect only, as the cloud
+    /// stores).
+    pub sh: Vec<ShRgb>,
+}
+
+/// Draws `count` training points in free space of `bake_box` (seeded by
+/// `fit.seed`) and captures them with `capture` at `fit.samples` samples;
+/// `indirect_only` keeps indirect light only (what `bake --indirect-only`
+/// stores). `progress(done, total)` counts points. Deterministic (any
+/// thread count).
+pub fn capture_training_set(
+    baker: &Baker,
+    bake_box: &Aabb,
+    count: usize,
+    capture: &CaptureSettings,
+    indirect_only: bool,
+    fit: &BlendFitSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TrainingSet, BlendFitError> {
+    fit.validate()?;
+    let pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, count, fit.seed ^ TRAINING_STREAM)
+        .into_iter()
+        .map(|p| p.position)
+        .collect();
+    if pts.is_empty() {
+        return Err(BlendFitError::NoTrainingPoints);
+    }
+    let mut s = capture.clone();
+    s.samples = fit.samples;
+    s.split_direct = indirect_only;
+    s.groups = false;
+    let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
+    let (positions, sh) = rs
+        .into_iter()
+        .map(|r| {
+            let sh = match (indirect_only, r.indirect) {
+                (true, Some(ind)) => ind,
+                _ => r.sh,
+            };
+            (r.position, sh)
+        })
+        .unzip();
+    Ok(TrainingSet { positions, sh })
+}
+
+/// One training point as the fit sees it: the cell's probes, their blend
+/// weights without probe weights (normalized), and the Gram matrix of the
+/// probes' irradiance errors `G_kl = ⟨C_k − E, C_l − E⟩` (band-weighted SH
+/// inner product), divided by the point's squared relative-error scale.
+struct Row {
+    probes: [u32; 4],
+    w: [f32; 4],
+    /// Upper triangle of `G` (00 01 02 03 11 12 13 22 23 33), already scaled.
+    g: [f64; 10],
+}
+
+impl Row {
+    /// Scaled squared error of the blend with per-probe factors `f`.
+    fn error(&self, f: [f64; 4]) -> f64 {
+        let mut a = [0.0f64; 4];
+        let mut sum = 0.0;
+        for k in 0..4 {
+            a[k] = self.w[k] as f64 * f[k];
+            sum += a[k];
+        }
+        if sum <= 0.0 {
+            return 0.0;
+        }
+        let a = a.map(|x| x / sum);
+        let g = &self.g;
+        a[0] * a[0] * g[0]
+            + a[1] * a[1] * g[4]
+            + a[2] * a[2] * g[7]
+            + a[3] * a[3] * g[9]
+            + 2.0
+                * (a[0] * (a[1] * g[1] + a[2] * g[2] + a[3] * g[3])
+                    + a[1] * (a[2] * g[5] + a[3] * g[6])
+                    + a[2] * a[3] * g[8])
+    }
+}
+
+/// Fits one weight per probe of `cloud` to the training points (see the
+/// module docs for the objective); `cloud` blends as it is set up
+/// (visibility, cell bits, brightness), except for probe weights it may
+/// already have, which are ignored. Returns `s_i = e^{t_i}`, one per probe,
+/// in `[e^`[`LOG_WEIGHT_MIN`]`, e^`[`LOG_WEIGHT_MAX`]`]`; a probe no
+/// training point blends keeps 1. Deterministic.
+pub fn fit_probe_weights(
+    cloud: &ProbeCloud,
+    training: &TrainingSet,
+    regularization: f32,
+) -> Result<Vec<f32>, BlendFitError> {
+    if training.positions.len() != training.sh.len() {
+        return Err(BlendFitError::Mismatch(
+            "training positions and SH differ in count",
+        ));
+    }
+    if !(regularization >= 0.0 && regularization.is_finite()) {
+        return Err(BlendFitError::Settings(
+            "regularization must be a finite number ≥ 0",
+        ));
+    }
+    let n = cloud.coeffs_per_probe();
+    if training.sh.iter().any(|s| s.coeffs().len() < n) {
+        return Err(BlendFitError::Mismatch(
+            "a training point has fewer SH bands than the cloud",
+        ));
+    }
+    let nprobes = cloud.probe_count();
+    if training.positions.is_empty() {
+        return Ok(vec![1.0; nprobes]);
+    }
+    let mut plain = cloud.clone();
+    plain.set_probe_weighting(false);
+    // A_l² per coefficient.
+    let band: Vec<f64> = (0..n)
+        .map(|c| {
+            let l = (c as f64).sqrt() as usize;
+            clamped_cosine_band(l).powi(2)
+        })
+        .collect();
+    let norm = |v: &[Vec3]| -> f64 {
+        v.iter()
+            .zip(&band)
+            .map(|(x, b)| b * x.length_squared() as f64)
+            .sum::<f64>()
+            .sqrt()
+    };
+    // The cloud's bands of each training point (a codec may store fewer).
+    let truth = |j: usize| &training.sh[j].coeffs()[..n];
+    let mean =
+        (0..training.sh.len()).map(|j| norm(truth(j))).sum::<f64>() / training.sh.len() as f64;
+    let floor = 0.01 * mean;
+    let npts = training.positions.len() as f64;
+    let mut ws = WalkState::new();
+    let mut rows = Vec::with_capacity(training.positions.len());
+    for (j, p) in training.positions.iter().enumerate() {
+        let (probes, w) = plain.weights_at(*p, &mut ws);
+        let e = truth(j);
+        let scale = (norm(e) + floor).powi(2).max(1e-30) * npts;
+        let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
+            if w[k] > 0.0 {
+                let c = plain.probe_sh(probes[k] as usize);
+                c.iter().zip(e).map(|(a, b)| *a - *b).collect()
+            } else {
+                vec![Vec3::ZERO; n]
+            }
+        });
+        let dot = |a: &[Vec3], b: &[Vec3]| -> f64 {
+            a.iter()
+                .zip(b)
+                .zip(&band)
+                .map(|((x, y), bw)| bw * x.dot(*y) as f64)
+                .sum::<f64>()
+                / scale
+        };
+        let mut g = [0.0f64; 10];
+        let mut i = 0;
+        for k in 0..4 {
+            for l in k..4 {
+                g[i] = dot(&d[k], &d[l]);
+                i += 1;
+            }
+        }
+        rows.push(Row { probes, w, g });
+    }
+    // Points by probe (CSR), for the local re-evaluation.
+    let mut start = vec![0usize; nprobes + 1];
+    for r in &rows {
+        for k in 0..4 {
+            if r.w[k] > 0.0 {
+                start[r.probes[k] as usize + 1] += 1;
+            }
+        }
+    }
+    for i in 0..nprobes {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut members = vec![0u32; start[nprobes]];
+    for (j, r) in rows.iter().enumerate() {
+        for k in 0..4 {
+            if r.w[k] > 0.0 {
+                let i = r.probes[k] as usize;
+                members[fill[i]] = j as u32;
+                fill[i] += 1;
+            }
+        }
+    }
+    let rho = regularization as f64;
+    let mut t = vec![0.0f32; nprobes];
+    let mut s = vec![1.0f64; nprobes];
+    let factors = |r: &Row, s: &[f64]| -> [f64; 4] {
+        core::array::from_fn(|k| {
+            if r.w[k] > 0.0 {
+                s[r.probes[k] as usize]
+            } else {
+                1.0
+            }
+        })
+    };
+    for step in SWEEP_STEPS {
+        for i in 0..nprobes {
+            let mine = &members[start[i]..start[i + 1]];
+            if mine.is_empty() {
+                continue;
+            }
+            let t0 = t[i];
+            let mut best = (f64::INFINITY, t0);
+            for k in -4i32..=4 {
+                let ti = (t0 + k as f32 * step).clamp(LOG_WEIGHT_MIN, LOG_WEIGHT_MAX);
+                s[i] = (ti as f64).exp();
+                let c = mine
+                    .iter()
+                    .map(|&j| {
+                        let r = &rows[j as usize];
+                        r.error(factors(r, &s))
+                    })
+                    .sum::<f64>()
+                    + rho * (ti as f64).powi(2);
+                if c < best.0 {
+                    best = (c, ti);
+                }
+            }
+            t[i] = best.1;
+            s[i] = (best.1 as f64).exp();
+        }
+    }
+    Ok(t.iter().map(|&x| x.exp()).collect())
+}
+
+/// Fits probe weights for a cloud file: builds its [`ProbeCloud`] (with the
+/// visibility data it holds), captures `fit.points_per_probe ×` probes
+/// training points ([`capture_training_set`]) and fits
+/// ([`fit_probe_weights`]). `probekit bake` stores the result as the file's
+/// `PWGT` section.
+pub fn fit_file_probe_weights(
+    baker: &Baker,
+    file: &probekit_runtime::format::ProbeFile,
+    bake_box: &Aabb,
+    capture: &CaptureSettings,
+    indirect_only: bool,
+    fit: &BlendFitSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<f32>, BlendFitError> {
+    fit.validate()?;
+    let cloud = ProbeCloud::from_file(file)?;
+    let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
+    let training = capture_training_set(
+        baker,
+        bake_box,
+        count,
+        capture,
+        indirect_only,
+        fit,
+        progress,
+    )?;
+    fit_probe_weights(&cloud, &training, fit.regularization)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::tetrahedralize;
+
+    /// Seeded uniform points in `[lo, hi]³` (the crate's sampler).
+    struct Lcg(crate::bake::sampling::SampleRng);
+    impl Lcg {
+        fn new(seed: u64) -> Self {
+            Self(crate::bake::sampling::SampleRng::new(seed, 0, 0))
+        }
+        fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
+            let r = &mut self.0;
+            Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * (hi - lo) + Vec3::splat(lo)
+        }
+    }
+
+    /// L2 SH of a uniform grey sky of radiance `dc / Y00`.
+    fn grey(dc: f32) -> ShRgb {
+        let mut c = vec![Vec3::ZERO; 9];
+        c[0] = Vec3::splat(dc);
+        ShRgb::from_coeffs(c).unwrap()
+    }
+
+    /// A 4 × 4 × 4 lattice (1 m) whose probe `bright` has 50× the others'
+    /// light.
+    fn outlier_cloud(bright: usize) -> ProbeCloud {
+        let mut pos = Vec::new();
+        for z in 0..4 {
+            for y in 0..4 {
+                for x in 0..4 {
+                    pos.push(Vec3::new(x as f32, y as f32, z as f32));
+                }
+            }
+        }
+        let mesh = tetrahedralize(&pos).unwrap().to_tet_mesh(&pos).unwrap();
+        let coeffs = (0..pos.len())
+            .flat_map(|i| grey(if i == bright { 50.0 } else { 1.0 }).coeffs().to_vec())
+            .collect();
+        ProbeCloud::new(mesh, 3, coeffs).unwrap()
+    }
+
+    /// Independent relative error of the cloud at `p` against a constant
+    /// field `truth`: the RMS over 200 Fibonacci-sphere normals of the
+    /// irradiance difference, over the RMS of the true irradiance.
+    fn sphere_rel_error(cloud: &ProbeCloud, p: Vec3, truth: &ShRgb) -> f32 {
+        let mut ws = WalkState::new();
+        let (mut se, mut st) = (0.0f64, 0.0f64);
+        let n = 200;
+        for i in 0..n {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let r = (1.0 - z * z).sqrt();
+            let phi = i as f32 * 2.399_963;
+            let d = Vec3::new(r * phi.cos(), z, r * phi.sin());
+            let t = truth.irradiance(d);
+            se += (cloud.irradiance(p, d, &mut ws) - t).length_squared() as f64;
+            st += t.length_squared() as f64;
+        }
+        (se / st).sqrt() as f32
+    }
+
+    /// A probe that sees light its neighbourhood does not (50× brighter
+    /// than a field that is constant everywhere) is weighted down to the
+    /// floor, the others stay near 1, and the independently measured
+    /// error at fresh points falls more than tenfold.
+    #[test]
+    fn an_outlier_probe_is_weighted_down_and_the_error_falls() {
+        let bright = 21; // (1, 1, 1): interior
+        let cloud = outlier_cloud(bright);
+        let mut g = Lcg::new(1);
+        let truth = grey(1.0);
+        let training = TrainingSet {
+            positions: (0..800).map(|_| g.v(0.05, 2.95)).collect(),
+            sh: vec![truth.clone(); 800],
+        };
+        let w = fit_probe_weights(&cloud, &training, 1e-5).unwrap();
+        assert_eq!(w.len(), 64);
+        assert!(w[bright] < (LOG_WEIGHT_MIN + 1.0).exp(), "{}", w[bright]);
+        let mut others: Vec<f32> = (0..64).filter(|&i| i != bright).map(|i| w[i]).collect();
+        others.sort_by(f32::total_cmp);
+        assert!((0.8..1.25).contains(&others[31]), "median {}", others[31]);
+        let mut fitted = cloud.clone();
+        fitted.set_probe_weights(Some(w)).unwrap();
+        let test: Vec<Vec3> = (0..300).map(|_| g.v(0.05, 2.95)).collect();
+        let mean = |c: &ProbeCloud| {
+            test.iter()
+                .map(|&p| sphere_rel_error(c, p, &truth))
+                .sum::<f32>()
+                / test.len() as f32
+        };
+        let (before, after) = (mean(&cloud), mean(&fitted));
+        assert!(after < 0.1 * before, "{before} → {after}");
+    }
+
+    /// A very large `ρ` keeps every weight at exactly 1; the fit is
+    /// deterministic; bad input is a typed error.
+    #[test]
+    fn regularization_determinism_and_bad_input() {
+        let cloud = outlier_cloud(5);
+        let mut g = Lcg::new(2);
+        let training = TrainingSet {
+            positions: (0..200).map(|_| g.v(0.05, 2.95)).collect(),
+            sh: vec![grey(1.0); 200],
+        };
+        assert_eq!(
+            fit_probe_weights(&cloud, &training, 1e9).unwrap(),
+            vec![1.0; 64]
+        );
+        let a = fit_probe_weights(&cloud, &training, 1e-4).unwrap();
+        assert_eq!(a, fit_probe_weights(&cloud, &training, 1e-4).unwrap());
+        // Weights the cloud already has are ignored.
+        let mut weighted = cloud.clone();
+        weighted.set_probe_weights(Some(vec![7.0; 64])).unwrap();
+        assert_eq!(fit_probe_weights(&weighted, &training, 1e-4).unwrap(), a);
+        let mut short = training.clone();
+        short.sh.pop();
+        assert!(matches!(
+            fit_probe_weights(&cloud, &short, 1e-4),
+            Err(BlendFitError::Mismatch(_))
+        ));
+        let mut l1 = training.clone();
+        l1.sh[3] = ShRgb::zeros(2);
+        assert!(matches!(
+            fit_probe_weights(&cloud, &l1, 1e-4),
+            Err(BlendFitError::Mismatch(_))
+        ));
+        for bad in [-1.0, f32::NAN, f32::INFINITY] {
+            assert!(matches!(
+                fit_probe_weights(&cloud, &training, bad),
+                Err(BlendFitError::Settings(_))
+            ));
+        }
+        let empty = TrainingSet {
+            positions: vec![],
+            sh: vec![],
+        };
+        assert_eq!(
+            fit_probe_weights(&cloud, &empty, 1e-4).unwrap(),
+            vec![1.0; 64]
+        );
+    }
+
+    /// On the demo scene: training points are captured in free space and
+    /// fitted, deterministically, to weights in range, not all 1; bad
+    /// settings are refused before any work.
+    #[test]
+    fn fits_a_small_cloud_of_the_demo_scene() {
+        let scene = crate::scene::Scene::load(std::path::Path::new("builtin:demo")).unwrap();
+        let baker = Baker::new(&scene).unwrap();
+        let b = scene.bake_box();
+        let mut pos = Vec::new();
+        for i in 0..4 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    let t = Vec3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5)
+                        / Vec3::new(4.0, 3.0, 3.0);
+                    let p = b.min + t * (b.max - b.min);
+                    if !crate::placement::inside_geometry(baker.tracer(), p) {
+                        pos.push(p);
+                    }
+                }
+            }
+        }
+        let mut cs = CaptureSettings::from_scene(&scene);
+        cs.samples = 16;
+        let sh: Vec<ShRgb> = baker
+            .capture_many(&pos, 0, &cs, &|_, _| {})
+            .unwrap()
+            .into_iter()
+            .map(|r| r.sh)
+            .collect();
+        let file = crate::cloud::file::test_cloud_file(&pos, &sh);
+        let fit = BlendFitSettings {
+            points_per_probe: 4,
+            samples: 16,
+            ..BlendFitSettings::new(9)
+        };
+        let run = || fit_file_probe_weights(&baker, &file, &b, &cs, false, &fit, &|_, _| {});
+        let w = run().unwrap();
+        assert_eq!(w.len(), pos.len());
+        assert!(w
+            .iter()
+            .all(|x| probekit_runtime::cloud::PROBE_WEIGHT_RANGE.contains(x)));
+        assert!(w.iter().any(|&x| x != 1.0));
+        assert_eq!(w, run().unwrap());
+        let t = capture_training_set(&baker, &b, 50, &cs, false, &fit, &|_, _| {}).unwrap();
+        assert_eq!(t.positions.len(), 50);
+        assert!(t.positions.iter().all(|p| b.contains(*p)));
+        for bad in [
+            BlendFitSettings {
+                points_per_probe: 0,
+                ..fit
+            },
+            BlendFitSettings { samples: 0, ..fit },
+            BlendFitSettings {
+                regularization: -1.0,
+                ..fit
+            },
+        ] {
+            assert!(matches!(
+                fit_file_probe_weights(&baker, &file, &b, &cs, false, &bad, &|_, _| {}),
+                Err(BlendFitError::Settings(_))
+            ));
+        }
+    }
+}
