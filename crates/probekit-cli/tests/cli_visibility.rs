@@ -239,7 +239,7 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     assert!(p["bytes_by_section"].get("probe_weights").is_none());
     let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
     assert!(
-        meta.contains("\"probe_weights\":{\"points_per_probe\":4"),
+        meta.contains("\"probe_weights\":{\"absolute_weight\":1.0,\"points_per_probe\":4"),
         "{meta}"
     );
 
@@ -253,6 +253,7 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         ("--fit-samples", "0"),
         ("--fit-regularization", "-1"),
         ("--fit-regularization", "nan"),
+        ("--fit-absolute-weight", "-2"),
     ] {
         fails_one_line(
             d,

@@ -5,7 +5,8 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility [--no-weights] [--brightness A]] [--seeds 1,2,3] [--seed S]
+//!     [--light-shells] [--visibility [--no-weights] [--fit-points N] [--fit-samples N]
+//!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -17,7 +18,8 @@
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`), cell
 //! visibility (`CVSP`) and probe weights fitted with the default settings
-//! (`PWGT`; `--no-weights`: none) — as `probekit eval` does on such a file.
+//! (`PWGT`; `--no-weights`: none; `--fit-*` as `probekit bake`'s) — as
+//! `probekit eval` does on such a file.
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`).
 //!
@@ -79,6 +81,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     s.samples = samples;
     // The capture seed, which also seeds placement (pool jitter, spawns).
     s.seed = arg(&args, "--seed", s.seed);
+    let diag: std::cell::RefCell<Option<ProbeCloud>> = std::cell::RefCell::new(None);
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {
         let sh: Vec<ShRgb> = baker
             .capture_many(pos, 0, &s, &|_, _| {})?
@@ -102,13 +105,33 @@ fn main() -> Result<(), Box<dyn Error>> {
             cloud.set_cell_visibility_bits(Some(cells))?;
             cloud.set_brightness_weighting(brightness)?;
             if weights {
-                let fit = BlendFitSettings::new(s.seed);
+                let d = BlendFitSettings::new(s.seed);
+                let fit = BlendFitSettings {
+                    points_per_probe: arg(&args, "--fit-points", d.points_per_probe),
+                    samples: arg(&args, "--fit-samples", d.samples),
+                    regularization: arg(&args, "--fit-regularization", d.regularization),
+                    absolute_weight: arg(&args, "--fit-absolute-weight", d.absolute_weight),
+                    ..d
+                };
                 let n = fit.points_per_probe as usize * pos.len();
-                let t = capture_training_set(&baker, &bbox, n, &s, false, &fit, &|_, _| {})?;
-                let w = fit_probe_weights(&cloud, &t, fit.regularization)?;
+                let t = capture_training_set(
+                    &baker,
+                    &bbox,
+                    cloud.mesh(),
+                    n,
+                    &s,
+                    false,
+                    &fit,
+                    &|_, _| {},
+                )?;
+                let w = fit_probe_weights(&cloud, &t, &fit)?;
                 cloud.set_probe_weights(Some(w))?;
             }
             let mut ws = WalkState::new();
+            if top {
+                // The blend at the worst points, for diagnosis.
+                *diag.borrow_mut() = Some(cloud.clone());
+            }
             pts.iter()
                 .map(|p| cloud.irradiance(p.position, p.normal, &mut ws))
                 .collect()
@@ -133,6 +156,21 @@ fn main() -> Result<(), Box<dyn Error>> {
                     pred[i],
                     e(i) / tot
                 );
+                if let Some(c) = diag.borrow().as_ref() {
+                    let mut ws = WalkState::new();
+                    let (idx4, w4) = c.weights_at(pts[i].position, &mut ws);
+                    for k in 0..4 {
+                        let j = idx4[k] as usize;
+                        let e = probekit_sh::irradiance(c.probe_sh(j), pts[i].normal);
+                        println!(
+                            "      probe {j} at {:.2?}: weight {:.3}, fitted s {:.3}, E(n) {:.1}",
+                            pos[j],
+                            w4[k],
+                            c.probe_weights().map_or(1.0, |s| s[j]),
+                            e.x
+                        );
+                    }
+                }
             }
         }
         println!(

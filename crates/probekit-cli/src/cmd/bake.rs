@@ -154,6 +154,10 @@ pub struct BakeArgs {
     /// weights nearer 1).
     #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_REGULARIZATION)]
     pub fit_regularization: f32,
+    /// Weight `β` of the absolute error beside the relative one in the
+    /// probe weight fit (≥ 0; 0 fits relative error alone).
+    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_ABSOLUTE_WEIGHT)]
+    pub fit_absolute_weight: f32,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -353,6 +357,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         points_per_probe: a.fit_points,
         samples: a.fit_samples,
         regularization: a.fit_regularization,
+        absolute_weight: a.fit_absolute_weight,
         seed: settings.seed,
     });
     if let Some(w) = &weights {
@@ -363,6 +368,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             bail!(
                 "--fit-regularization {}: expected a finite number ≥ 0",
                 w.regularization
+            );
+        }
+        if !(w.absolute_weight >= 0.0 && w.absolute_weight.is_finite()) {
+            bail!(
+                "--fit-absolute-weight {}: expected a finite number ≥ 0",
+                w.absolute_weight
             );
         }
     }

@@ -21,36 +21,45 @@
 //! switches probes off rather than weighting them.
 //!
 //! **Training points** ([`capture_training_set`]): `points_per_probe × P`
-//! points drawn like `probekit eval`'s (free space of the bake box, at least
-//! 1 cm from surfaces) from their own seed stream, captured as radiance SH
-//! with the bake's light transport at [`BlendFitSettings::samples`].
+//! points in free space (at least 1 cm from surfaces), from their own seed
+//! stream: half drawn like `probekit eval`'s (uniform in the bake box), half
+//! uniform in tetrahedra chosen uniformly, so that every cell, the small
+//! ones next to lights included, has evidence; captured as radiance SH with
+//! the bake's light transport at [`BlendFitSettings::samples`].
 //!
 //! **Objective** ([`fit_probe_weights`]), over the training points `j`:
 //!
 //! ```text
-//! J(t) = (1/N) Σ_j ‖Ê_j(s) − E_j‖² / (‖E_j‖ + 0.01·mean_k ‖E_k‖)²  +  ρ Σ_i t_i²,   s_i = e^{t_i}
+//! J(t) = (1/N) Σ_j ‖Ê_j(s) − E_j‖² · ( 1/(‖E_j‖ + 0.01·mean_k ‖E_k‖)²  +  β/mean_k ‖E_k‖² )  +  ρ Σ_i t_i²
+//! s_i = e^{t_i}
 //! ```
 //!
 //! `‖·‖` is the root-mean-square over all normals of the irradiance of the
 //! SH (`Σ_lm A_l² |c_lm|²`, `A_l` the clamped-cosine band factors, over 4π),
-//! `Ê_j(s)` the blend with weights `s` and `E_j` the captured point: a
-//! *relative* error, so every point counts alike and a dark closet's points
-//! weigh as much as the bright ones next to a light; the floor is
-//! `probekit eval`'s (1 % of the mean). `ρ` ([`BlendFitSettings::regularization`])
-//! keeps probes without evidence at 1. The minimizer is cyclic coordinate
-//! descent on `t_i` over a shrinking grid of steps (9 trial values per
-//! probe and sweep), `t_i ∈ [`[`LOG_WEIGHT_MIN`]`, `[`LOG_WEIGHT_MAX`]`]`;
-//! each trial re-evaluates only the points whose cell holds the probe, from
-//! a 4 × 4 Gram matrix per point (the squared error is a quadratic form in
-//! the normalized weights). Sequential and deterministic.
+//! `Ê_j(s)` the blend with weights `s` and `E_j` the captured point. The
+//! first term is the squared *relative* error, so every point counts alike
+//! and a dark closet's points weigh as much as the bright ones next to a
+//! light (the floor is `probekit eval`'s, 1 % of the mean); the second,
+//! weighted by `β` ([`BlendFitSettings::absolute_weight`]), is the squared
+//! error relative to the mean, what `rel_rmse` measures, so that fixing the
+//! dark points does not cost the bright ones. `ρ`
+//! ([`BlendFitSettings::regularization`]) keeps probes without evidence at a
+//! weight of one. The minimizer is cyclic coordinate descent on `t_i` over a shrinking
+//! grid of steps (9 trial values per probe and sweep), `t_i ∈
+//! [`[`LOG_WEIGHT_MIN`]`, `[`LOG_WEIGHT_MAX`]`]`; each trial re-evaluates
+//! only the points whose cell holds the probe, from a 4 × 4 Gram matrix per
+//! point (the squared error is a quadratic form in the normalized weights).
+//! Sequential and deterministic.
 //!
 //! Measured in BENCHMARKS.md ("Fitted probe weights").
 
+use crate::bake::sampling::SampleRng;
 use crate::bake::{BakeError, Baker, CaptureSettings};
-use crate::placement::eval::sample_points;
+use crate::placement::eval::{sample_points, SURFACE_CLEARANCE};
+use crate::placement::is_free;
 use crate::scene::Aabb;
 use glam::Vec3;
-use probekit_runtime::cloud::{ProbeCloud, ProbeCloudError, WalkState};
+use probekit_runtime::cloud::{ProbeCloud, ProbeCloudError, TetMesh, WalkState};
 use probekit_sh::convolve::clamped_cosine_band;
 use probekit_sh::ShRgb;
 use thiserror::Error;
@@ -65,9 +74,13 @@ pub const DEFAULT_POINTS_PER_PROBE: u32 = 32;
 pub const DEFAULT_FIT_SAMPLES: u32 = 128;
 /// Default `ρ` of the objective (see the module docs).
 pub const DEFAULT_REGULARIZATION: f32 = 1e-5;
+/// Default `β` of the objective (see the module docs).
+pub const DEFAULT_ABSOLUTE_WEIGHT: f32 = 1.0;
 /// Seed stream of the training points (`"wfit"`), apart from `probekit
 /// eval`'s points of the same seed.
 const TRAINING_STREAM: u64 = 0x7766_6974;
+/// Stream of the per-cell training points' random numbers.
+const CELL_STREAM: u64 = 0x6365_6c6c; // "cell"
 /// Capture index of the first training point: far above any probe's, so
 /// training points never share a probe's random numbers.
 const TRAINING_INDEX: usize = 1 << 32;
@@ -83,6 +96,10 @@ pub struct BlendFitSettings {
     pub samples: u32,
     /// `ρ` of the objective (≥ 0, finite).
     pub regularization: f32,
+    /// `β` of the objective (≥ 0, finite): the weight of the absolute
+    /// squared error (relative to the mean squared irradiance) beside the
+    /// relative one.
+    pub absolute_weight: f32,
     /// Seed of the training points' positions (their capture uses the
     /// capture settings' seed).
     pub seed: u64,
@@ -95,6 +112,7 @@ impl BlendFitSettings {
             points_per_probe: DEFAULT_POINTS_PER_PROBE,
             samples: DEFAULT_FIT_SAMPLES,
             regularization: DEFAULT_REGULARIZATION,
+            absolute_weight: DEFAULT_ABSOLUTE_WEIGHT,
             seed,
         }
     }
@@ -105,6 +123,7 @@ impl BlendFitSettings {
             "points_per_probe": self.points_per_probe,
             "samples": self.samples,
             "regularization": self.regularization,
+            "absolute_weight": self.absolute_weight,
             "seed": self.seed,
         })
     }
@@ -125,6 +144,11 @@ impl BlendFitSettings {
                 .map(|x| x as f32)
                 .filter(|x| *x >= 0.0 && x.is_finite())
                 .unwrap_or(fallback.regularization),
+            absolute_weight: v["absolute_weight"]
+                .as_f64()
+                .map(|x| x as f32)
+                .filter(|x| *x >= 0.0 && x.is_finite())
+                .unwrap_or(fallback.absolute_weight),
             seed: v["seed"].as_u64().unwrap_or(fallback.seed),
         }
     }
@@ -141,6 +165,11 @@ impl BlendFitSettings {
         if !(self.regularization >= 0.0 && self.regularization.is_finite()) {
             return Err(BlendFitError::Settings(
                 "regularization must be a finite number ≥ 0",
+            ));
+        }
+        if !(self.absolute_weight >= 0.0 && self.absolute_weight.is_finite()) {
+            return Err(BlendFitError::Settings(
+                "absolute weight must be a finite number ≥ 0",
             ));
         }
         Ok(())
@@ -182,11 +211,18 @@ pub struct TrainingSet {
 /// Draws `count` training points in free space of `bake_box` (seeded by
 /// `fit.seed`) and captures them with `capture` at `fit.samples` samples;
 /// `indirect_only` keeps indirect light only (what `bake --indirect-only`
-/// stores). `progress(done, total)` counts points. Deterministic (any
-/// thread count).
+/// stores). Half are uniform in the box, as `probekit eval`'s points; the
+/// other half are uniform in tetrahedra of `mesh` chosen uniformly (not by
+/// volume), so every cell has evidence and small cells — where adaptive
+/// placement packed probes, next to lights — are sampled densely: a fit that
+/// only saw uniform points could shift weight onto a probe beside a light
+/// where no point would show the overshoot. `progress(done, total)` counts
+/// points. Deterministic (any thread count).
+#[allow(clippy::too_many_arguments)]
 pub fn capture_training_set(
     baker: &Baker,
     bake_box: &Aabb,
+    mesh: &TetMesh,
     count: usize,
     capture: &CaptureSettings,
     indirect_only: bool,
@@ -194,10 +230,31 @@ pub fn capture_training_set(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TrainingSet, BlendFitError> {
     fit.validate()?;
-    let pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, count, fit.seed ^ TRAINING_STREAM)
+    let seed = fit.seed ^ TRAINING_STREAM;
+    let uniform = count.div_ceil(2);
+    let mut pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, uniform, seed)
         .into_iter()
         .map(|p| p.position)
         .collect();
+    let tets = mesh.tets();
+    let pos = mesh.positions();
+    let want = count - uniform;
+    let mut tries = 0u64;
+    let mut cell_points = 0;
+    while !tets.is_empty() && cell_points < want && tries < 200 * want as u64 + 1000 {
+        let mut rng = SampleRng::new(seed, CELL_STREAM, tries);
+        tries += 1;
+        let t = &tets[((rng.next_f32() * tets.len() as f32) as usize).min(tets.len() - 1)];
+        // Uniform in the simplex: the gaps of three sorted uniforms.
+        let mut u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        u.sort_by(f32::total_cmp);
+        let b = [u[0], u[1] - u[0], u[2] - u[1], 1.0 - u[2]];
+        let p = (0..4).fold(Vec3::ZERO, |acc, k| acc + b[k] * pos[t[k] as usize]);
+        if bake_box.contains(p) && is_free(baker.tracer(), p, SURFACE_CLEARANCE) {
+            pts.push(p);
+            cell_points += 1;
+        }
+    }
     if pts.is_empty() {
         return Err(BlendFitError::NoTrainingPoints);
     }
@@ -264,18 +321,14 @@ impl Row {
 pub fn fit_probe_weights(
     cloud: &ProbeCloud,
     training: &TrainingSet,
-    regularization: f32,
+    fit: &BlendFitSettings,
 ) -> Result<Vec<f32>, BlendFitError> {
     if training.positions.len() != training.sh.len() {
         return Err(BlendFitError::Mismatch(
             "training positions and SH differ in count",
         ));
     }
-    if !(regularization >= 0.0 && regularization.is_finite()) {
-        return Err(BlendFitError::Settings(
-            "regularization must be a finite number ≥ 0",
-        ));
-    }
+    fit.validate()?;
     let n = cloud.coeffs_per_probe();
     if training.sh.iter().any(|s| s.coeffs().len() < n) {
         return Err(BlendFitError::Mismatch(
@@ -286,6 +339,16 @@ pub fn fit_probe_weights(
     if training.positions.is_empty() {
         return Ok(vec![1.0; nprobes]);
     }
+    let rows = rows(cloud, training, fit.absolute_weight as f64);
+    let t = descend(&rows, nprobes, fit.regularization as f64);
+    Ok(t.iter().map(|&x| x.exp()).collect())
+}
+
+/// The training points as [`Row`]s of `cloud`'s plain blend (probe weights
+/// off), each point's Gram matrix scaled by its relative-error scale plus
+/// `beta` over the mean squared irradiance (see the module docs).
+fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> Vec<Row> {
+    let n = cloud.coeffs_per_probe();
     let mut plain = cloud.clone();
     plain.set_probe_weighting(false);
     // A_l² per coefficient.
@@ -304,16 +367,20 @@ pub fn fit_probe_weights(
     };
     // The cloud's bands of each training point (a codec may store fewer).
     let truth = |j: usize| &training.sh[j].coeffs()[..n];
-    let mean =
-        (0..training.sh.len()).map(|j| norm(truth(j))).sum::<f64>() / training.sh.len() as f64;
+    let count = training.sh.len() as f64;
+    let mean = (0..training.sh.len()).map(|j| norm(truth(j))).sum::<f64>() / count;
+    let mean_square = ((0..training.sh.len())
+        .map(|j| norm(truth(j)).powi(2))
+        .sum::<f64>()
+        / count)
+        .max(1e-30);
     let floor = 0.01 * mean;
-    let npts = training.positions.len() as f64;
     let mut ws = WalkState::new();
     let mut rows = Vec::with_capacity(training.positions.len());
     for (j, p) in training.positions.iter().enumerate() {
         let (probes, w) = plain.weights_at(*p, &mut ws);
         let e = truth(j);
-        let scale = (norm(e) + floor).powi(2).max(1e-30) * npts;
+        let scale = 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square;
         let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
             if w[k] > 0.0 {
                 let c = plain.probe_sh(probes[k] as usize);
@@ -328,7 +395,7 @@ pub fn fit_probe_weights(
                 .zip(&band)
                 .map(|((x, y), bw)| bw * x.dot(*y) as f64)
                 .sum::<f64>()
-                / scale
+                * scale
         };
         let mut g = [0.0f64; 10];
         let mut i = 0;
@@ -340,9 +407,26 @@ pub fn fit_probe_weights(
         }
         rows.push(Row { probes, w, g });
     }
+    rows
+}
+
+/// Per-slot factors of `r` for probe weights `s`.
+fn factors(r: &Row, s: &[f64]) -> [f64; 4] {
+    core::array::from_fn(|k| {
+        if r.w[k] > 0.0 {
+            s[r.probes[k] as usize]
+        } else {
+            1.0
+        }
+    })
+}
+
+/// Cyclic coordinate descent on `t`: minimizes the rows' mean error plus
+/// `rho Σ t_i²` (see the module docs).
+fn descend(rows: &[Row], nprobes: usize, rho: f64) -> Vec<f32> {
     // Points by probe (CSR), for the local re-evaluation.
     let mut start = vec![0usize; nprobes + 1];
-    for r in &rows {
+    for r in rows {
         for k in 0..4 {
             if r.w[k] > 0.0 {
                 start[r.probes[k] as usize + 1] += 1;
@@ -363,18 +447,10 @@ pub fn fit_probe_weights(
             }
         }
     }
-    let rho = regularization as f64;
+    // Σ errors + rho·N·Σ t²: the mean error's minimizer.
+    let rho = rho * rows.len() as f64;
     let mut t = vec![0.0f32; nprobes];
     let mut s = vec![1.0f64; nprobes];
-    let factors = |r: &Row, s: &[f64]| -> [f64; 4] {
-        core::array::from_fn(|k| {
-            if r.w[k] > 0.0 {
-                s[r.probes[k] as usize]
-            } else {
-                1.0
-            }
-        })
-    };
     for step in SWEEP_STEPS {
         for i in 0..nprobes {
             let mine = &members[start[i]..start[i + 1]];
@@ -402,7 +478,7 @@ pub fn fit_probe_weights(
             s[i] = (best.1 as f64).exp();
         }
     }
-    Ok(t.iter().map(|&x| x.exp()).collect())
+    t
 }
 
 /// Fits probe weights for a cloud file: builds its [`ProbeCloud`] (with the
@@ -425,13 +501,14 @@ pub fn fit_file_probe_weights(
     let training = capture_training_set(
         baker,
         bake_box,
+        cloud.mesh(),
         count,
         capture,
         indirect_only,
         fit,
         progress,
     )?;
-    fit_probe_weights(&cloud, &training, fit.regularization)
+    fit_probe_weights(&cloud, &training, fit)
 }
 
 #[cfg(test)]
@@ -448,6 +525,14 @@ mod tests {
         fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
             let r = &mut self.0;
             Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * (hi - lo) + Vec3::splat(lo)
+        }
+    }
+
+    /// The default settings with regularization `rho`.
+    fn settings(rho: f32) -> BlendFitSettings {
+        BlendFitSettings {
+            regularization: rho,
+            ..BlendFitSettings::new(1)
         }
     }
 
@@ -509,7 +594,7 @@ mod tests {
             positions: (0..800).map(|_| g.v(0.05, 2.95)).collect(),
             sh: vec![truth.clone(); 800],
         };
-        let w = fit_probe_weights(&cloud, &training, 1e-5).unwrap();
+        let w = fit_probe_weights(&cloud, &training, &settings(1e-5)).unwrap();
         assert_eq!(w.len(), 64);
         assert!(w[bright] < (LOG_WEIGHT_MIN + 1.0).exp(), "{}", w[bright]);
         let mut others: Vec<f32> = (0..64).filter(|&i| i != bright).map(|i| w[i]).collect();
@@ -539,30 +624,44 @@ mod tests {
             sh: vec![grey(1.0); 200],
         };
         assert_eq!(
-            fit_probe_weights(&cloud, &training, 1e9).unwrap(),
+            fit_probe_weights(&cloud, &training, &settings(1e9)).unwrap(),
             vec![1.0; 64]
         );
-        let a = fit_probe_weights(&cloud, &training, 1e-4).unwrap();
-        assert_eq!(a, fit_probe_weights(&cloud, &training, 1e-4).unwrap());
+        let a = fit_probe_weights(&cloud, &training, &settings(1e-4)).unwrap();
+        assert_eq!(
+            a,
+            fit_probe_weights(&cloud, &training, &settings(1e-4)).unwrap()
+        );
         // Weights the cloud already has are ignored.
         let mut weighted = cloud.clone();
         weighted.set_probe_weights(Some(vec![7.0; 64])).unwrap();
-        assert_eq!(fit_probe_weights(&weighted, &training, 1e-4).unwrap(), a);
+        assert_eq!(
+            fit_probe_weights(&weighted, &training, &settings(1e-4)).unwrap(),
+            a
+        );
         let mut short = training.clone();
         short.sh.pop();
         assert!(matches!(
-            fit_probe_weights(&cloud, &short, 1e-4),
+            fit_probe_weights(&cloud, &short, &settings(1e-4)),
             Err(BlendFitError::Mismatch(_))
         ));
         let mut l1 = training.clone();
         l1.sh[3] = ShRgb::zeros(2);
         assert!(matches!(
-            fit_probe_weights(&cloud, &l1, 1e-4),
+            fit_probe_weights(&cloud, &l1, &settings(1e-4)),
             Err(BlendFitError::Mismatch(_))
         ));
         for bad in [-1.0, f32::NAN, f32::INFINITY] {
             assert!(matches!(
-                fit_probe_weights(&cloud, &training, bad),
+                fit_probe_weights(&cloud, &training, &settings(bad)),
+                Err(BlendFitError::Settings(_))
+            ));
+            let beta = BlendFitSettings {
+                absolute_weight: bad,
+                ..settings(1e-4)
+            };
+            assert!(matches!(
+                fit_probe_weights(&cloud, &training, &beta),
                 Err(BlendFitError::Settings(_))
             ));
         }
@@ -571,7 +670,7 @@ mod tests {
             sh: vec![],
         };
         assert_eq!(
-            fit_probe_weights(&cloud, &empty, 1e-4).unwrap(),
+            fit_probe_weights(&cloud, &empty, &settings(1e-4)).unwrap(),
             vec![1.0; 64]
         );
     }
@@ -619,7 +718,9 @@ mod tests {
             .all(|x| probekit_runtime::cloud::PROBE_WEIGHT_RANGE.contains(x)));
         assert!(w.iter().any(|&x| x != 1.0));
         assert_eq!(w, run().unwrap());
-        let t = capture_training_set(&baker, &b, 50, &cs, false, &fit, &|_, _| {}).unwrap();
+        let cloud = ProbeCloud::from_file(&file).unwrap();
+        let t = capture_training_set(&baker, &b, cloud.mesh(), 50, &cs, false, &fit, &|_, _| {})
+            .unwrap();
         assert_eq!(t.positions.len(), 50);
         assert!(t.positions.iter().all(|p| b.contains(*p)));
         for bad in [
