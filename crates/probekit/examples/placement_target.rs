@@ -114,16 +114,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                     ..d
                 };
                 let n = fit.points_per_probe as usize * pos.len();
-                let t = capture_training_set(
-                    &baker,
-                    &bbox,
-                    cloud.mesh(),
-                    n,
-                    &s,
-                    false,
-                    &fit,
-                    &|_, _| {},
-                )?;
+                let t = capture_training_set(&baker, &bbox, cloud.mesh(), n, &s, &fit, &|_, _| {})?;
                 let w = fit_probe_weights(&cloud, &t, &fit)?;
                 cloud.set_probe_weights(Some(w))?;
             }

@@ -708,7 +708,6 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
                     &file,
                     &scene.bake_box(),
                     &capture,
-                    capture.split_direct,
                     &fit,
                     &|d, t| advance(&pb, d, t),
                 )

@@ -209,23 +209,22 @@ pub struct TrainingSet {
 }
 
 /// Draws `count` training points in free space of `bake_box` (seeded by
-/// `fit.seed`) and captures them with `capture` at `fit.samples` samples;
-/// `indirect_only` keeps indirect light only (what `bake --indirect-only`
-/// stores). Half are uniform in the box, as `probekit eval`'s points; the
+/// `fit.seed`) and captures them with `capture` at `fit.samples` samples:
+/// all light, or indirect light only when `capture.split_direct` (the
+/// convention of [`crate::placement::sweep::bake_cloud`]: what `bake
+/// --indirect-only` stores). Half are uniform in the box, as `probekit eval`'s points; the
 /// other half are uniform in tetrahedra of `mesh` chosen uniformly (not by
 /// volume), so every cell has evidence and small cells — where adaptive
 /// placement packed probes, next to lights — are sampled densely: a fit that
 /// only saw uniform points could shift weight onto a probe beside a light
 /// where no point would show the overshoot. `progress(done, total)` counts
 /// points. Deterministic (any thread count).
-#[allow(clippy::too_many_arguments)]
 pub fn capture_training_set(
     baker: &Baker,
     bake_box: &Aabb,
     mesh: &TetMesh,
     count: usize,
     capture: &CaptureSettings,
-    indirect_only: bool,
     fit: &BlendFitSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TrainingSet, BlendFitError> {
@@ -260,13 +259,12 @@ pub fn capture_training_set(
     }
     let mut s = capture.clone();
     s.samples = fit.samples;
-    s.split_direct = indirect_only;
     s.groups = false;
     let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
     let (positions, sh) = rs
         .into_iter()
         .map(|r| {
-            let sh = match (indirect_only, r.indirect) {
+            let sh = match (capture.split_direct, r.indirect) {
                 (true, Some(ind)) => ind,
                 _ => r.sh,
             };
@@ -491,23 +489,14 @@ pub fn fit_file_probe_weights(
     file: &probekit_runtime::format::ProbeFile,
     bake_box: &Aabb,
     capture: &CaptureSettings,
-    indirect_only: bool,
     fit: &BlendFitSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<f32>, BlendFitError> {
     fit.validate()?;
     let cloud = ProbeCloud::from_file(file)?;
     let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
-    let training = capture_training_set(
-        baker,
-        bake_box,
-        cloud.mesh(),
-        count,
-        capture,
-        indirect_only,
-        fit,
-        progress,
-    )?;
+    let training =
+        capture_training_set(baker, bake_box, cloud.mesh(), count, capture, fit, progress)?;
     fit_probe_weights(&cloud, &training, fit)
 }
 
@@ -710,7 +699,7 @@ mod tests {
             samples: 16,
             ..BlendFitSettings::new(9)
         };
-        let run = || fit_file_probe_weights(&baker, &file, &b, &cs, false, &fit, &|_, _| {});
+        let run = || fit_file_probe_weights(&baker, &file, &b, &cs, &fit, &|_, _| {});
         let w = run().unwrap();
         assert_eq!(w.len(), pos.len());
         assert!(w
@@ -719,8 +708,7 @@ mod tests {
         assert!(w.iter().any(|&x| x != 1.0));
         assert_eq!(w, run().unwrap());
         let cloud = ProbeCloud::from_file(&file).unwrap();
-        let t = capture_training_set(&baker, &b, cloud.mesh(), 50, &cs, false, &fit, &|_, _| {})
-            .unwrap();
+        let t = capture_training_set(&baker, &b, cloud.mesh(), 50, &cs, &fit, &|_, _| {}).unwrap();
         assert_eq!(t.positions.len(), 50);
         assert!(t.positions.iter().all(|p| b.contains(*p)));
         for bad in [
@@ -735,7 +723,7 @@ mod tests {
             },
         ] {
             assert!(matches!(
-                fit_file_probe_weights(&baker, &file, &b, &cs, false, &bad, &|_, _| {}),
+                fit_file_probe_weights(&baker, &file, &b, &cs, &bad, &|_, _| {}),
                 Err(BlendFitError::Settings(_))
             ));
         }

@@ -129,7 +129,6 @@ impl VisibilityBake {
                 file,
                 &baker.scene().bake_box(),
                 capture,
-                capture.split_direct,
                 fit,
                 progress,
             )?);
