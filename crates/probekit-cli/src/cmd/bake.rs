@@ -24,7 +24,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use probekit::bake::{bake_shard, shard_range, BakeOutput, CaptureSettings};
+use probekit::bake::{shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::blend_fit::BlendFitSettings;
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
@@ -284,11 +284,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     if let Some(o) = a.order {
         placement_settings.order = o;
     }
+    // One baker (and BVH) for placement, the probes and the blend data.
+    let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
         a.seed003
-            .place(&scene, &a.scene, method, a.budget, &placement_settings)?
+            .place(&baker, &a.scene, method, a.budget, &placement_settings)?
     } else if method == "adaptive" {
-        let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
         let pb = ProgressBar::new(a.budget as u64);
         pb.set_style(
             ProgressStyle::with_template(
@@ -396,10 +397,11 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         ProgressStyle::with_template("{bar:40} {pos}/{len} probes  {elapsed} elapsed, ETA {eta}")
             .expect("static template"),
     );
-    let out = bake_shard(&scene, &points, shard, shards, &settings, &|done, _| {
-        pb.set_position(done as u64)
-    })
-    .with_context(|| a.scene.clone())?;
+    let out = baker
+        .bake_shard(&points, shard, shards, &settings, &|done, _| {
+            pb.set_position(done as u64)
+        })
+        .with_context(|| a.scene.clone())?;
     pb.finish_and_clear();
     let sh = stored_sh(&out, a.indirect_only);
     let groups = stored_groups(&out, a.indirect_only);
@@ -428,7 +430,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
-        bake_blend_data(&scene, &kinds, &settings, &mut file)
+        bake_blend_data(&baker, &kinds, &settings, &mut file)
             .with_context(|| format!("{}: visibility data and probe weights", outname))?;
     }
     file.validate().with_context(|| outname.clone())?;
@@ -509,12 +511,11 @@ const FIT_BAR: &str = "probe weights: {bar:40} {pos}/{len} training points  {ela
 /// weights fitted to that blend — with progress bars; one baker (one BVH
 /// build) for all.
 fn bake_blend_data(
-    scene: &probekit::scene::Scene,
+    baker: &probekit::bake::Baker,
     kinds: &VisibilityBake,
     capture: &probekit::bake::CaptureSettings,
     file: &mut ProbeFile,
 ) -> Result<()> {
-    let baker = probekit::bake::Baker::new(scene)?;
     let (pm, pc) = (counting_bar(MOMENTS_BAR), counting_bar(CELLS_BAR));
     kinds.bake_into(baker.tracer(), file, &|d, t| advance(&pm, d, t), &|d, t| {
         advance(&pc, d, t)
@@ -522,7 +523,7 @@ fn bake_blend_data(
     pm.finish_and_clear();
     pc.finish_and_clear();
     let pf = counting_bar(FIT_BAR);
-    kinds.fit_weights_into(&baker, capture, file, &|d, t| advance(&pf, d, t))?;
+    kinds.fit_weights_into(baker, capture, file, &|d, t| advance(&pf, d, t))?;
     pf.finish_and_clear();
     Ok(())
 }
@@ -806,7 +807,7 @@ impl Seed003Args {
     /// parameters plus the probe `count`).
     pub fn place(
         &self,
-        scene: &Scene,
+        baker: &probekit::bake::Baker,
         scene_name: &str,
         name: &str,
         budget: usize,
@@ -814,10 +815,10 @@ impl Seed003Args {
     ) -> Result<(Vec<Vec3>, serde_json::Value)> {
         use probekit::placement::PlacementMethod;
         let method = self.method(name, budget)?;
-        let baker = probekit::bake::Baker::new(scene).with_context(|| scene_name.to_string())?;
+        let scene = baker.scene();
         let pb = ProgressBar::new(budget as u64);
         let placed = probekit::placement::place(
-            &baker,
+            baker,
             scene.bake_box(),
             &method,
             settings,

@@ -211,16 +211,43 @@ pub fn bake_points_from(
     settings: &CaptureSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<BakeOutput, BakeError> {
-    settings.validate()?;
-    let baker = Baker::new(scene)?;
-    let results = baker.capture_many(points, first_index, settings, progress)?;
-    Ok(BakeOutput::from_results(
-        first_index,
-        points,
-        results,
-        settings,
-        baker.group_names(),
-    ))
+    Baker::new(scene)?.bake_points_from(points, first_index, settings, progress)
+}
+
+impl Baker<'_> {
+    /// [`bake_points_from`] with this baker's scene and BVH, so a caller
+    /// that also places probes or bakes visibility data with the same
+    /// baker builds the BVH once.
+    pub fn bake_points_from(
+        &self,
+        points: &[Vec3],
+        first_index: usize,
+        settings: &CaptureSettings,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<BakeOutput, BakeError> {
+        settings.validate()?;
+        let results = self.capture_many(points, first_index, settings, progress)?;
+        Ok(BakeOutput::from_results(
+            first_index,
+            points,
+            results,
+            settings,
+            self.group_names(),
+        ))
+    }
+
+    /// [`bake_shard`] with this baker (see [`Baker::bake_points_from`]).
+    pub fn bake_shard(
+        &self,
+        all_points: &[Vec3],
+        shard: usize,
+        shards: usize,
+        settings: &CaptureSettings,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<BakeOutput, BakeError> {
+        let r = shard_range(all_points.len(), shard, shards)?;
+        self.bake_points_from(&all_points[r.clone()], r.start, settings, progress)
+    }
 }
 
 /// Bakes shard `shard` of `shards` of `all_points` (see [`shard_range`]).
@@ -232,8 +259,7 @@ pub fn bake_shard(
     settings: &CaptureSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<BakeOutput, BakeError> {
-    let r = shard_range(all_points.len(), shard, shards)?;
-    bake_points_from(scene, &all_points[r.clone()], r.start, settings, progress)
+    Baker::new(scene)?.bake_shard(all_points, shard, shards, settings, progress)
 }
 
 /// The contiguous index range of shard `shard` (0-based) of `shards` over
