@@ -695,10 +695,9 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             file.cell_visibility = Some(cells);
         }
         if weights.is_object() {
-            // The parts' capture settings, as the bake recorded them (a
-            // part's metadata wraps the bake's).
-            let (capture, _) = probekit::placement::sweep::settings_from_metadata(
-                &serde_json::json!({ "settings": head.meta.settings }).to_string(),
+            // The parts' capture settings, as the bake recorded them.
+            let (capture, _) = probekit::placement::sweep::settings_from_json(
+                &head.meta.settings,
                 &probekit::bake::CaptureSettings::from_scene(&scene),
             );
             let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));

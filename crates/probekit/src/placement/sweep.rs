@@ -141,9 +141,18 @@ pub fn settings_from_metadata(
     metadata: &str,
     fallback: &CaptureSettings,
 ) -> (CaptureSettings, Codec) {
-    let mut s = fallback.clone();
     let v: serde_json::Value = serde_json::from_str(metadata).unwrap_or_default();
-    let set = &v["settings"];
+    settings_from_json(&v["settings"], fallback)
+}
+
+/// [`settings_from_metadata`] on the metadata's parsed `settings` object
+/// (what [`settings_json`] wrote), e.g. a shard part's recorded bake
+/// settings; anything but an object gives `fallback` and f32.
+pub fn settings_from_json(
+    set: &serde_json::Value,
+    fallback: &CaptureSettings,
+) -> (CaptureSettings, Codec) {
+    let mut s = fallback.clone();
     let u = |k: &str| set[k].as_u64();
     if let Some(x) = u("samples").filter(|&x| x > 0 && x <= u32::MAX as u64) {
         s.samples = x as u32;
@@ -314,6 +323,14 @@ mod tests {
         assert_eq!((s.samples, s.bounces, s.order, s.seed), (64, 1, 2, 9));
         assert_eq!(s.russian_roulette_depth, fb.russian_roulette_depth);
         assert_eq!(c, Codec::F16);
+        // The same settings object, already parsed (what `merge` passes).
+        let v: serde_json::Value = serde_json::from_str(m).unwrap();
+        let (s2, c2) = settings_from_json(&v["settings"], &fb);
+        assert_eq!((s2, c2), (s, c));
+        assert_eq!(
+            settings_from_json(&serde_json::json!(3), &fb),
+            (fb.clone(), Codec::F32)
+        );
         assert!(method_for_budget("nope", 10).is_err());
     }
 
