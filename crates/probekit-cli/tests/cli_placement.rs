@@ -281,3 +281,51 @@ fn eval_compare_and_sweep_plot() {
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
 }
+
+/// `bake --light-shells auto` records its choice and both held-out errors
+/// in the placement metadata; a bad mode is a one-line error, no file.
+#[test]
+fn bake_light_shells_auto_records_its_choice() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("auto.probes");
+    let o = out.to_str().unwrap();
+    let base = [
+        "bake",
+        "builtin:demo",
+        "--budget",
+        "24",
+        "--samples",
+        "32",
+        "--no-visibility",
+        "--no-probe-weights",
+        "-o",
+        o,
+    ];
+    let bad = probekit(&[&base[..], &["--light-shells", "maybe"]].concat());
+    assert_eq!(bad.status.code(), Some(1));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(msg.contains("--light-shells maybe"), "{msg}");
+    assert!(!out.exists());
+    json(&probekit(
+        &[&base[..], &["--light-shells", "auto", "--json"]].concat(),
+    ));
+    let i = json(&probekit(&["inspect", o, "--json"]));
+    let p = &i["placement"]["parameters"];
+    assert_eq!(p["light_shells_mode"], "auto", "{i}");
+    let e: Vec<f64> = p["held_out_error"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(e.len(), 2, "{i}");
+    assert!(e.iter().all(|x| x.is_finite() && *x > 0.0), "{i}");
+    assert_eq!(p["light_shells"].as_bool(), Some(e[1] < e[0]), "{i}");
+    // The bare flag still means `on`.
+    json(&probekit(
+        &[&base[..], &["--light-shells", "--json"]].concat(),
+    ));
+    let i = json(&probekit(&["inspect", o, "--json"]));
+    assert_eq!(i["placement"]["parameters"]["light_shells_mode"], "on");
+    assert!(i["placement"]["parameters"]["held_out_error"].is_null());
+}

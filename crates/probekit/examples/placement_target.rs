@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells] [--visibility [--no-weights] [--fit-points N] [--fit-samples N]
+//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
@@ -14,6 +14,9 @@
 //! difference between two placements is chance).
 //!
 //! `--seeds`: the evaluation points of several seeds pooled (default 1).
+//!
+//! `--light-shells`: adaptive's [`LightShells`] mode (default `off`);
+//! `--no-grid`: evaluate the adaptive clouds only.
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`), cell
@@ -35,7 +38,7 @@ use probekit::cloud::cell_visibility::bake_cell_visibility;
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
-use probekit::placement::{grid_points, inside_geometry, place, PlacementMethod};
+use probekit::placement::{grid_points, inside_geometry, place, LightShells, PlacementMethod};
 use probekit::scene::Scene;
 use probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
@@ -61,7 +64,12 @@ fn main() -> Result<(), Box<dyn Error>> {
         .map(|s| s.trim().parse())
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
-    let shells = args.iter().any(|a| a == "--light-shells");
+    let skip_grid = args.iter().any(|a| a == "--no-grid");
+    let shells = match arg(&args, "--light-shells", "off".to_string()).as_str() {
+        "on" => LightShells::On,
+        "auto" => LightShells::Auto,
+        _ => LightShells::Off,
+    };
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);
     let weights = !args.iter().any(|a| a == "--no-weights");
@@ -178,7 +186,9 @@ fn main() -> Result<(), Box<dyn Error>> {
             .into_iter()
             .filter(|p| !inside_geometry(baker.tracer(), *p))
             .collect();
-        eval("grid", &g)?;
+        if !skip_grid {
+            eval("grid", &g)?;
+        }
         let t = std::time::Instant::now();
         let m = PlacementMethod::Adaptive {
             budget: b,

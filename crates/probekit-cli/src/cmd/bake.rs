@@ -32,6 +32,7 @@ use probekit::cloud::file::{
 use probekit::cloud::visibility::VisibilitySettings;
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
+use probekit::placement::LightShells;
 use probekit::scene::Scene;
 use probekit_sh::ShRgb;
 use std::path::PathBuf;
@@ -80,11 +81,12 @@ pub struct BakeArgs {
     /// placement's own captured pool is below this.
     #[arg(long, default_value_t = 0.02)]
     pub tolerance: f32,
-    /// Adaptive placement: add candidate shells around point, spot, sphere
-    /// and disk lights (lower error near small bright lights, fewer probes
-    /// elsewhere).
-    #[arg(long)]
-    pub light_shells: bool,
+    /// Adaptive placement: candidate shells around point, spot, sphere and
+    /// disk lights (lower error near small bright lights, fewer probes
+    /// elsewhere): `off`, `on` (also the bare flag) or `auto` (place both
+    /// ways, keep the lower error at held-out points).
+    #[arg(long, value_name = "WHEN", num_args = 0..=1, default_missing_value = "on", default_value = "off")]
+    pub light_shells: String,
     /// CSV of probe positions `x,y,z` (header optional).
     #[arg(long)]
     pub positions: Option<PathBuf>,
@@ -290,6 +292,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         a.seed003
             .place(&baker, &a.scene, method, a.budget, &placement_settings)?
     } else if method == "adaptive" {
+        let light_shells = LightShells::from_name(&a.light_shells).ok_or_else(|| {
+            anyhow!(
+                "--light-shells {}: expected off, on or auto",
+                a.light_shells
+            )
+        })?;
         let pb = ProgressBar::new(a.budget as u64);
         pb.set_style(
             ProgressStyle::with_template(
@@ -303,7 +311,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             &probekit::placement::PlacementMethod::Adaptive {
                 budget: a.budget,
                 tolerance: a.tolerance,
-                light_shells: a.light_shells,
+                light_shells,
             },
             &placement_settings,
             &|phase, done, total| {
@@ -317,7 +325,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let n = placed.positions.len();
         (
             placed.positions,
-            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "light_shells": a.light_shells, "count": n }),
+            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "light_shells": placed.stats.light_shells, "light_shells_mode": light_shells.name(), "held_out_error": placed.stats.held_out_error, "count": n }),
         )
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;

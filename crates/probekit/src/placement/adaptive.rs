@@ -269,6 +269,86 @@ fn light_shells(lights: &[Light], bbox: &Aabb, max_radius: f32) -> Vec<Vec3> {
     out
 }
 
+/// Whether [`light_shells`] offers any candidate in `bbox`: some positional
+/// light is close enough to the box.
+pub(super) fn has_shell_lights(scene: &Scene, bbox: &Aabb) -> bool {
+    !light_shells(&scene.lights, bbox, LIGHT_SHELL_MAX).is_empty()
+}
+
+/// Seed salt of the held-out points of [`held_out_errors`].
+const HELD_OUT_SALT: u64 = 0x0048_454c_444f_5554;
+
+/// First capture index of the held-out points: far above any probe's or
+/// candidate's, so their random numbers are their own.
+const HELD_OUT_FIRST_INDEX: usize = 1 << 40;
+
+/// The relative RMSE (`sqrt(Σ err / Σ mean-square irradiance)`, as
+/// [`Adaptive::rel_rmse`]) of the plain barycentric interpolation of each
+/// placement in `candidates` at held-out points: about `2·budget` (512 to
+/// 8192) jittered points in free space of `bbox` (as the pool, with
+/// [`PROBE_CLEARANCE`]), captured with `st`'s settings and their own random
+/// numbers. A placement whose tetrahedra the runtime rejects scores
+/// infinity.
+pub(super) fn held_out_errors(
+    st: &mut State,
+    bbox: &Aabb,
+    budget: usize,
+    candidates: [&State; 2],
+) -> Result<[f32; 2], PlacementError> {
+    let tracer = st.baker.tracer();
+    let pts: Vec<Vec3> = jittered(
+        bbox,
+        (2 * budget).clamp(512, 8192),
+        st.settings.seed ^ HELD_OUT_SALT,
+        None,
+    )
+    .into_par_iter()
+    .filter(|p| has_clearance(tracer, *p))
+    .collect();
+    let first = st.next_index;
+    st.next_index = HELD_OUT_FIRST_INDEX;
+    let captured = st.capture(&pts);
+    st.next_index = first;
+    let captured: Vec<(Vec3, ShRgb)> = captured?
+        .into_iter()
+        .filter(|(p, _)| bbox.contains(*p))
+        .collect();
+    let order = captured.first().map_or(1, |c| c.1.order());
+    let w = band_weights(order);
+    let total: f64 = captured.iter().map(|(_, s)| energy(&w, s) as f64).sum();
+    let mut out = [f32::INFINITY; 2];
+    for (o, c) in out.iter_mut().zip(candidates) {
+        let tri = tetrahedralize(&c.positions)?;
+        let Ok(mesh) = tri.to_tet_mesh(&c.positions) else {
+            continue;
+        };
+        const CHUNK: usize = 256;
+        let err: f64 = captured
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut ws = WalkState::new();
+                chunk
+                    .iter()
+                    .map(|(p, cap)| {
+                        let (idx, wt) = mesh.weights_at(*p, &mut ws);
+                        let mut pred = ShRgb::zeros(cap.order());
+                        for k in 0..4 {
+                            if wt[k] != 0.0 {
+                                pred.add_scaled(&c.sh[idx[k] as usize], wt[k]);
+                            }
+                        }
+                        sq_error(&w, &pred, cap) as f64
+                    })
+                    .sum::<f64>()
+            })
+            .sum();
+        if total > 0.0 {
+            *o = (err / total).sqrt() as f32;
+        }
+    }
+    Ok(out)
+}
+
 /// Distances of the pool layers in front of and behind emissive surfaces,
 /// in units of [`PROBE_CLEARANCE`].
 const EMITTER_LAYERS: [f32; 3] = [1.2, 2.5, 5.0];
@@ -767,6 +847,7 @@ pub(super) fn adaptive(
     ls: &LeakSettings,
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<(), PlacementError> {
+    st.stats.light_shells = shells;
     let tracer = st.baker.tracer();
     st.layer = Some(Aabb::new(
         bbox.min + Vec3::splat(BOUNDARY_SNAP),

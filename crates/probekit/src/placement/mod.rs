@@ -63,16 +63,55 @@ pub enum PlacementMethod {
         /// Stop when the mean relative irradiance error at the candidates of a
         /// round falls below this (e.g. 0.05).
         tolerance: f32,
-        /// Add shells of candidates around positional lights
-        /// (the `adaptive` placement module docs). Lowers the error near small bright
-        /// lights, but draws probes from the rest of the scene: on the demo
-        /// at small budgets it raised p95 and leaks (docs/bench/placement.md).
-        light_shells: bool,
+        /// Whether to add shells of candidates around positional lights
+        /// (the `adaptive` placement module docs); see [`LightShells`].
+        light_shells: LightShells,
     },
     /// Seed 003's spawn-and-merge placement ([`spawn_merge`]).
     SpawnMerge(spawn_merge::SpawnMergeParams),
     /// Seed 003's gradient-ascent placement ([`gradient_ascent`]).
     GradientAscent(gradient_ascent::GradientAscentParams),
+}
+
+/// Whether adaptive placement offers candidates on shells around positional
+/// lights (the `adaptive` module docs). Shells lower the error near small
+/// bright lights but draw probes from the rest of the scene; which way wins
+/// depends on the scene and the budget (BENCHMARKS.md, "Light shells").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightShells {
+    /// No shell candidates.
+    #[default]
+    Off,
+    /// Shell candidates around every positional light in the bake box.
+    On,
+    /// Place both ways (when the box holds a positional light) and keep the
+    /// placement whose plain barycentric interpolation has the lower
+    /// relative RMSE at held-out points: about `2·budget` (512 to 8192)
+    /// jittered points in free space of the box, captured like the pool but
+    /// with their own random numbers and never offered as candidates.
+    /// Costs about 2.5× the placement time of `Off`.
+    Auto,
+}
+
+impl LightShells {
+    /// The names `off`, `on`, `auto`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightShells::Off => "off",
+            LightShells::On => "on",
+            LightShells::Auto => "auto",
+        }
+    }
+
+    /// Parses [`LightShells::name`].
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "off" => Some(LightShells::Off),
+            "on" => Some(LightShells::On),
+            "auto" => Some(LightShells::Auto),
+            _ => None,
+        }
+    }
 }
 
 impl PlacementMethod {
@@ -130,6 +169,12 @@ pub struct PlacementStats {
     /// one of 26 normals) when adaptive placement ends; `None` for the other
     /// methods.
     pub leaking_pool_points: Option<usize>,
+    /// [`LightShells::Auto`]: the held-out relative RMSE of the placement
+    /// without and with light shells (the lower one was kept); `None`
+    /// otherwise.
+    pub held_out_error: Option<[f32; 2]>,
+    /// Whether the kept adaptive placement used light shells.
+    pub light_shells: bool,
 }
 
 /// Result of [`place`].
@@ -315,6 +360,7 @@ pub fn crossing_extent(tracer: &Tracer, points: &[Vec3]) -> Result<(usize, f32),
 }
 
 /// Probes so far: positions, captured SH, and the next capture index.
+#[derive(Clone)]
 struct State<'a, 'b> {
     baker: &'a Baker<'b>,
     settings: CaptureSettings,
@@ -592,15 +638,36 @@ pub fn place(
                     "tolerance {tolerance} must be ≥ 0"
                 )));
             }
-            adaptive::adaptive(
-                &mut st,
-                &bake_box,
-                *budget,
-                *tolerance,
-                *light_shells,
-                &ls,
-                progress,
-            )?;
+            let shells = match light_shells {
+                LightShells::Off => false,
+                LightShells::On => true,
+                LightShells::Auto => adaptive::has_shell_lights(baker.scene(), &bake_box),
+            };
+            if *light_shells == LightShells::Auto && shells {
+                let mut plain = st.clone();
+                adaptive::adaptive(
+                    &mut plain, &bake_box, *budget, *tolerance, false, &ls, progress,
+                )?;
+                let mut shelled = st.clone();
+                adaptive::adaptive(
+                    &mut shelled,
+                    &bake_box,
+                    *budget,
+                    *tolerance,
+                    true,
+                    &ls,
+                    progress,
+                )?;
+                let e = adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures;
+                st = if e[1] < e[0] { shelled } else { plain };
+                st.stats.captures = captures;
+                st.stats.held_out_error = Some(e);
+            } else {
+                adaptive::adaptive(
+                    &mut st, &bake_box, *budget, *tolerance, shells, &ls, progress,
+                )?;
+            }
         }
     }
     let captured = reusable.then(|| st.sh.clone());

@@ -22,7 +22,7 @@
 use super::eval::{mean_luminance, metrics, EvalPoint, Metrics, PredictError, Predictor};
 use super::gradient_ascent::GradientAscentParams;
 use super::spawn_merge::SpawnMergeParams;
-use super::{place, PlacementError, PlacementMethod};
+use super::{place, LightShells, PlacementError, PlacementMethod};
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::file::{cloud_file, file_validity, settings_json, CloudFileError};
 use crate::cloud::visibility_bake::{VisibilityBake, VisibilityBakeError};
@@ -74,7 +74,7 @@ pub fn method_for_budget(name: &str, budget: usize) -> Result<PlacementMethod, S
         "adaptive" => PlacementMethod::Adaptive {
             budget,
             tolerance: 0.0,
-            light_shells: false,
+            light_shells: LightShells::Off,
         },
         "spawn-merge" => PlacementMethod::SpawnMerge(SpawnMergeParams {
             initial: (budget / 2).max(8),

@@ -32,6 +32,66 @@ fn grid_points_cover_box_at_cell_centres() {
     assert!(grid_points(&b, Some(-1.0), None).is_err());
 }
 
+/// `auto` light shells place both ways and keep exactly the `off` or the
+/// `on` placement: the one with the lower held-out error, which it reports;
+/// with no positional light in the box it is `off` and places once.
+#[test]
+fn auto_light_shells_keep_the_placement_with_the_lower_held_out_error() {
+    let run = |scene: &Scene, light_shells| {
+        let baker = Baker::new(scene).unwrap();
+        let m = PlacementMethod::Adaptive {
+            budget: 32,
+            tolerance: 0.0,
+            light_shells,
+        };
+        place(
+            &baker,
+            scene.bake_box(),
+            &m,
+            &fast_settings(),
+            &|_, _, _| {},
+        )
+        .unwrap()
+    };
+    let scene = Scene::builtin_demo();
+    let off = run(&scene, LightShells::Off);
+    let on = run(&scene, LightShells::On);
+    let auto = run(&scene, LightShells::Auto);
+    assert_ne!(
+        off.positions, on.positions,
+        "the shells change the placement"
+    );
+    assert_eq!(off.stats.held_out_error, None);
+    assert!(!off.stats.light_shells && on.stats.light_shells);
+    let [e_off, e_on] = auto.stats.held_out_error.unwrap();
+    assert!(e_off.is_finite() && e_on.is_finite() && e_off > 0.0 && e_on > 0.0);
+    let kept = if e_on < e_off { &on } else { &off };
+    assert_eq!(auto.positions, kept.positions);
+    assert_eq!(auto.captured, kept.captured);
+    assert_eq!(auto.stats.light_shells, e_on < e_off);
+    assert!(auto.stats.captures > on.stats.captures + off.stats.captures);
+    // The sun alone offers no shell: auto is off, placed once.
+    let mut sunlit = Scene::builtin_demo();
+    sunlit
+        .lights
+        .retain(|l| l.kind == crate::scene::LightKind::Directional);
+    let (a, o) = (
+        run(&sunlit, LightShells::Auto),
+        run(&sunlit, LightShells::Off),
+    );
+    assert_eq!(a, o);
+    assert_eq!(a.stats.held_out_error, None);
+}
+
+#[test]
+fn light_shell_modes_round_trip_their_names() {
+    for m in [LightShells::Off, LightShells::On, LightShells::Auto] {
+        assert_eq!(LightShells::from_name(m.name()), Some(m));
+    }
+    assert_eq!(LightShells::from_name("yes"), None);
+    assert_eq!(LightShells::default(), LightShells::Off);
+}
+
 #[test]
 fn adaptive_places_no_probe_inside_and_is_deterministic() {
     let scene = Scene::builtin_demo();
@@ -40,7 +100,7 @@ fn adaptive_places_no_probe_inside_and_is_deterministic() {
         budget: 48,
         tolerance: 0.0,
         // Exercises the light shells too: they must obey the same rules.
-        light_shells: true,
+        light_shells: LightShells::On,
     };
     let a = place(
         &baker,
@@ -164,7 +224,7 @@ fn adaptive_beats_grid_at_equal_probe_count() {
     let m = PlacementMethod::Adaptive {
         budget: 96,
         tolerance: 0.0,
-        light_shells: false,
+        light_shells: LightShells::Off,
     };
     let a = place(&baker, scene.bake_box(), &m, &s, &|_, _, _| {}).unwrap();
     let g = grid_points(&scene.bake_box(), None, Some(a.positions.len())).unwrap();
@@ -272,7 +332,7 @@ fn adaptive_hull_has_no_sliver_tetrahedra_along_the_layers() {
     let m = PlacementMethod::Adaptive {
         budget: 64,
         tolerance: 0.0,
-        light_shells: false,
+        light_shells: LightShells::Off,
     };
     let bbox = scene.bake_box();
     let a = place(&baker, bbox, &m, &fast_settings(), &|_, _, _| {}).unwrap();
