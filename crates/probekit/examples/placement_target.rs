@@ -15,7 +15,8 @@
 //!
 //! `--seeds`: the evaluation points of several seeds pooled (default 1).
 //!
-//! `--light-shells`: adaptive's [`LightShells`] mode (default `off`);
+//! `--light-shells`: adaptive's [`LightShells`] mode (default `auto`, as
+//! `probekit bake`);
 //! `--no-grid`: evaluate the adaptive clouds only.
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
@@ -65,10 +66,10 @@ fn main() -> Result<(), Box<dyn Error>> {
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
     let skip_grid = args.iter().any(|a| a == "--no-grid");
-    let shells = match arg(&args, "--light-shells", "off".to_string()).as_str() {
+    let shells = match arg(&args, "--light-shells", "auto".to_string()).as_str() {
         "on" => LightShells::On,
-        "auto" => LightShells::Auto,
-        _ => LightShells::Off,
+        "off" => LightShells::Off,
+        _ => LightShells::Auto,
     };
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);

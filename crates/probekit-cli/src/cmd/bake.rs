@@ -83,9 +83,9 @@ pub struct BakeArgs {
     pub tolerance: f32,
     /// Adaptive placement: candidate shells around point, spot, sphere and
     /// disk lights (lower error near small bright lights, fewer probes
-    /// elsewhere): `off`, `on` (also the bare flag) or `auto` (place both
-    /// ways, keep the lower error at held-out points).
-    #[arg(long, value_name = "WHEN", num_args = 0..=1, default_missing_value = "on", default_value = "off")]
+    /// elsewhere): `auto` (default: place both ways, keep the lower error at
+    /// held-out points), `on` (also the bare flag) or `off`.
+    #[arg(long, value_name = "WHEN", num_args = 0..=1, default_missing_value = "on", default_value = "auto")]
     pub light_shells: String,
     /// CSV of probe positions `x,y,z` (header optional).
     #[arg(long)]

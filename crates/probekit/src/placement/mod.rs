@@ -76,11 +76,11 @@ pub enum PlacementMethod {
 /// Whether adaptive placement offers candidates on shells around positional
 /// lights (the `adaptive` module docs). Shells lower the error near small
 /// bright lights but draw probes from the rest of the scene; which way wins
-/// depends on the scene and the budget (BENCHMARKS.md, "Light shells").
+/// depends on the scene and the budget (BENCHMARKS.md, "Light shells"), so
+/// the default, [`LightShells::Auto`], tries both.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightShells {
     /// No shell candidates.
-    #[default]
     Off,
     /// Shell candidates around every positional light in the bake box.
     On,
@@ -89,7 +89,8 @@ pub enum LightShells {
     /// relative RMSE at held-out points: about `2·budget` (512 to 8192)
     /// jittered points in free space of the box, captured like the pool but
     /// with their own random numbers and never offered as candidates.
-    /// Costs about 2.5× the placement time of `Off`.
+    /// Costs about 2.5× the placement time of `Off`. The default.
+    #[default]
     Auto,
 }
 

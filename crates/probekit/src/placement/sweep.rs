@@ -74,7 +74,7 @@ pub fn method_for_budget(name: &str, budget: usize) -> Result<PlacementMethod, S
         "adaptive" => PlacementMethod::Adaptive {
             budget,
             tolerance: 0.0,
-            light_shells: LightShells::Off,
+            light_shells: LightShells::default(),
         },
         "spawn-merge" => PlacementMethod::SpawnMerge(SpawnMergeParams {
             initial: (budget / 2).max(8),

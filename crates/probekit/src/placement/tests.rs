@@ -89,7 +89,7 @@ fn light_shell_modes_round_trip_their_names() {
         assert_eq!(LightShells::from_name(m.name()), Some(m));
     }
     assert_eq!(LightShells::from_name("yes"), None);
-    assert_eq!(LightShells::default(), LightShells::Off);
+    assert_eq!(LightShells::default(), LightShells::Auto);
 }
 
 #[test]
