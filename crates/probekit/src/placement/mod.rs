@@ -649,6 +649,9 @@ pub fn place(
                 adaptive::adaptive(
                     &mut plain, &bake_box, *budget, *tolerance, false, &ls, progress,
                 )?;
+                // The second run's phases say so (a progress bar restarts).
+                let shelled_progress =
+                    |phase: &str, done, total| progress(&format!("{phase}+shells"), done, total);
                 let mut shelled = st.clone();
                 adaptive::adaptive(
                     &mut shelled,
@@ -657,9 +660,11 @@ pub fn place(
                     *tolerance,
                     true,
                     &ls,
-                    progress,
+                    &shelled_progress,
                 )?;
+                progress("held-out", 0, 1);
                 let e = adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                progress("held-out", 1, 1);
                 let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures;
                 st = if e[1] < e[0] { shelled } else { plain };
                 st.stats.captures = captures;
