@@ -62,6 +62,7 @@
 //! `rel_rmse`) is below the tolerance. The captured pool is noisy (placement
 //! samples), which only limits how fine the error ranking can be.
 
+use super::eval::blend_sh;
 use super::{LeakSettings, PlacementError, State};
 use crate::bake::sampling::SampleRng;
 use crate::cloud::cell_visibility::segment_clear;
@@ -352,12 +353,7 @@ pub(super) fn held_out_errors(
                     .iter()
                     .map(|(p, cap)| {
                         let (idx, wt) = mesh.weights_at(*p, &mut ws);
-                        let mut pred = ShRgb::zeros(cap.order());
-                        for k in 0..4 {
-                            if wt[k] != 0.0 {
-                                pred.add_scaled(&c.sh[idx[k] as usize], wt[k]);
-                            }
-                        }
+                        let pred = blend_sh(&c.sh, idx, wt, cap.order());
                         sq_error(&w, &pred, cap) as f64
                     })
                     .sum::<f64>()
@@ -500,16 +496,12 @@ impl Adaptive<'_, '_, '_> {
                         }
                         let p = self.pool.pos[i];
                         let (idx, wt) = mesh.weights_at(p, &mut ws);
-                        let mut pred = ShRgb::zeros(self.pool.sh[i].order());
-                        let mut near = f32::INFINITY;
-                        for k in 0..4 {
-                            let q = self.st.positions[idx[k] as usize];
-                            near = near.min(q.distance(p));
-                            if wt[k] != 0.0 {
-                                pred.add_scaled(&self.st.sh[idx[k] as usize], wt[k]);
-                            }
-                        }
                         let cap = &self.pool.sh[i];
+                        let pred = blend_sh(&self.st.sh, idx, wt, cap.order());
+                        let near = idx
+                            .iter()
+                            .map(|&v| self.st.positions[v as usize].distance(p))
+                            .fold(f32::INFINITY, f32::min);
                         // A leak through geometry: some vertex it blends is
                         // out of sight (behind a wall), checked only where
                         // the values leak.

@@ -227,17 +227,24 @@ pub fn interpolate_cloud(mesh: &TetMesh, sh: &[ShRgb], points: &[EvalPoint]) -> 
         .iter()
         .map(|p| {
             let (idx, w) = mesh.weights_at(p.position, &mut ws);
-            let mut acc = ShRgb::zeros(order);
-            for k in 0..4 {
-                if w[k] != 0.0 {
-                    if let Some(s) = sh.get(idx[k] as usize) {
-                        acc.add_scaled(s, w[k]);
-                    }
-                }
-            }
-            acc.irradiance(p.normal)
+            blend_sh(sh, idx, w, order).irradiance(p.normal)
         })
         .collect()
+}
+
+/// Order-`order` radiance SH blended from the probes `idx` of `sh` with the
+/// barycentric weights `w`, in vertex order; vertices of weight 0 (and
+/// indices past `sh`) are skipped.
+pub(crate) fn blend_sh(sh: &[ShRgb], idx: [u32; 4], w: [f32; 4], order: usize) -> ShRgb {
+    let mut acc = ShRgb::zeros(order);
+    for k in 0..4 {
+        if w[k] != 0.0 {
+            if let Some(s) = sh.get(idx[k] as usize) {
+                acc.add_scaled(s, w[k]);
+            }
+        }
+    }
+    acc
 }
 
 /// Why a baked file cannot be evaluated.

@@ -639,12 +639,10 @@ pub fn place(
                     "tolerance {tolerance} must be ≥ 0"
                 )));
             }
-            let shells = match light_shells {
-                LightShells::Off => false,
-                LightShells::On => true,
-                LightShells::Auto => adaptive::has_shell_lights(baker.scene(), &bake_box),
-            };
-            if *light_shells == LightShells::Auto && shells {
+            // Auto places twice only where some light offers shells.
+            if *light_shells == LightShells::Auto
+                && adaptive::has_shell_lights(baker.scene(), &bake_box)
+            {
                 let mut plain = st.clone();
                 adaptive::adaptive(
                     &mut plain, &bake_box, *budget, *tolerance, false, &ls, progress,
@@ -670,6 +668,7 @@ pub fn place(
                 st.stats.captures = captures;
                 st.stats.held_out_error = Some(e);
             } else {
+                let shells = *light_shells == LightShells::On;
                 adaptive::adaptive(
                     &mut st, &bake_box, *budget, *tolerance, shells, &ls, progress,
                 )?;
