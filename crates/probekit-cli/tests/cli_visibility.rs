@@ -66,9 +66,13 @@ fn bake_inspect_query_with_and_without_visibility() {
         v["bytes_by_section"]["visibility"].as_u64().unwrap(),
         16 + (probes * 64).div_ceil(16) * 16
     );
+    // The lattice comes from the cell size by default (`auto`): the
+    // library's choice for the file's mesh, recorded as "auto".
+    let file = probekit_runtime::ProbeFile::load(d.join("v.probes")).unwrap();
+    let mesh = probekit_runtime::cloud::ProbeCloud::mesh_from_file(&file).unwrap();
     assert_eq!(
         v["cell_visibility"]["subdivision"],
-        probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION
+        probekit::cloud::cell_visibility::auto_subdivision(&mesh)
     );
     // Sparse: some cells stored, none more than exist.
     let cells = v["cell_visibility"]["cells"].as_u64().unwrap();
@@ -81,6 +85,25 @@ fn bake_inspect_query_with_and_without_visibility() {
     assert_eq!(v["probes"], n["probes"]);
     let meta = std::fs::read(d.join("v.probes")).unwrap();
     assert!(String::from_utf8_lossy(&meta).contains("\"rays_per_texel\":16"));
+    assert!(String::from_utf8_lossy(&meta).contains("\"cell_visibility\":\"auto\""));
+    // A given subdivision is kept.
+    json(
+        d,
+        &[
+            &common[..],
+            &["-o", "k3.probes", "--cell-visibility", "3", "--json"],
+        ]
+        .concat(),
+    );
+    let k3 = json(d, &["inspect", "k3.probes", "--json"]);
+    assert_eq!(k3["cell_visibility"]["subdivision"], 3);
+    for bad in ["9", "fine"] {
+        fails_one_line(
+            d,
+            &[&common[..], &["-o", "x.probes", "--cell-visibility", bad]].concat(),
+            "cell-visibility",
+        );
+    }
 
     // Near the demo's dividing wall a query differs with visibility on and
     // off; --no-visibility on the file with moments equals the file without.

@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--no-weights] [--fit-points N] [--fit-samples N]
+//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
@@ -22,7 +22,8 @@
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`), cell
 //! visibility (`CVSP`) and probe weights fitted with the default settings
-//! (`PWGT`; `--no-weights`: none; `--fit-*` as `probekit bake`'s) — as
+//! (`PWGT`; `--no-weights`: none; `--fit-*` as `probekit bake`'s;
+//! `--cell-visibility` as `probekit bake`'s, default `auto`) — as
 //! `probekit eval` does on such a file.
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`).
@@ -35,13 +36,12 @@
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
 use probekit::cloud::blend_fit::{capture_training_set, fit_probe_weights, BlendFitSettings};
-use probekit::cloud::cell_visibility::bake_cell_visibility;
+use probekit::cloud::cell_visibility::{bake_cell_visibility, CellLattice};
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
 use probekit::placement::{grid_points, inside_geometry, place, LightShells, PlacementMethod};
 use probekit::scene::Scene;
-use probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
 use std::error::Error;
@@ -74,6 +74,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);
     let weights = !args.iter().any(|a| a == "--no-weights");
+    let lattice = match arg(&args, "--cell-visibility", "auto".to_string()).as_str() {
+        "auto" => CellLattice::Auto,
+        k => CellLattice::Fixed(k.parse()?),
+    };
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let EvalSet {
@@ -108,7 +112,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                 &VisibilitySettings::new(bbox.size().length(), s.seed),
                 &|_, _| {},
             )?;
-            let cells = bake_cell_visibility(tracer, &mesh, DEFAULT_CELL_SUBDIVISION, &|_, _| {})?;
+            let cells = bake_cell_visibility(tracer, &mesh, lattice.resolve(&mesh), &|_, _| {})?;
             let mut cloud = ProbeCloud::new(mesh, order as u32, coeffs)?;
             cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
             cloud.set_cell_visibility_bits(Some(cells))?;

@@ -26,6 +26,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::blend_fit::BlendFitSettings;
+use probekit::cloud::cell_visibility::CellLattice;
 use probekit::cloud::file::{
     cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
 };
@@ -134,10 +135,11 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
     pub visibility_res: u32,
     /// Lattice subdivision of the per-cell visibility bits (`CVSP`, 1..=8;
-    /// 0: none): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
+    /// 0: none; `auto`, the default: from the median tetrahedron edge,
+    /// 4 to 8): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
     /// points of the cell.
-    #[arg(long, default_value_t = probekit_runtime::cloud::cell_visibility::DEFAULT_CELL_SUBDIVISION)]
-    pub cell_visibility: u32,
+    #[arg(long, default_value = "auto")]
+    pub cell_visibility: String,
     /// Do not bake distance moments or cell visibility (the cloud blends
     /// without visibility; probe weights are still fitted unless
     /// `--no-probe-weights`).
@@ -355,13 +357,18 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         ..VisibilitySettings::new(bb.size().length().max(1e-3), settings.seed)
     });
     sj["visibility"] = vis.map_or(serde_json::Value::Null, |v| v.to_json());
-    let cells = (!a.no_visibility && a.cell_visibility > 0).then_some(a.cell_visibility);
-    if let Some(k) = cells {
-        if k > probekit_runtime::cloud::cell_visibility::MAX_CELL_SUBDIVISION {
-            bail!("--cell-visibility {k}: expected 0 (none) to 8");
-        }
-    }
-    sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, |k| serde_json::json!(k));
+    let lattice = match a.cell_visibility.as_str() {
+        "auto" => Some(CellLattice::Auto),
+        k => match k.parse::<u32>() {
+            Ok(0) => None,
+            Ok(k) if k <= probekit_runtime::cloud::cell_visibility::MAX_CELL_SUBDIVISION => {
+                Some(CellLattice::Fixed(k))
+            }
+            _ => bail!("--cell-visibility {k}: expected auto, 0 (none) or 1 to 8"),
+        },
+    };
+    let cells = lattice.filter(|_| !a.no_visibility);
+    sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, CellLattice::to_json);
     let weights = (!a.no_probe_weights).then_some(BlendFitSettings {
         points_per_probe: a.fit_points,
         samples: a.fit_samples,
@@ -676,7 +683,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec).with_context(|| out.clone())?;
     file.visibility = moments;
-    let cells = head.meta.settings["cell_visibility"].as_u64();
+    let cells = CellLattice::from_json(&head.meta.settings["cell_visibility"]);
     let weights = &head.meta.settings["probe_weights"];
     if cells.is_some() || weights.is_object() {
         let Some(scene_name) = &a.scene else {
@@ -690,12 +697,12 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             bail!("{scene_name}: not the scene {} was baked from", head.name);
         }
         let baker = probekit::bake::Baker::new(&scene).with_context(|| scene_name.clone())?;
-        if let Some(k) = cells {
+        if let Some(lattice) = cells {
             let pb = counting_bar(CELLS_BAR);
             let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
                 baker.tracer(),
                 &file,
-                k as u32,
+                lattice,
                 &|d, t| advance(&pb, d, t),
             )
             .with_context(|| out.clone())?;

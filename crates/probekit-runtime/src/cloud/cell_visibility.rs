@@ -55,7 +55,9 @@ use glam::Vec3;
 /// Largest lattice subdivision a file may hold.
 pub const MAX_CELL_SUBDIVISION: u32 = 8;
 
-/// Default lattice subdivision: 35 points per tetrahedron, 18 bytes per
+/// Default lattice subdivision, and the smallest `probekit bake` picks
+/// from the cell size (`--cell-visibility auto`; coarse clouds get up to
+/// [`MAX_CELL_SUBDIVISION`]): 35 points per tetrahedron, 18 bytes per
 /// tetrahedron that is not clear (sparse storage; on a 525-probe adaptive
 /// cloud of builtin:demo about 27 % of the tetrahedra, some 25 bytes per
 /// probe in all). Measured (BENCHMARKS.md, "Sparse cell visibility"): at

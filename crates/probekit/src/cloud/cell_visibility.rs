@@ -17,7 +17,8 @@
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::{
-    lattice_numerators, lattice_position, record_bytes, CellVisibility, MAX_CELL_SUBDIVISION,
+    lattice_numerators, lattice_position, record_bytes, CellVisibility, DEFAULT_CELL_SUBDIVISION,
+    MAX_CELL_SUBDIVISION,
 };
 use probekit_runtime::cloud::{ProbeCloud, TetMesh};
 use probekit_runtime::format::ProbeFile;
@@ -47,6 +48,109 @@ pub fn segment_clear(tracer: &Tracer<'_>, a: Vec3, b: Vec3) -> bool {
         return true;
     }
     tracer.closest_hit(&Ray::new(a, d / len), len).is_none()
+}
+
+/// Lattice spacing, metres, that [`auto_subdivision`] aims for along the
+/// edges of a typical cell: about the thickness of an interior wall and a
+/// half, so that a wall cutting a cell has lattice points close to both of
+/// its sides.
+pub const CELL_LATTICE_SPACING: f32 = 0.25;
+
+/// The lattice subdivision `k` for `mesh` when none is given (`probekit bake
+/// --cell-visibility auto`, the default): `ceil(L / `[`CELL_LATTICE_SPACING`]`)`
+/// clamped to [`DEFAULT_CELL_SUBDIVISION`]`..=`[`MAX_CELL_SUBDIVISION`],
+/// `L` the [`typical_cell_edge`]. Coarse clouds have large cells, and a
+/// lattice of the default `k` = 4 there lets a probe behind a wall keep part
+/// of its weight at points next to the wall (BENCHMARKS.md, "Cell lattice
+/// from the cell size"); clear cells store no record, so a finer lattice
+/// costs only where geometry cuts a cell. A mesh without tetrahedra of
+/// positive volume gets the default.
+pub fn auto_subdivision(mesh: &TetMesh) -> u32 {
+    let Some(edge) = typical_cell_edge(mesh) else {
+        return DEFAULT_CELL_SUBDIVISION;
+    };
+    let k = (edge / CELL_LATTICE_SPACING).ceil();
+    if k >= MAX_CELL_SUBDIVISION as f32 {
+        MAX_CELL_SUBDIVISION
+    } else {
+        (k as u32).max(DEFAULT_CELL_SUBDIVISION)
+    }
+}
+
+/// The volume-weighted median of the tetrahedra's mean edge lengths,
+/// metres: half of the cloud's volume lies in cells whose six edges average
+/// at most this, so it is the size of the cell a random point in the hull
+/// falls in (adaptive clouds crowd small cells next to lights, which a plain
+/// median over cells would count). `None` when no tetrahedron has a positive
+/// finite volume. Deterministic (ties keep mesh order).
+pub fn typical_cell_edge(mesh: &TetMesh) -> Option<f32> {
+    const EDGES: [(usize, usize); 6] = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+    let p = mesh.positions();
+    let mut cells: Vec<(f32, f64)> = mesh
+        .tets()
+        .iter()
+        .map(|t| {
+            let v = t.map(|i| p[i as usize]);
+            let edge = EDGES.iter().map(|&(a, b)| v[a].distance(v[b])).sum::<f32>() / 6.0;
+            let volume = ((v[1] - v[0]).dot((v[2] - v[0]).cross(v[3] - v[0])) as f64).abs() / 6.0;
+            (edge, volume)
+        })
+        .filter(|(e, v)| e.is_finite() && v.is_finite() && *v > 0.0)
+        .collect();
+    let total: f64 = cells.iter().map(|c| c.1).sum();
+    if cells.is_empty() {
+        return None;
+    }
+    // A stable sort: equal lengths keep mesh order.
+    cells.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut seen = 0.0;
+    for (edge, volume) in &cells {
+        seen += volume;
+        if seen >= 0.5 * total {
+            return Some(*edge);
+        }
+    }
+    cells.last().map(|c| c.0)
+}
+
+/// The lattice subdivision to bake cell visibility at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CellLattice {
+    /// From the cell size ([`auto_subdivision`]); `probekit bake`'s default.
+    Auto,
+    /// This subdivision (`1..=`[`MAX_CELL_SUBDIVISION`]).
+    Fixed(u32),
+}
+
+impl CellLattice {
+    /// The subdivision for `mesh`.
+    pub fn resolve(self, mesh: &TetMesh) -> u32 {
+        match self {
+            CellLattice::Auto => auto_subdivision(mesh),
+            CellLattice::Fixed(k) => k,
+        }
+    }
+
+    /// As the bake metadata records it (`settings.cell_visibility`):
+    /// `"auto"` or the subdivision.
+    pub fn to_json(self) -> serde_json::Value {
+        match self {
+            CellLattice::Auto => serde_json::json!("auto"),
+            CellLattice::Fixed(k) => serde_json::json!(k),
+        }
+    }
+
+    /// The lattice a metadata value records ([`CellLattice::to_json`]);
+    /// `None` for anything else (`null`: no cell visibility).
+    pub fn from_json(v: &serde_json::Value) -> Option<Self> {
+        match v {
+            serde_json::Value::String(s) if s == "auto" => Some(CellLattice::Auto),
+            _ => v
+                .as_u64()
+                .and_then(|k| u32::try_from(k).ok())
+                .map(CellLattice::Fixed),
+        }
+    }
 }
 
 /// One cell's record: corner `v`'s bit for lattice point `l` at bit
@@ -114,15 +218,16 @@ pub fn bake_cell_visibility(
 }
 
 /// [`bake_cell_visibility`] of the mesh a cloud file stores (its positions
-/// and `TETS`), ready for [`ProbeFile::cell_visibility`].
+/// and `TETS`) at `lattice`'s subdivision for that mesh, ready for
+/// [`ProbeFile::cell_visibility`].
 pub fn bake_file_cell_visibility(
     tracer: &Tracer<'_>,
     file: &ProbeFile,
-    k: u32,
+    lattice: CellLattice,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<CellVisibility, CellVisibilityError> {
     let mesh = ProbeCloud::mesh_from_file(file)?;
-    bake_cell_visibility(tracer, &mesh, k, progress)
+    bake_cell_visibility(tracer, &mesh, lattice.resolve(&mesh), progress)
 }
 
 #[cfg(test)]
@@ -158,6 +263,119 @@ mod tests {
     fn crosses_wall(a: Vec3, b: Vec3) -> bool {
         let (lo, hi) = (a.x.min(b.x), a.x.max(b.x));
         lo < 0.3 && hi > 0.0
+    }
+
+    /// `typical_cell_edge` against an independent estimate: the median,
+    /// over uniform random points of the hull, of the mean edge of the
+    /// tetrahedron the walk finds them in (sampling in place of sorting by
+    /// volume); and the subdivision it gives scales with the cloud.
+    #[test]
+    fn typical_cell_edge_is_the_cell_size_at_a_random_point() {
+        // Jittered probes, denser near one corner, like a cloud crowding a light.
+        let mut rng = crate::bake::sampling::SampleRng::new(11, 0, 0);
+        let mut pos = Vec::new();
+        for i in 0..6 {
+            for j in 0..4 {
+                for k in 0..5 {
+                    let jit = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+                    pos.push(Vec3::new(i as f32, j as f32, k as f32) * 0.8 + jit * 0.3);
+                }
+            }
+        }
+        for _ in 0..200 {
+            pos.push(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.6);
+        }
+        let mesh = crate::cloud::tetrahedralize(&pos)
+            .unwrap()
+            .to_tet_mesh(&pos)
+            .unwrap();
+        let edge = typical_cell_edge(&mesh).unwrap();
+        let (lo, hi) = pos
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)));
+        let mut ws = WalkState::new();
+        let mut found = Vec::new();
+        while found.len() < 20_000 {
+            let q = lo + (hi - lo) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            if let probekit_runtime::cloud::Location::Inside { tet, .. } = mesh.locate(q, &mut ws) {
+                let v = mesh.tets()[tet as usize].map(|i| pos[i as usize]);
+                let mut sum = 0.0;
+                for a in 0..4 {
+                    for b in a + 1..4 {
+                        sum += v[a].distance(v[b]);
+                    }
+                }
+                found.push(sum / 6.0);
+            }
+        }
+        found.sort_by(f32::total_cmp);
+        let sampled = found[found.len() / 2];
+        assert!(
+            (edge / sampled - 1.0).abs() < 0.03,
+            "{edge} against {sampled}"
+        );
+        // The plain median over cells is smaller: the crowded corner's many
+        // small cells hold little volume.
+        let mut plain: Vec<f32> = Vec::new();
+        for t in mesh.tets() {
+            let v = t.map(|i| pos[i as usize]);
+            plain.push(
+                [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+                    .iter()
+                    .map(|&(a, b)| v[a].distance(v[b]))
+                    .sum::<f32>()
+                    / 6.0,
+            );
+        }
+        plain.sort_by(f32::total_cmp);
+        assert!(
+            plain[plain.len() / 2] < 0.9 * edge,
+            "{} {edge}",
+            plain[plain.len() / 2]
+        );
+        // k = ceil(L / spacing), clamped to 4..=8; scaling the cloud scales L.
+        for scale in [0.25f32, 1.0, 1.5, 3.0] {
+            let p: Vec<Vec3> = pos.iter().map(|x| *x * scale).collect();
+            let m = crate::cloud::tetrahedralize(&p)
+                .unwrap()
+                .to_tet_mesh(&p)
+                .unwrap();
+            let l = typical_cell_edge(&m).unwrap();
+            assert!(
+                (l / (edge * scale) - 1.0).abs() < 1e-4,
+                "{l} {edge} {scale}"
+            );
+            let want = ((l / CELL_LATTICE_SPACING).ceil() as u32).clamp(4, 8);
+            assert_eq!(auto_subdivision(&m), want);
+            assert_eq!(CellLattice::Auto.resolve(&m), want);
+            assert_eq!(CellLattice::Fixed(3).resolve(&m), 3);
+        }
+        assert_eq!(
+            auto_subdivision(&mesh),
+            ((edge / 0.25).ceil() as u32).clamp(4, 8)
+        );
+    }
+
+    #[test]
+    fn cell_lattice_metadata_round_trips() {
+        for l in [
+            CellLattice::Auto,
+            CellLattice::Fixed(1),
+            CellLattice::Fixed(8),
+        ] {
+            assert_eq!(CellLattice::from_json(&l.to_json()), Some(l));
+        }
+        assert_eq!(
+            CellLattice::from_json(&serde_json::json!(4)),
+            Some(CellLattice::Fixed(4))
+        );
+        for bad in [
+            serde_json::json!(null),
+            serde_json::json!("fine"),
+            serde_json::json!(-1),
+        ] {
+            assert_eq!(CellLattice::from_json(&bad), None);
+        }
     }
 
     #[test]

@@ -11,7 +11,7 @@
 //! probe weights.
 
 use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
-use super::cell_visibility::{bake_file_cell_visibility, CellVisibilityError};
+use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
 use crate::bake::{Baker, CaptureSettings};
 use crate::trace::Tracer;
@@ -38,9 +38,9 @@ pub enum VisibilityBakeError {
 pub struct VisibilityBake {
     /// Distance moments (`VISM`) with these settings; `None`: none.
     pub moments: Option<VisibilitySettings>,
-    /// Cell visibility (`CVSP`) at this lattice subdivision (1..=8);
-    /// `None`: none.
-    pub cell_subdivision: Option<u32>,
+    /// Cell visibility (`CVSP`) at this lattice subdivision (fixed, 1..=8,
+    /// or from the cell size); `None`: none.
+    pub cell_subdivision: Option<CellLattice>,
     /// Fitted probe weights (`PWGT`) with these settings; `None`: none.
     pub probe_weights: Option<BlendFitSettings>,
 }
@@ -57,7 +57,8 @@ impl VisibilityBake {
 
     /// The kinds `file` stores, with its settings: the moments' resolution
     /// and distance clamp (ray jitter from `seed`, default rays per texel),
-    /// the cells' subdivision, and probe weights fitted with the settings
+    /// the cells' subdivision (chosen anew from the cell size where the
+    /// metadata records `settings.cell_visibility` as `"auto"`), and probe weights fitted with the settings
     /// its metadata records (`settings.probe_weights`; the defaults with
     /// `seed` where absent). For a second cloud that should blend as `file`
     /// does (`eval --compare grid`, the `--plot` sweep).
@@ -68,7 +69,12 @@ impl VisibilityBake {
                 resolution: v.resolution,
                 ..VisibilitySettings::new(v.max_distance, seed)
             }),
-            cell_subdivision: file.cell_visibility.as_ref().map(|c| c.subdivision()),
+            cell_subdivision: file.cell_visibility.as_ref().map(|c| {
+                match CellLattice::from_json(&meta["settings"]["cell_visibility"]) {
+                    Some(CellLattice::Auto) => CellLattice::Auto,
+                    _ => CellLattice::Fixed(c.subdivision()),
+                }
+            }),
             probe_weights: file.probe_weights.as_ref().map(|_| {
                 BlendFitSettings::from_json(
                     &meta["settings"]["probe_weights"],
@@ -102,7 +108,12 @@ impl VisibilityBake {
             None => None,
         };
         file.cell_visibility = match self.cell_subdivision {
-            Some(k) => Some(bake_file_cell_visibility(tracer, file, k, cells_progress)?),
+            Some(lattice) => Some(bake_file_cell_visibility(
+                tracer,
+                file,
+                lattice,
+                cells_progress,
+            )?),
             None => None,
         };
         file.probe_weights = None;
@@ -172,7 +183,7 @@ mod tests {
         };
         let want = VisibilityBake {
             moments: Some(vs),
-            cell_subdivision: Some(2),
+            cell_subdivision: Some(CellLattice::Fixed(2)),
             probe_weights: None,
         };
         a.probe_weights = Some(vec![2.0; pos.len()]);
@@ -180,12 +191,13 @@ mod tests {
             .unwrap();
         let moments = bake_distance_moments(&tracer, &pos, &vs, &|_, _| {}).unwrap();
         assert_eq!(a.visibility.as_ref(), Some(&moments));
-        let cells = bake_file_cell_visibility(&tracer, &a, 2, &|_, _| {}).unwrap();
+        let cells =
+            bake_file_cell_visibility(&tracer, &a, CellLattice::Fixed(2), &|_, _| {}).unwrap();
         assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
         // Weights fitted to the old blend are gone.
         assert!(a.probe_weights.is_none());
         let like = VisibilityBake::like(&a, 7);
-        assert_eq!(like.cell_subdivision, Some(2));
+        assert_eq!(like.cell_subdivision, Some(CellLattice::Fixed(2)));
         assert_eq!(
             like.moments.map(|m| (m.resolution, m.max_distance)),
             Some((4, 5.0))
@@ -199,7 +211,7 @@ mod tests {
         // A bad subdivision is a typed error.
         let bad = VisibilityBake {
             moments: None,
-            cell_subdivision: Some(99),
+            cell_subdivision: Some(CellLattice::Fixed(99)),
             probe_weights: None,
         };
         assert!(matches!(

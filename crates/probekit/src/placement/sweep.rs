@@ -405,7 +405,7 @@ mod tests {
                 resolution: 4,
                 ..crate::cloud::visibility::VisibilitySettings::new(10.0, 1)
             }),
-            cell_subdivision: Some(2),
+            cell_subdivision: Some(crate::cloud::cell_visibility::CellLattice::Fixed(2)),
             probe_weights: Some(crate::cloud::blend_fit::BlendFitSettings {
                 points_per_probe: 2,
                 samples: 8,
