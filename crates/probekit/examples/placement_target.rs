@@ -29,7 +29,7 @@
 //! `A` (`probekit eval --brightness-weight A`).
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
-//! temporary directory, keyed by scene hash and point count. Prints one line
+//! temporary directory, keyed by scene hash and the points. Prints one line
 //! per cloud with `rel_rmse`, `p95_rel_error`, leaks and per-region
 //! `rel_rmse/leaks` (the `probekit eval` figures).
 

@@ -32,8 +32,8 @@ pub struct EvalSet {
 }
 
 /// `probekit eval`'s `n` points of `seed` in the scene's bake box and their
-/// reference irradiance (cached in the temp folder, keyed by scene, count
-/// and seed).
+/// reference irradiance (cached in the temp folder, keyed by scene and
+/// points).
 pub fn eval_set(
     baker: &Baker,
     scene: &Scene,
@@ -44,7 +44,7 @@ pub fn eval_set(
     let truth = reference_cached(
         baker,
         &pts,
-        &reference_cache_path(scene.content_hash(), n, seed),
+        &reference_cache_path(scene.content_hash(), &pts),
     )?;
     let mean = mean_luminance(&truth);
     Ok(EvalSet {

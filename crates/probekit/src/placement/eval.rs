@@ -109,11 +109,29 @@ pub fn reference_cached(
 }
 
 /// A cache file for [`reference_cached`] in the system's temporary
-/// directory, keyed by the scene's content hash, the point count and the
-/// sampling seed of [`sample_points`] (the box is the scene's bake box).
-pub fn reference_cache_path(scene_hash: u64, points: usize, seed: u64) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("probekit_truth_{scene_hash}_{points}_s{seed}.bin"))
+/// directory, keyed by the scene's content hash and a hash of the points
+/// themselves (positions and normals, bit for bit) and of the reference
+/// version ([`REFERENCE_VERSION`]): a change to how [`sample_points`] picks
+/// points, or to the reference, gets a new file instead of another point
+/// set's truth (a count and a seed alone do not tell).
+pub fn reference_cache_path(scene_hash: u64, points: &[EvalPoint]) -> std::path::PathBuf {
+    let mut h = crate::scene::Fnv1a::new();
+    h.u32(REFERENCE_VERSION);
+    h.u64(points.len() as u64);
+    for p in points {
+        h.vec3(p.position);
+        h.vec3(p.normal);
+    }
+    std::env::temp_dir().join(format!(
+        "probekit_truth_{scene_hash:016x}_{:016x}_{}.bin",
+        h.0,
+        points.len()
+    ))
 }
+
+/// Bumped whenever [`reference_cached`]'s reference changes (precision,
+/// integrator), so cached truth of an older one is not read.
+pub const REFERENCE_VERSION: u32 = 1;
 
 /// Error figures of a prediction against ground truth.
 #[derive(Clone, Copy, Debug, PartialEq)]

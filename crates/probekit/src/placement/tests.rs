@@ -282,6 +282,38 @@ fn reference_cache_round_trips_and_rejects_a_wrong_length() {
     assert_eq!(reference_cached(&baker, &pts, &path).unwrap(), computed);
 }
 
+/// The cache file is keyed by the points themselves: the same points give
+/// the same file; another seed, count, moved point or turned normal (what a
+/// change to the sampler would give under the same seed) another; another
+/// scene another.
+#[test]
+fn reference_cache_path_is_keyed_by_the_points() {
+    let scene = Scene::builtin_demo();
+    let baker = Baker::new(&scene).unwrap();
+    let h = scene.content_hash();
+    let pts = sample_points(baker.tracer(), &scene.bake_box(), 20, 5);
+    let path = reference_cache_path(h, &pts);
+    assert_eq!(path, reference_cache_path(h, &pts.clone()));
+    let other_seed = sample_points(baker.tracer(), &scene.bake_box(), 20, 6);
+    let fewer = &pts[..19];
+    let mut moved = pts.clone();
+    moved[7].position.x += 1e-3;
+    let mut turned = pts.clone();
+    turned[3].normal = -turned[3].normal;
+    let mut seen = vec![path.clone()];
+    for p in [
+        reference_cache_path(h, &other_seed),
+        reference_cache_path(h, fewer),
+        reference_cache_path(h, &moved),
+        reference_cache_path(h, &turned),
+        reference_cache_path(h ^ 1, &pts),
+    ] {
+        assert!(!seen.contains(&p), "{p:?}");
+        seen.push(p);
+    }
+    assert!(path.starts_with(std::env::temp_dir()));
+}
+
 /// `region_metrics` gives, per region, the metrics of exactly the points
 /// inside its box (filtered here by hand), with the overall mean for the
 /// leak threshold.
