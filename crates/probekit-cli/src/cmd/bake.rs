@@ -135,8 +135,9 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
     pub visibility_res: u32,
     /// Lattice subdivision of the per-cell visibility bits (`CVSP`, 1..=8;
-    /// 0: none; `auto`, the default: from the median tetrahedron edge,
-    /// 4 to 8): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
+    /// 0: none; `auto`, the default: 4 to 8 from the cell size, the
+    /// volume-weighted median of the tetrahedra's mean edge lengths over
+    /// 0.25 m): each probe of a cell tests its view of (k+1)(k+2)(k+3)/6
     /// points of the cell.
     #[arg(long, default_value = "auto")]
     pub cell_visibility: String,
