@@ -74,10 +74,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);
     let weights = !args.iter().any(|a| a == "--no-weights");
-    let lattice = match arg(&args, "--cell-visibility", "auto".to_string()).as_str() {
-        "auto" => CellLattice::Auto,
-        k => CellLattice::Fixed(k.parse()?),
-    };
+    let lattice = CellLattice::from_name(&arg(&args, "--cell-visibility", "auto".to_string()))
+        .ok_or("--cell-visibility: expected auto or 1 to 8")?;
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
     let EvalSet {

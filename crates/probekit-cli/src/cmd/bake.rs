@@ -358,16 +358,13 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         ..VisibilitySettings::new(bb.size().length().max(1e-3), settings.seed)
     });
     sj["visibility"] = vis.map_or(serde_json::Value::Null, |v| v.to_json());
-    let lattice = match a.cell_visibility.as_str() {
-        "auto" => Some(CellLattice::Auto),
-        k => match k.parse::<u32>() {
-            Ok(0) => None,
-            Ok(k) if k <= probekit_runtime::cloud::cell_visibility::MAX_CELL_SUBDIVISION => {
-                Some(CellLattice::Fixed(k))
-            }
-            _ => bail!("--cell-visibility {k}: expected auto, 0 (none) or 1 to 8"),
-        },
-    };
+    let lattice =
+        match a.cell_visibility.as_str() {
+            "0" => None,
+            k => Some(CellLattice::from_name(k).ok_or_else(|| {
+                anyhow!("--cell-visibility {k}: expected auto, 0 (none) or 1 to 8")
+            })?),
+        };
     let cells = lattice.filter(|_| !a.no_visibility);
     sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, CellLattice::to_json);
     let weights = (!a.no_probe_weights).then_some(BlendFitSettings {

@@ -131,6 +131,20 @@ impl CellLattice {
         }
     }
 
+    /// The lattice a command line names: `auto` or a subdivision in
+    /// `1..=`[`MAX_CELL_SUBDIVISION`]; `None` for anything else (`probekit
+    /// bake` reads `0`, no cell visibility, before asking).
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "auto" => Some(CellLattice::Auto),
+            k => k
+                .parse::<u32>()
+                .ok()
+                .filter(|k| (1..=MAX_CELL_SUBDIVISION).contains(k))
+                .map(CellLattice::Fixed),
+        }
+    }
+
     /// As the bake metadata records it (`settings.cell_visibility`):
     /// `"auto"` or the subdivision.
     pub fn to_json(self) -> serde_json::Value {
@@ -356,8 +370,10 @@ mod tests {
         );
     }
 
+    /// Command-line names and metadata values are read back as written;
+    /// anything else is refused.
     #[test]
-    fn cell_lattice_metadata_round_trips() {
+    fn cell_lattice_names_and_metadata_round_trip() {
         for l in [
             CellLattice::Auto,
             CellLattice::Fixed(1),
@@ -369,6 +385,11 @@ mod tests {
             CellLattice::from_json(&serde_json::json!(4)),
             Some(CellLattice::Fixed(4))
         );
+        assert_eq!(CellLattice::from_name("auto"), Some(CellLattice::Auto));
+        assert_eq!(CellLattice::from_name("8"), Some(CellLattice::Fixed(8)));
+        for bad in ["0", "9", "-1", "fine", ""] {
+            assert_eq!(CellLattice::from_name(bad), None, "{bad}");
+        }
         for bad in [
             serde_json::json!(null),
             serde_json::json!("fine"),

@@ -59,8 +59,8 @@ impl VisibilityBake {
     /// and distance clamp (ray jitter from `seed`, default rays per texel),
     /// the cells' subdivision (chosen anew from the cell size where the
     /// metadata records `settings.cell_visibility` as `"auto"`), and probe
-    /// weights fitted with the settings its metadata records (`settings.probe_weights`; the defaults with
-    /// `seed` where absent). For a second cloud that should blend as `file`
+    /// weights fitted with the settings its metadata records
+    /// (`settings.probe_weights`; the defaults with `seed` where absent). For a second cloud that should blend as `file`
     /// does (`eval --compare grid`, the `--plot` sweep).
     pub fn like(file: &ProbeFile, seed: u64) -> Self {
         let meta: serde_json::Value = serde_json::from_str(&file.metadata).unwrap_or_default();
