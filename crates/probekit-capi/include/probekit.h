@@ -162,8 +162,8 @@ PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
 
 /* A probe cloud's blend at position[3]: 4 probe indices into out_indices[4]
  * and their weights (sum 1, unused slots 0) into out_weights[4]; barycentric
- * times each probe's visibility (VISM, CVSP) and fitted weight (PWGT) when the
- * file stores them, renormalized. The
+ * times each probe's visibility (VISM, CVSP refined by CPLN) and fitted weight
+ * (PWGT) when the file stores them, renormalized. The
  * weights the shaders' pk_blend_l1 / pk_blend_l2 take. PK_ERR_WRONG_KIND if the
  * handle is not a cloud. */
 PkStatus pk_cloud_weights(const PkProbes *probes, PkWalkState *state,

@@ -665,8 +665,9 @@ pub unsafe extern "C" fn pk_sh_many(
 /// `out_indices[4]` and their weights into `out_weights[4]` (summing to 1;
 /// unused slots weight 0, index any) — barycentric in the enclosing
 /// tetrahedron or outer cell, times each probe's Chebyshev visibility when
-/// the file stores distance moments (`VISM`), its cell visibility (`CVSP`)
-/// and its fitted weight (`PWGT`), renormalized. These are the weights the
+/// the file stores distance moments (`VISM`), its cell visibility (`CVSP`,
+/// refined by the occluder planes of `CPLN`) and its fitted weight
+/// (`PWGT`), renormalized. These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
 /// probes equals [`pk_sh`]. Not a cloud: [`PkStatus::WrongKind`]. `state`
 /// as in [`pk_irradiance`]. No allocation.

@@ -32,6 +32,7 @@ pub mod volume;
 
 /// What `std`'s prelude would give, from `alloc` (works with and without std).
 mod prelude {
+    pub(crate) use alloc::boxed::Box;
     pub(crate) use alloc::string::{String, ToString};
     pub(crate) use alloc::vec;
     pub(crate) use alloc::vec::Vec;

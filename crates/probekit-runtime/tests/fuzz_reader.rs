@@ -33,6 +33,7 @@ fn seeds() -> Vec<Vec<u8>> {
         compact_volume_file().to_bytes().unwrap(),
         cvis_file().to_bytes().unwrap(),
         weights_file().to_bytes().unwrap(),
+        planes_file().to_bytes().unwrap(),
     ]
 }
 

@@ -49,7 +49,7 @@ use thiserror::Error;
 pub mod cell_visibility;
 pub mod probes;
 pub mod visibility;
-pub use cell_visibility::CellVisibility;
+pub use cell_visibility::{CellPlanes, CellVisibility};
 pub use probes::{ProbeCloud, ProbeCloudError, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE};
 pub use visibility::VisibilityMaps;
 

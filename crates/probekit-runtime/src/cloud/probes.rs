@@ -7,7 +7,7 @@
 //! ([`super::visibility`]; DDGI, Majercik et al. 2019), so probes behind a
 //! wall stop leaking their light.
 
-use super::cell_visibility::CellVisibility;
+use super::cell_visibility::{CellPlanes, CellVisibility};
 use super::visibility::VisibilityMaps;
 use super::{CloudError, Location, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
@@ -45,6 +45,14 @@ pub enum ProbeCloudError {
         /// Hull faces of the mesh.
         mesh_hull_faces: usize,
     },
+    /// The occluder planes do not match the tetrahedral mesh.
+    #[error("the cell planes cover {tets} tetrahedra, the mesh has {mesh_tets}")]
+    CellPlanesMismatch {
+        /// Tetrahedra the planes are for.
+        tets: usize,
+        /// Tetrahedra of the mesh.
+        mesh_tets: usize,
+    },
     /// The brightness exponent is not a number in `0..=`[`MAX_BRIGHTNESS_EXPONENT`].
     #[error("brightness exponent {0}: expected 0 to 4")]
     BrightnessExponent(f32),
@@ -79,6 +87,9 @@ pub struct ProbeCloud {
     visibility: Option<VisibilityMaps>,
     visibility_on: bool,
     cells: Option<CellVisibility>,
+    /// Occluder planes refining `cells` ([`ProbeCloud::set_cell_planes`]);
+    /// boxed, so a cloud without them stays small.
+    planes: Option<Box<CellPlanes>>,
     cells_on: bool,
     /// Brightness exponent `α` of [`ProbeCloud::set_brightness_weighting`]
     /// (0: off).
@@ -117,6 +128,9 @@ impl ProbeCloud {
         if let Some(c) = &file.cell_visibility {
             cloud.set_cell_visibility_bits(Some(c.clone()))?;
         }
+        if let Some(p) = &file.cell_planes {
+            cloud.set_cell_planes(Some(p.clone()))?;
+        }
         if let Some(w) = &file.probe_weights {
             cloud.set_probe_weights(Some(w.clone()))?;
         }
@@ -154,6 +168,7 @@ impl ProbeCloud {
             visibility: None,
             visibility_on: true,
             cells: None,
+            planes: None,
             cells_on: true,
             brightness: 0.0,
             probe_weights: None,
@@ -230,15 +245,39 @@ impl ProbeCloud {
         self.cells.as_ref()
     }
 
+    /// Attaches (or with `None` removes) occluder planes
+    /// ([`super::cell_visibility::CellPlanes`]): in a tetrahedron with a
+    /// plane, cell visibility is the plane's side test in place of the
+    /// interpolated bits. They must be for exactly the mesh's tetrahedra.
+    /// Like the bits, they apply while cell-visibility weighting is on.
+    pub fn set_cell_planes(&mut self, planes: Option<CellPlanes>) -> Result<(), ProbeCloudError> {
+        if let Some(p) = &planes {
+            if p.tet_count() != self.mesh.tets().len() {
+                return Err(ProbeCloudError::CellPlanesMismatch {
+                    tets: p.tet_count(),
+                    mesh_tets: self.mesh.tets().len(),
+                });
+            }
+        }
+        self.planes = planes.map(Box::new);
+        Ok(())
+    }
+
+    /// The occluder planes, if the cloud has them.
+    pub fn cell_planes(&self) -> Option<&CellPlanes> {
+        self.planes.as_deref()
+    }
+
     /// Switches cell-visibility weighting on (the default) or off; without
-    /// bits it has no effect. Independent of [`ProbeCloud::set_visibility`].
+    /// bits or planes it has no effect. Independent of [`ProbeCloud::set_visibility`].
     pub fn set_cell_visibility(&mut self, on: bool) {
         self.cells_on = on;
     }
 
-    /// True when queries apply cell-visibility weighting (bits present and on).
+    /// True when queries apply cell-visibility weighting (bits or planes
+    /// present, and on).
     pub fn cell_visibility_enabled(&self) -> bool {
-        self.cells_on && self.cells.is_some()
+        self.cells_on && (self.cells.is_some() || self.planes.is_some())
     }
 
     /// Sets the distance bias of the visibility test in metres (default
@@ -376,7 +415,8 @@ impl ProbeCloud {
 
     /// Blend weights at `p`: the barycentric weights `b_i` of
     /// [`TetMesh::weights_at`] (tetrahedron or outer cell), times each
-    /// probe's cell visibility `c_i(p)` ([`super::cell_visibility`]) and
+    /// probe's cell visibility `c_i(p)` ([`super::cell_visibility`]: the
+    /// tetrahedron's occluder plane where it has one, else its bits) and
     /// Chebyshev visibility `v_i(p)` ([`super::visibility`]) where present
     /// and on, and the factor `f_i = s_i·Ē_i^−α`: the fitted probe weight
     /// `s_i` ([`ProbeCloud::set_probe_weights`]) when present and on, and the
@@ -388,19 +428,27 @@ impl ProbeCloud {
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
         let maps = self.visibility.as_ref().filter(|_| self.visibility_on);
         let cells = self.cells.as_ref().filter(|_| self.cells_on);
+        let planes = self.planes.as_deref().filter(|_| self.cells_on);
         if maps.is_none()
             && cells.is_none()
+            && planes.is_none()
             && self.brightness <= 0.0
             && !self.probe_weighting_enabled()
         {
             return self.mesh.weights_at(p, state);
         }
         let (probes, bary, c) = match self.mesh.locate(p, state) {
-            Location::Inside { tet, weights } => (
-                self.mesh.tets()[tet as usize],
-                weights,
-                cells.map_or([1.0; 4], |c| c.tet(tet, &weights)),
-            ),
+            Location::Inside { tet, weights } => {
+                let probes = self.mesh.tets()[tet as usize];
+                let c = match planes.and_then(|pl| pl.plane(tet)) {
+                    Some(plane) => {
+                        let pos = self.mesh.positions();
+                        CellPlanes::visibility(plane, p, &probes.map(|i| pos[i as usize]))
+                    }
+                    None => cells.map_or([1.0; 4], |c| c.tet(tet, &weights)),
+                };
+                (probes, weights, c)
+            }
             Location::Outside {
                 hull_face,
                 probes,

@@ -13,12 +13,13 @@ pub const VERSION_MAJOR: u16 = 1;
 /// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
 /// distance moments for visibility-aware blending; 1.4 added `CVIS`, per-cell
 /// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse; 1.6
-/// added `PWGT`, fitted per-probe blend weights). Files
+/// added `PWGT`, fitted per-probe blend weights; 1.7 added `CPLN`, occluder
+/// planes of cells). Files
 /// with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 6;
+pub const VERSION_MINOR: u16 = 7;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
@@ -40,6 +41,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 }
 
 /// The lowest minor version whose section set includes every id in `ids`:
+/// 7 if `CPLN` ([`SectionId::CELL_PLANES`]) is present, else
 /// 6 if `PWGT` ([`SectionId::PROBE_WEIGHTS`]) is present, else
 /// 5 if `CVSP` ([`SectionId::CELL_VISIBILITY_SPARSE`]) is present, else
 /// 4 if `CVIS` ([`SectionId::CELL_VISIBILITY`]) is present, else
@@ -49,6 +51,7 @@ pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
 pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
     ids.into_iter()
         .map(|id| match id {
+            SectionId::CELL_PLANES => 7,
             SectionId::PROBE_WEIGHTS => 6,
             SectionId::CELL_VISIBILITY_SPARSE => 5,
             SectionId::CELL_VISIBILITY => 4,
@@ -138,11 +141,17 @@ impl SectionId {
     /// Fitted per-probe blend weights of a cloud, one `f32` per probe
     /// (format 1.6; [`crate::cloud::ProbeCloud::set_probe_weights`]).
     pub const PROBE_WEIGHTS: Self = Self::from_fourcc(*b"PWGT");
+    /// Occluder planes of some tetrahedra of a cloud, refining its cell
+    /// visibility where one flat wall cuts the cell: the mesh's tetrahedron
+    /// count, the increasing indices of the tetrahedra with a plane, then
+    /// one plane `[n_x, n_y, n_z, d]` each (format 1.7;
+    /// [`crate::cloud::CellPlanes`]). Only with `CVSP`/`CVIS`.
+    pub const CELL_PLANES: Self = Self::from_fourcc(*b"CPLN");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 16] = [
+    pub const KNOWN: [Self; 17] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -158,6 +167,7 @@ impl SectionId {
         Self::CELL_VISIBILITY,
         Self::CELL_VISIBILITY_SPARSE,
         Self::PROBE_WEIGHTS,
+        Self::CELL_PLANES,
         Self::METADATA,
     ];
 
@@ -191,6 +201,7 @@ impl SectionId {
             Self::CELL_VISIBILITY => "cell_visibility",
             Self::CELL_VISIBILITY_SPARSE => "cell_visibility",
             Self::PROBE_WEIGHTS => "probe_weights",
+            Self::CELL_PLANES => "cell_planes",
             Self::HEADER => "header",
             _ => return None,
         })

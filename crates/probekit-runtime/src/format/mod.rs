@@ -38,7 +38,7 @@ pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
 pub use write::{assemble_file, SectionBuilder};
 
-use crate::cloud::CellVisibility;
+use crate::cloud::{CellPlanes, CellVisibility};
 use crate::prelude::*;
 use glam::Vec3;
 #[cfg(feature = "std")]
@@ -340,6 +340,10 @@ pub struct ProbeFile {
     /// section, every probe weighs 1). See
     /// [`crate::cloud::ProbeCloud::set_probe_weights`].
     pub probe_weights: Option<Vec<f32>>,
+    /// Occluder planes of a cloud's tetrahedra (`CPLN`, format 1.7), a
+    /// refinement of `cell_visibility` for cells one flat wall cuts; only
+    /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
+    pub cell_planes: Option<CellPlanes>,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -372,6 +376,7 @@ impl ProbeFile {
             visibility: None,
             cell_visibility: None,
             probe_weights: None,
+            cell_planes: None,
             metadata: String::new(),
         }
     }

@@ -15,8 +15,8 @@ use super::{
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
 use crate::cloud::cell_visibility::{
-    record_bytes, record_has_padding, records_len, stored_counts, CellVisibility,
-    MAX_CELL_SUBDIVISION,
+    record_bytes, record_has_padding, records_len, stored_counts, CellPlanes, CellVisibility,
+    MAX_CELL_SUBDIVISION, PLANE_NORMAL_TOLERANCE,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -705,6 +705,84 @@ fn parse_probe_weights(s: &Sec<'_>) -> Result<Vec<f32>, FormatError> {
         .collect())
 }
 
+/// A `CPLN` section (1.7) as stored, its arrays checked against the section
+/// length only: the mesh's tetrahedron count (header `w0`), the tetrahedra
+/// with a plane and their planes `[n_x, n_y, n_z, d]`. [`build_cell_planes`]
+/// turns it into a [`CellPlanes`] once the whole file is parsed: the
+/// planes' lookup table has one entry per tetrahedron, so `tet_count` must
+/// first be checked against `TETS` (a section that may come later).
+struct RawCellPlanes {
+    tet_count: u32,
+    tets: Vec<u32>,
+    planes: Vec<[f32; 4]>,
+}
+
+/// `CPLN` (1.7): header `tet_count, count`; `count × u32` tetrahedron
+/// indices, then `count × f32[4]` planes, each array padded to 16.
+fn parse_cell_planes(s: &Sec<'_>) -> Result<RawCellPlanes, FormatError> {
+    let [tet_count, count, ..] = s.header()?;
+    let [tets, planes] = s.arrays([bytes_for(count, 4), bytes_for(count, 16)])?;
+    Ok(RawCellPlanes {
+        tet_count,
+        tets: pod_vec(tets),
+        planes: pod_vec(planes),
+    })
+}
+
+/// The first entry of `raw` that [`CellPlanes::new`] would refuse, as a
+/// typed error naming it: an index not above the one before it (unsorted or
+/// repeated), an index past the tetrahedra, a value that is not finite, or
+/// a normal whose length is not within [`PLANE_NORMAL_TOLERANCE`] of 1.
+fn first_bad_cell_plane(raw: &RawCellPlanes) -> Option<FormatError> {
+    let id = SectionId::CELL_PLANES;
+    raw.tets
+        .iter()
+        .zip(&raw.planes)
+        .enumerate()
+        .find_map(|(i, (&t, p))| {
+            let element = i as u64;
+            let bad = |reason| FormatError::InvalidValue {
+                id,
+                element,
+                reason,
+            };
+            if i > 0 && t <= raw.tets[i - 1] {
+                Some(bad(
+                    "cell plane tetrahedra not strictly increasing (unsorted or repeated index)",
+                ))
+            } else if t >= raw.tet_count {
+                Some(FormatError::IndexOutOfRange {
+                    id,
+                    element,
+                    value: t.into(),
+                    limit: raw.tet_count.into(),
+                })
+            } else if !p.iter().all(|c| c.is_finite()) {
+                Some(FormatError::NonFinite { id, element })
+            } else if (Vec3::new(p[0], p[1], p[2]).length() - 1.0).abs() > PLANE_NORMAL_TOLERANCE {
+                Some(bad("cell plane normal not of unit length (tolerance 1e-3)"))
+            } else {
+                None
+            }
+        })
+}
+
+/// Builds the planes of a `CPLN` section once `file` holds every other
+/// section: where they may stand first
+/// ([`super::validate::check_cell_planes_context`]: a cloud with cell
+/// visibility, `tet_count` equal to `TETS`'s count), then each entry.
+fn build_cell_planes(file: &ProbeFile, raw: RawCellPlanes) -> Result<CellPlanes, FormatError> {
+    super::validate::check_cell_planes_context(file, raw.tet_count as usize)?;
+    if let Some(e) = first_bad_cell_plane(&raw) {
+        return Err(e);
+    }
+    CellPlanes::new(raw.tet_count as usize, raw.tets, raw.planes).ok_or(FormatError::InvalidValue {
+        id: SectionId::CELL_PLANES,
+        element: 0,
+        reason: "cell planes refused",
+    })
+}
+
 fn parse_metadata(s: &Sec<'_>) -> Result<String, FormatError> {
     let [len, ..] = s.header()?;
     let [text] = s.arrays([Some(len as usize)])?;
@@ -720,6 +798,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     let mut positions = None;
     let mut coefficients = None;
     let mut compact = None;
+    let mut planes = None;
     let mut file = ProbeFile::new(kind, Coefficients::empty(1));
     for raw in &sections {
         let s = Sec {
@@ -754,6 +833,7 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
                 });
             }
             SectionId::PROBE_WEIGHTS => file.probe_weights = Some(parse_probe_weights(&s)?),
+            SectionId::CELL_PLANES => planes = Some(parse_cell_planes(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.
@@ -773,6 +853,9 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             });
         }
         file.octree = Some(c.expand(&file.positions)?);
+    }
+    if let Some(raw) = planes {
+        file.cell_planes = Some(build_cell_planes(&file, raw)?);
     }
     file.validate()?;
     Ok(file)

@@ -433,6 +433,13 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
+    // Occluder planes (1.7): a cloud's, refining its cell visibility, one
+    // lookup entry per tetrahedron (the planes themselves are checked by
+    // `CellPlanes::new`).
+    if let Some(p) = &f.cell_planes {
+        check_cell_planes_context(f, p.tet_count())?;
+    }
+
     match f.kind {
         ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
             Err(FormatError::MissingSection(SectionId::GRID))
@@ -442,4 +449,39 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
         _ => Ok(()),
     }
+}
+
+/// Whether occluder planes (`CPLN`, format 1.7) for a mesh of `tet_count`
+/// tetrahedra may stand in `f`: it is a cloud (`InvalidValue` otherwise),
+/// it has cell visibility, which the planes refine (`MissingSection`
+/// naming `CVSP` otherwise), and `tet_count` equals the number of
+/// tetrahedra in `TETS` (`MissingSection`, `CountMismatch`). Shared by
+/// [`validate`] and the reader, which checks it before building a
+/// [`crate::cloud::CellPlanes`] (its lookup table has `tet_count` entries,
+/// so an unchecked count would allocate at an attacker's word).
+pub(super) fn check_cell_planes_context(
+    f: &ProbeFile,
+    tet_count: usize,
+) -> Result<(), FormatError> {
+    let id = SectionId::CELL_PLANES;
+    if f.kind != ProbeFileKind::Cloud {
+        return Err(FormatError::InvalidValue {
+            id,
+            element: 0,
+            reason: "cell planes belong to a probe cloud",
+        });
+    }
+    if f.cell_visibility.is_none() {
+        return Err(FormatError::MissingSection(
+            SectionId::CELL_VISIBILITY_SPARSE,
+        ));
+    }
+    let tets = f
+        .tetrahedra
+        .as_ref()
+        .ok_or(FormatError::MissingSection(SectionId::TETRAHEDRA))?;
+    if tet_count != tets.vertices.len() {
+        return Err(count_mismatch(id, tets.vertices.len(), tet_count));
+    }
+    Ok(())
 }

@@ -296,6 +296,18 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::PROBE_WEIGHTS, s.finish()));
     }
 
+    if let Some(p) = &f.cell_planes {
+        let mut s = SectionBuilder::new([
+            count(p.tet_count(), "cell plane tetrahedra")?,
+            count(p.len(), "cell planes")?,
+            0,
+            0,
+        ]);
+        s.u32s(p.tets().iter().copied()).pad();
+        s.f32s(p.planes().iter().flatten().copied());
+        out.push((SectionId::CELL_PLANES, s.finish()));
+    }
+
     let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
     s.bytes(f.metadata.as_bytes());
     out.push((SectionId::METADATA, s.finish()));
@@ -323,7 +335,7 @@ impl ProbeFile {
     /// (1), a regular octree, written compactly as `OCTC` (2), distance
     /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
     /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
-    /// weights, `PWGT` (6).
+    /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;

@@ -895,3 +895,17 @@ pub fn weights_file() -> ProbeFile {
     f.probe_weights = Some((0..n).map(|i| 0.25 + 0.5 * i as f32).collect());
     f
 }
+
+/// Planes of [`planes_file`]'s two tetrahedra: `[n_x, n_y, n_z, d]`, unit
+/// normals.
+pub const PLANES: [[f32; 4]; 2] = [[0.6, 0.8, 0.0, 0.25], [0.0, 0.0, -1.0, -0.5]];
+
+/// [`cvis_file`] with an occluder plane for each of its two tetrahedra
+/// (`CPLN`, format 1.7).
+pub fn planes_file() -> ProbeFile {
+    let mut f = cvis_file();
+    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
+    f.cell_planes =
+        Some(probekit_runtime::cloud::CellPlanes::new(tets, vec![0, 1], PLANES.to_vec()).unwrap());
+    f
+}

@@ -872,6 +872,7 @@ fn finish(
         visibility: None,
         cell_visibility: None,
         probe_weights: None,
+        cell_planes: None,
         metadata: String::new(),
     };
     structure(&mut file);
