@@ -97,6 +97,40 @@ fn bake_inspect_query_with_and_without_visibility() {
     );
     let k3 = json(d, &["inspect", "k3.probes", "--json"]);
     assert_eq!(k3["cell_visibility"]["subdivision"], 3);
+    // Occluder planes by default (the demo's walls cut cells), recorded;
+    // `--no-cell-planes` leaves them out and changes nothing else.
+    let planes = probekit::cloud::cell_visibility::bake_cell_planes(
+        &probekit::trace::Tracer::new(&probekit::scene::Scene::builtin_demo()),
+        &mesh,
+        file.cell_visibility.as_ref().unwrap(),
+        probekit::cloud::cell_visibility::CELL_PLANE_SEED,
+        &|_, _| {},
+    )
+    .unwrap();
+    assert!(!planes.is_empty());
+    assert_eq!(file.cell_planes.as_ref(), Some(&planes));
+    assert_eq!(v["cell_visibility"]["planes"], planes.len());
+    assert!(planes.len() as u64 <= stored);
+    assert!(String::from_utf8_lossy(&meta).contains("\"cell_planes\":true"));
+    json(
+        d,
+        &[
+            &common[..],
+            &[
+                "-o",
+                "np.probes",
+                "--visibility-res",
+                "4",
+                "--no-cell-planes",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    let np = probekit_runtime::ProbeFile::load(d.join("np.probes")).unwrap();
+    assert!(np.cell_planes.is_none());
+    assert_eq!(np.cell_visibility, file.cell_visibility);
+    assert_eq!(np.coefficients, file.coefficients);
     for bad in ["9", "fine"] {
         fails_one_line(
             d,

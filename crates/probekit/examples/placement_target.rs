@@ -5,7 +5,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
-//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-weights] [--fit-points N] [--fit-samples N]
+//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
 //!
@@ -23,7 +23,8 @@
 //! `probekit bake` stores by default — distance moments (`VISM`), cell
 //! visibility (`CVSP`) and probe weights fitted with the default settings
 //! (`PWGT`; `--no-weights`: none; `--fit-*` as `probekit bake`'s;
-//! `--cell-visibility` as `probekit bake`'s, default `auto`) — as
+//! `--cell-visibility` as `probekit bake`'s, default `auto`; occluder
+//! planes `CPLN` unless `--no-cell-planes`) — as
 //! `probekit eval` does on such a file.
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`).
@@ -36,7 +37,9 @@
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
 use probekit::cloud::blend_fit::{capture_training_set, fit_probe_weights, BlendFitSettings};
-use probekit::cloud::cell_visibility::{bake_cell_visibility, CellLattice};
+use probekit::cloud::cell_visibility::{
+    bake_cell_planes, bake_cell_visibility, CellLattice, CELL_PLANE_SEED,
+};
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
@@ -74,6 +77,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let visibility = args.iter().any(|a| a == "--visibility");
     let brightness: f32 = arg(&args, "--brightness", 0.0);
     let weights = !args.iter().any(|a| a == "--no-weights");
+    let no_planes = args.iter().any(|a| a == "--no-cell-planes");
     let lattice = CellLattice::from_name(&arg(&args, "--cell-visibility", "auto".to_string()))
         .ok_or("--cell-visibility: expected auto or 1 to 8")?;
     let baker = Baker::new(&scene)?;
@@ -111,9 +115,13 @@ fn main() -> Result<(), Box<dyn Error>> {
                 &|_, _| {},
             )?;
             let cells = bake_cell_visibility(tracer, &mesh, lattice.resolve(&mesh), &|_, _| {})?;
+            let planes = (!no_planes)
+                .then(|| bake_cell_planes(tracer, &mesh, &cells, CELL_PLANE_SEED, &|_, _| {}))
+                .transpose()?;
             let mut cloud = ProbeCloud::new(mesh, order as u32, coeffs)?;
             cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
             cloud.set_cell_visibility_bits(Some(cells))?;
+            cloud.set_cell_planes(planes)?;
             cloud.set_brightness_weighting(brightness)?;
             if weights {
                 let d = BlendFitSettings::new(s.seed);

@@ -141,6 +141,11 @@ pub struct BakeArgs {
     /// points of the cell.
     #[arg(long, default_value = "auto")]
     pub cell_visibility: String,
+    /// Do not fit occluder planes (`CPLN`) to the cells one flat wall cuts
+    /// (they make such cells' visibility exact up to the wall, where the
+    /// lattice interpolates between its points).
+    #[arg(long)]
+    pub no_cell_planes: bool,
     /// Do not bake distance moments or cell visibility (the cloud blends
     /// without visibility; probe weights are still fitted unless
     /// `--no-probe-weights`).
@@ -367,6 +372,8 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         };
     let cells = lattice.filter(|_| !a.no_visibility);
     sj["cell_visibility"] = cells.map_or(serde_json::Value::Null, CellLattice::to_json);
+    let planes = cells.is_some() && !a.no_cell_planes;
+    sj["cell_planes"] = serde_json::json!(planes);
     let weights = (!a.no_probe_weights).then_some(BlendFitSettings {
         points_per_probe: a.fit_points,
         samples: a.fit_samples,
@@ -440,6 +447,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     let kinds = VisibilityBake {
         moments: vis,
         cell_subdivision: cells.filter(|_| whole),
+        cell_planes: planes && whole,
         probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
@@ -706,6 +714,16 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             .with_context(|| out.clone())?;
             pb.finish_and_clear();
             file.cell_visibility = Some(cells);
+            if head.meta.settings["cell_planes"] == serde_json::json!(true) {
+                let pb = counting_bar(CELLS_BAR);
+                file.cell_planes = probekit::cloud::cell_visibility::bake_file_cell_planes(
+                    baker.tracer(),
+                    &file,
+                    &|d, t| advance(&pb, d, t),
+                )
+                .with_context(|| out.clone())?;
+                pb.finish_and_clear();
+            }
         }
         if weights.is_object() {
             // The parts' capture settings, as the bake recorded them.

@@ -230,9 +230,9 @@ pub struct InspectArgs {
 /// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
 /// up to rounding, which light points outside the hull from far probes)
 /// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
-/// `cell_visibility`: `{"subdivision","cells","stored_cells"}` of the
-/// `CVSP` / `CVIS` section — cells in all, and those not clear, which have a
-/// record — or null; `probe_weights`: `{"min","median","max","below_half",
+/// `cell_visibility`: `{"subdivision","cells","stored_cells","planes"}` of
+/// the `CVSP` / `CVIS` section — cells in all, those not clear, which have a
+/// record, and the tetrahedra with an occluder plane (`CPLN`) — or null; `probe_weights`: `{"min","median","max","below_half",
 /// "above_two"}` of the fitted weights (`PWGT`), or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
@@ -273,6 +273,7 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
                 "subdivision": c.subdivision(),
                 "cells": c.tet_count() + c.hull_face_count(),
                 "stored_cells": c.record_count(),
+                "planes": file.cell_planes.as_ref().map_or(0, |p| p.len()),
             })),
             "probe_weights": file.probe_weights.as_ref().filter(|w| !w.is_empty()).map(|w| {
                 let mut s = w.clone();

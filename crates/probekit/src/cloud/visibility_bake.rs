@@ -11,7 +11,9 @@
 //! probe weights.
 
 use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
-use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
+use super::cell_visibility::{
+    bake_file_cell_planes, bake_file_cell_visibility, CellLattice, CellVisibilityError,
+};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
 use crate::bake::{Baker, CaptureSettings};
 use crate::trace::Tracer;
@@ -41,6 +43,10 @@ pub struct VisibilityBake {
     /// Cell visibility (`CVSP`) at this lattice subdivision (fixed, 1..=8,
     /// or from the cell size); `None`: none.
     pub cell_subdivision: Option<CellLattice>,
+    /// Occluder planes (`CPLN`) for the cells one flat wall cuts, refining
+    /// the cell visibility ([`super::cell_visibility::bake_cell_planes`]);
+    /// only with `cell_subdivision`.
+    pub cell_planes: bool,
     /// Fitted probe weights (`PWGT`) with these settings; `None`: none.
     pub probe_weights: Option<BlendFitSettings>,
 }
@@ -51,6 +57,7 @@ impl VisibilityBake {
         Self {
             moments: None,
             cell_subdivision: None,
+            cell_planes: false,
             probe_weights: None,
         }
     }
@@ -75,6 +82,7 @@ impl VisibilityBake {
                     _ => CellLattice::Fixed(c.subdivision()),
                 }
             }),
+            cell_planes: file.cell_planes.is_some(),
             probe_weights: file.probe_weights.as_ref().map(|_| {
                 BlendFitSettings::from_json(
                     &meta["settings"]["probe_weights"],
@@ -89,7 +97,8 @@ impl VisibilityBake {
     /// kinds not selected are removed, and so are probe weights (fitted to
     /// the old blend: [`VisibilityBake::fit_weights_into`] fits them anew).
     /// `moments_progress(done, total)` counts probes,
-    /// `cells_progress` cells and hull faces. Deterministic (any thread
+    /// `cells_progress` cells and hull faces, then the cells whose planes
+    /// are fitted. Deterministic (any thread
     /// count).
     pub fn bake_into(
         &self,
@@ -116,6 +125,10 @@ impl VisibilityBake {
             )?),
             None => None,
         };
+        file.cell_planes = None;
+        if self.cell_planes {
+            file.cell_planes = bake_file_cell_planes(tracer, file, cells_progress)?;
+        }
         file.probe_weights = None;
         Ok(())
     }
@@ -151,6 +164,7 @@ impl VisibilityBake {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cloud::cell_visibility::{bake_cell_planes, CELL_PLANE_SEED};
     use crate::cloud::file::test_cloud_file;
     use glam::Vec3;
     use probekit_sh::ShRgb;
@@ -184,6 +198,7 @@ mod tests {
         let want = VisibilityBake {
             moments: Some(vs),
             cell_subdivision: Some(CellLattice::Fixed(2)),
+            cell_planes: true,
             probe_weights: None,
         };
         a.probe_weights = Some(vec![2.0; pos.len()]);
@@ -194,10 +209,15 @@ mod tests {
         let cells =
             bake_file_cell_visibility(&tracer, &a, CellLattice::Fixed(2), &|_, _| {}).unwrap();
         assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
+        let mesh = probekit_runtime::cloud::ProbeCloud::mesh_from_file(&a).unwrap();
+        let planes = bake_cell_planes(&tracer, &mesh, &cells, CELL_PLANE_SEED, &|_, _| {}).unwrap();
+        assert!(!planes.is_empty());
+        assert_eq!(a.cell_planes.as_ref(), Some(&planes));
         // Weights fitted to the old blend are gone.
         assert!(a.probe_weights.is_none());
         let like = VisibilityBake::like(&a, 7);
         assert_eq!(like.cell_subdivision, Some(CellLattice::Fixed(2)));
+        assert!(like.cell_planes);
         assert_eq!(
             like.moments.map(|m| (m.resolution, m.max_distance)),
             Some((4, 5.0))
@@ -206,12 +226,13 @@ mod tests {
         VisibilityBake::none()
             .bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
             .unwrap();
-        assert!(a.visibility.is_none() && a.cell_visibility.is_none());
+        assert!(a.visibility.is_none() && a.cell_visibility.is_none() && a.cell_planes.is_none());
         assert_eq!(VisibilityBake::like(&a, 7), VisibilityBake::none());
         // A bad subdivision is a typed error.
         let bad = VisibilityBake {
             moments: None,
             cell_subdivision: Some(CellLattice::Fixed(99)),
+            cell_planes: true,
             probe_weights: None,
         };
         assert!(matches!(

@@ -406,6 +406,7 @@ mod tests {
                 ..crate::cloud::visibility::VisibilitySettings::new(10.0, 1)
             }),
             cell_subdivision: Some(crate::cloud::cell_visibility::CellLattice::Fixed(2)),
+            cell_planes: true,
             probe_weights: Some(crate::cloud::blend_fit::BlendFitSettings {
                 points_per_probe: 2,
                 samples: 8,
