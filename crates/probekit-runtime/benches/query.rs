@@ -4,13 +4,15 @@
 //! walk), coherent queries (one object moving in small steps, warm state),
 //! and batched queries outside the hull (closest-hull-point outer cells);
 //! and the cost of visibility weighting (`cloud_visibility`: distance
-//! moments, cell visibility, both, and both with fitted probe weights).
+//! moments, cell visibility, both, and both with fitted probe weights; cell
+//! visibility with occluder planes).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit_runtime::cloud::{
-    cell_visibility, face_neighbors, CellVisibility, ProbeCloud, TetMesh, VisibilityMaps, WalkState,
+    cell_visibility, face_neighbors, CellPlanes, CellVisibility, ProbeCloud, TetMesh,
+    VisibilityMaps, WalkState,
 };
 use std::hint::black_box;
 
@@ -201,6 +203,43 @@ fn visibility(c: &mut Criterion) {
             })
         });
     }
+    // Occluder planes in every other cell with a record (a baked demo cloud
+    // has one in ~40 % of them): the side test replaces the bits there.
+    let planes = {
+        let bits = cloud.cell_visibility_bits().unwrap();
+        let (pos, tets) = (cloud.mesh().positions(), cloud.mesh().tets());
+        let ids: Vec<u32> = (0..tets.len() as u32)
+            .filter(|&t| bits.tet_has_record(t))
+            .step_by(2)
+            .collect();
+        let n = Vec3::new(1.0, 0.3, 0.2).normalize();
+        let planes = ids
+            .iter()
+            .map(|&t| {
+                let c = tets[t as usize]
+                    .iter()
+                    .map(|&i| pos[i as usize])
+                    .sum::<Vec3>()
+                    / 4.0;
+                [n.x, n.y, n.z, n.dot(c)]
+            })
+            .collect();
+        CellPlanes::new(tets.len(), ids, planes).unwrap()
+    };
+    cloud.set_visibility(false);
+    cloud.set_cell_visibility(true);
+    cloud.set_probe_weighting(false);
+    cloud.set_cell_planes(Some(planes)).unwrap();
+    g.bench_function("irradiance_cells_and_planes", |b| {
+        b.iter(|| {
+            let mut st = WalkState::new();
+            let mut acc = Vec3::ZERO;
+            for &p in &path {
+                acc += cloud.irradiance(p, Vec3::Y, &mut st);
+            }
+            black_box(acc)
+        })
+    });
     g.finish();
 }
 
