@@ -377,8 +377,14 @@ pub const CELL_PLANE_SEED: u64 = 0x5052_4f42;
 /// Bakes occluder planes ([`probekit_runtime::cloud::CellPlanes`], the
 /// `CPLN` section) for the tetrahedra of `mesh` that `cells` (baked on the
 /// same mesh) stores a record for, at the same lattice: a plane where one
-/// flat wall explains the cell's visibility ([`fit_cell_plane`]'s tests),
-/// none elsewhere. `progress(done, total)` counts those tetrahedra.
+/// flat wall explains the cell's visibility, none elsewhere. A cell gets a
+/// plane when every blocked segment between a corner and a lattice point,
+/// traced both ways, hits surfaces parallel to one plane (within about
+/// 10°), the slab they span is at most [`MAX_PLANE_SLAB`] thick with no
+/// corner in it, and the slab's mid-plane reproduces every lattice bit and
+/// an exact segment test at [`PLANE_CHECK_POINTS`] random points of the
+/// cell (from `seed` and the cell's index). `progress(done, total)` counts
+/// those tetrahedra.
 /// Deterministic: each cell's plane depends only on the mesh, the scene and
 /// `seed`.
 pub fn bake_cell_planes(
