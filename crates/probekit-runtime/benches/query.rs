@@ -173,6 +173,15 @@ fn visibility(c: &mut Criterion) {
             )
         })
         .collect();
+    // Irradiance along the whole path, from a cold walk state.
+    let walk = |cloud: &ProbeCloud| {
+        let mut st = WalkState::new();
+        let mut acc = Vec3::ZERO;
+        for &p in &path {
+            acc += cloud.irradiance(p, Vec3::Y, &mut st);
+        }
+        black_box(acc)
+    };
     let mut g = c.benchmark_group("cloud_visibility");
     g.throughput(Throughput::Elements(path.len() as u64));
     for (moments, cells, weights) in [
@@ -192,16 +201,7 @@ fn visibility(c: &mut Criterion) {
             (true, true, false) => "irradiance_moments_and_cells",
             (true, true, true) => "irradiance_moments_cells_and_weights",
         };
-        g.bench_function(name, |b| {
-            b.iter(|| {
-                let mut st = WalkState::new();
-                let mut acc = Vec3::ZERO;
-                for &p in &path {
-                    acc += cloud.irradiance(p, Vec3::Y, &mut st);
-                }
-                black_box(acc)
-            })
-        });
+        g.bench_function(name, |b| b.iter(|| walk(&cloud)));
     }
     // Occluder planes in every other cell with a record (a baked demo cloud
     // has one in ~40 % of them): the side test replaces the bits there.
@@ -230,16 +230,7 @@ fn visibility(c: &mut Criterion) {
     cloud.set_cell_visibility(true);
     cloud.set_probe_weighting(false);
     cloud.set_cell_planes(Some(planes)).unwrap();
-    g.bench_function("irradiance_cells_and_planes", |b| {
-        b.iter(|| {
-            let mut st = WalkState::new();
-            let mut acc = Vec3::ZERO;
-            for &p in &path {
-                acc += cloud.irradiance(p, Vec3::Y, &mut st);
-            }
-            black_box(acc)
-        })
-    });
+    g.bench_function("irradiance_cells_and_planes", |b| b.iter(|| walk(&cloud)));
     g.finish();
 }
 

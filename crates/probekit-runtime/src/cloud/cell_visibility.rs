@@ -476,6 +476,13 @@ impl CellVisibility {
 /// Largest deviation from 1 of the length of a stored plane normal.
 pub const PLANE_NORMAL_TOLERANCE: f32 = 1e-3;
 
+/// Whether plane `[n_x, n_y, n_z, d]` has a unit normal: its length within
+/// [`PLANE_NORMAL_TOLERANCE`] of 1 (the rule of [`CellPlanes::new`] and of
+/// the `CPLN` reader).
+pub fn plane_has_unit_normal(p: &[f32; 4]) -> bool {
+    (Vec3::new(p[0], p[1], p[2]).length() - 1.0).abs() <= PLANE_NORMAL_TOLERANCE
+}
+
 /// Occluder planes of tetrahedra (the file's `CPLN` section, format 1.7): a
 /// refinement of the lattice bits for cells that one flat wall cuts.
 ///
@@ -523,11 +530,8 @@ impl CellPlanes {
         {
             return None;
         }
-        let normal_ok = |p: &[f32; 4]| {
-            p.iter().all(|c| c.is_finite())
-                && (Vec3::new(p[0], p[1], p[2]).length() - 1.0).abs() <= PLANE_NORMAL_TOLERANCE
-        };
-        if !planes.iter().all(normal_ok) {
+        let valid = |p: &[f32; 4]| p.iter().all(|c| c.is_finite()) && plane_has_unit_normal(p);
+        if !planes.iter().all(valid) {
             return None;
         }
         let mut lookup = vec![0u32; tet_count];

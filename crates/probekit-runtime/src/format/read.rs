@@ -15,8 +15,8 @@ use super::{
     Rig, RigModel, TetSection, Transition, Validity, VolumeGrid,
 };
 use crate::cloud::cell_visibility::{
-    record_bytes, record_has_padding, records_len, stored_counts, CellPlanes, CellVisibility,
-    MAX_CELL_SUBDIVISION, PLANE_NORMAL_TOLERANCE,
+    plane_has_unit_normal, record_bytes, record_has_padding, records_len, stored_counts,
+    CellPlanes, CellVisibility, MAX_CELL_SUBDIVISION,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -732,7 +732,7 @@ fn parse_cell_planes(s: &Sec<'_>) -> Result<RawCellPlanes, FormatError> {
 /// The first entry of `raw` that [`CellPlanes::new`] would refuse, as a
 /// typed error naming it: an index not above the one before it (unsorted or
 /// repeated), an index past the tetrahedra, a value that is not finite, or
-/// a normal whose length is not within [`PLANE_NORMAL_TOLERANCE`] of 1.
+/// a normal whose length is not within [`PLANE_NORMAL_TOLERANCE`](crate::cloud::cell_visibility::PLANE_NORMAL_TOLERANCE) of 1.
 fn first_bad_cell_plane(raw: &RawCellPlanes) -> Option<FormatError> {
     let id = SectionId::CELL_PLANES;
     raw.tets
@@ -759,7 +759,7 @@ fn first_bad_cell_plane(raw: &RawCellPlanes) -> Option<FormatError> {
                 })
             } else if !p.iter().all(|c| c.is_finite()) {
                 Some(FormatError::NonFinite { id, element })
-            } else if (Vec3::new(p[0], p[1], p[2]).length() - 1.0).abs() > PLANE_NORMAL_TOLERANCE {
+            } else if !plane_has_unit_normal(p) {
                 Some(bad("cell plane normal not of unit length (tolerance 1e-3)"))
             } else {
                 None
