@@ -9,6 +9,9 @@ for the integer grid: volumes of integer points are computed exactly in
 float64; for random points |6·vol| < 1e-12 is reported).
 
 Usage: python3 scripts/bench_qhull.py [WORKDIR] [--big]  (--big: also Qhull on 1 M points)   (pip install scipy numpy)
+
+Set PROBEKIT_DELAUNAY_PEER to a built `delaunay_peer` binary to run it instead
+of `cargo run` (on a machine without a Rust toolchain).
 """
 import json
 import os
@@ -23,8 +26,10 @@ from scipy.spatial import Delaunay
 args = [a for a in sys.argv[1:] if not a.startswith("--")]
 work = args[0] if args else "target/delaunay_peer"
 os.makedirs(work, exist_ok=True)
+peer = os.environ.get("PROBEKIT_DELAUNAY_PEER")
+cmd = [peer] if peer else ["cargo", "run", "--release", "-q", "-p", "probekit", "--example", "delaunay_peer", "--"]
 out = subprocess.run(
-    ["cargo", "run", "--release", "-q", "-p", "probekit", "--example", "delaunay_peer", "--", work],
+    cmd + [work],
     check=True, capture_output=True, text=True,
 ).stdout
 ours = {r["set"]: r for r in map(json.loads, out.split())}
