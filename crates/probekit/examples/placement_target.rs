@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
-//!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top]
+//!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
 //! ```
@@ -18,6 +18,10 @@
 //! `--light-shells`: adaptive's [`LightShells`] mode (default `auto`, as
 //! `probekit bake`);
 //! `--no-grid`: evaluate the adaptive clouds only.
+//!
+//! `--floor`: first, the figures of a probe captured at every evaluation
+//! point (at `--samples` and at 16× as many): SH truncation and capture noise
+//! alone, the floor no placement at that sample count can go below.
 //!
 //! `--visibility`: every cloud (grid and adaptive alike) blends with what
 //! `probekit bake` stores by default — distance moments (`VISM`), cell
@@ -69,6 +73,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
     let skip_grid = args.iter().any(|a| a == "--no-grid");
+    let floor = args.iter().any(|a| a == "--floor");
     let shells = match arg(&args, "--light-shells", "auto".to_string()).as_str() {
         "on" => LightShells::On,
         "off" => LightShells::Off,
@@ -192,6 +197,27 @@ fn main() -> Result<(), Box<dyn Error>> {
         );
         Ok(())
     };
+    if floor {
+        // A probe at every evaluation point, captured like the clouds' probes
+        // (and at 16× the samples): no interpolation error at all, only SH
+        // truncation and capture noise, so no placement can go below it.
+        let at: Vec<Vec3> = pts.iter().map(|p| p.position).collect();
+        for k in [1, 16] {
+            let mut sk = s.clone();
+            sk.samples = samples * k;
+            let pred: Vec<Vec3> = baker
+                .capture_many(&at, 0, &sk, &|_, _| {})?
+                .iter()
+                .zip(&pts)
+                .map(|(r, p)| r.sh.irradiance(p.normal))
+                .collect();
+            let m = metrics(&pred, &truth, mean);
+            println!(
+                "    floor samples={:5} rel_rmse={:.3} p95={:.2} leaks={:3}",
+                sk.samples, m.rel_rmse, m.p95_rel_error, m.leaks
+            );
+        }
+    }
     for &b in &budgets {
         let g: Vec<Vec3> = grid_points(&bbox, None, Some(b * gf))?
             .into_iter()
