@@ -306,7 +306,7 @@ const HELD_OUT_FIRST_INDEX: usize = 1 << 40;
 
 /// Radius, metres, of the ball around each positional light in which
 /// [`held_out_points`] samples more densely.
-pub(super) const HELD_OUT_LIGHT_RADIUS: f32 = 1.0;
+const HELD_OUT_LIGHT_RADIUS: f32 = 1.0;
 
 /// Share of the held-out points that go into the balls around lights
 /// (split evenly between the lights) when the scene has any.
@@ -455,7 +455,7 @@ pub(super) fn held_out_errors(
 /// the irradiance next to an area light grows fastest in the last
 /// centimetres a probe may reach, and the Cornell box's error at ~7000
 /// probes comes mostly from points within 10 cm of its light
-/// (BENCHMARKS.md, "Other scenes with fresh ground truth"; 1.2 before).
+/// (BENCHMARKS.md, "Where the Cornell box's error is"; 1.2 before).
 const EMITTER_LAYERS: [f32; 3] = [1.0, 2.5, 5.0];
 
 /// Random stream of the emitter layers' sample points.
