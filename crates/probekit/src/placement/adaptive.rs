@@ -324,12 +324,7 @@ const HELD_OUT_LIGHT_SHARE: f32 = 0.5;
 /// points holds none or one of them, so with it the comparison of two
 /// placements was close to a coin flip (BENCHMARKS.md, "Held-out points
 /// near the lights"). Points are not yet checked for free space.
-pub(super) fn held_out_points(
-    lights: &[Light],
-    bbox: &Aabb,
-    n: usize,
-    seed: u64,
-) -> Vec<(Vec3, f32)> {
+fn held_out_points(lights: &[Light], bbox: &Aabb, n: usize, seed: u64) -> Vec<(Vec3, f32)> {
     let centres: Vec<Vec3> = lights
         .iter()
         .filter(|l| l.kind != LightKind::Directional && l.position.is_finite())
@@ -397,20 +392,13 @@ pub(super) fn held_out_errors(
     .filter(|(p, _)| has_clearance(tracer, *p))
     .collect();
     let at: Vec<Vec3> = pts.iter().map(|(p, _)| *p).collect();
-    let res = st
-        .baker
-        .capture_many(&at, HELD_OUT_FIRST_INDEX, &st.settings, &|_, _| {})?;
-    st.stats.captures += at.len();
     // (point, volume weight, captured SH), in free space of the box.
-    let captured: Vec<(Vec3, f32, ShRgb)> = res
+    let captured: Vec<(Vec3, f32, ShRgb)> = st
+        .capture_numbered(&at, HELD_OUT_FIRST_INDEX)?
         .into_iter()
         .zip(&pts)
-        .filter(|(r, _)| {
-            r.validity.valid
-                && bbox.contains(r.position)
-                && !super::inside_geometry(tracer, r.position)
-        })
-        .map(|(r, &(_, w))| (r.position, w, r.sh))
+        .filter_map(|(c, &(_, w))| c.map(|(p, sh)| (p, w, sh)))
+        .filter(|(p, _, _)| bbox.contains(*p))
         .collect();
     let order = captured.first().map_or(1, |c| c.2.order());
     let w = band_weights(order);

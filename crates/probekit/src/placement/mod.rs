@@ -425,17 +425,31 @@ impl State<'_, '_> {
     /// Captures `points` (already filtered for inside-geometry); returns the
     /// valid ones as (position, SH).
     fn capture(&mut self, points: &[Vec3]) -> Result<Vec<(Vec3, ShRgb)>, PlacementError> {
+        let out = self.capture_numbered(points, self.next_index)?;
+        self.next_index += points.len();
+        Ok(out.into_iter().flatten().collect())
+    }
+
+    /// Captures `points` as capture indices `first..` (which choose their
+    /// random numbers) without advancing [`Self::next_index`]; per point,
+    /// its (position, SH) when the capture is valid and not inside
+    /// geometry, else `None` (counted in `rejected_inside`).
+    fn capture_numbered(
+        &mut self,
+        points: &[Vec3],
+        first: usize,
+    ) -> Result<Vec<Option<(Vec3, ShRgb)>>, PlacementError> {
         let res = self
             .baker
-            .capture_many(points, self.next_index, &self.settings, &|_, _| {})?;
-        self.next_index += points.len();
+            .capture_many(points, first, &self.settings, &|_, _| {})?;
         self.stats.captures += points.len();
         let mut out = Vec::with_capacity(res.len());
         for r in res {
             if r.validity.valid && !inside_geometry(self.baker.tracer(), r.position) {
-                out.push((r.position, r.sh));
+                out.push(Some((r.position, r.sh)));
             } else {
                 self.stats.rejected_inside += 1;
+                out.push(None);
             }
         }
         Ok(out)
