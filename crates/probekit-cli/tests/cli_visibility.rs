@@ -254,9 +254,11 @@ fn bake_inspect_query_with_and_without_visibility() {
         .success());
 }
 
-/// `bake` fits probe weights (`PWGT`) by default, `inspect` reports them,
-/// `query` uses them unless `--no-probe-weights`, the metadata records the
-/// fit's settings, and bad fit settings are one-line errors.
+/// `bake` fits probe weights (`PWGT`) and their brightness exponent by
+/// default, `inspect` reports them, `query` uses them unless
+/// `--no-probe-weights`, the metadata records the fit's settings, a fixed
+/// `--brightness-weight` is stored as given, and bad fit settings are
+/// one-line errors.
 #[test]
 fn bake_fits_probe_weights_and_query_uses_them() {
     let t = tempfile::tempdir().unwrap();
@@ -296,14 +298,38 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     assert!(p["bytes_by_section"].get("probe_weights").is_none());
     let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
     assert!(
-        meta.contains("\"probe_weights\":{\"absolute_weight\":1.0,\"points_per_probe\":4"),
+        meta.contains(
+            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"points_per_probe\":4"
+        ),
         "{meta}"
     );
+    let alpha = pw["brightness_exponent"].as_f64().unwrap();
+    assert!([0.0, 0.5, 1.0].contains(&alpha), "{pw}");
+    // A fixed exponent is stored as given, and query blends with it.
+    json(
+        d,
+        &[
+            &common[..],
+            &fit[..],
+            &["-o", "h.probes", "--brightness-weight", "0.75", "--json"],
+        ]
+        .concat(),
+    );
+    let h = json(d, &["inspect", "h.probes", "--json"]);
+    assert_eq!(h["probe_weights"]["brightness_exponent"], 0.75);
 
     write_points(d);
     let q = |f: &str, extra: &[&str]| query(d, f, extra);
     assert_eq!(q("w.probes", &["--no-probe-weights"]), q("p.probes", &[]));
     assert_ne!(q("w.probes", &[]), q("p.probes", &[]));
+    assert_eq!(
+        q("h.probes", &[]),
+        q("h.probes", &["--brightness-weight", "0.75"])
+    );
+    assert_ne!(
+        q("h.probes", &[]),
+        q("h.probes", &["--brightness-weight", "0"])
+    );
 
     for (flag, bad) in [
         ("--fit-points", "0"),
@@ -311,6 +337,8 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         ("--fit-regularization", "-1"),
         ("--fit-regularization", "nan"),
         ("--fit-absolute-weight", "-2"),
+        ("--brightness-weight", "5"),
+        ("--brightness-weight", "often"),
     ] {
         fails_one_line(
             d,

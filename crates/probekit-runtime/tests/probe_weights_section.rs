@@ -1,4 +1,4 @@
-//! Fitted probe weights: `PWGT` (format 1.6) round trips at minor 6 with the
+//! Fitted probe weights: `PWGT` (format 1.6; its brightness exponent, 1.8) round trips at minor 6 with the
 //! bytes of the documented layout, reaches [`ProbeCloud`], and hostile
 //! sections (out-of-range or non-finite weights, wrong counts, a non-cloud
 //! file, truncation, byte mutations) are refused with typed errors, never a
@@ -99,4 +99,62 @@ fn bad_probe_weights_are_typed_errors() {
 fn hostile_probe_weight_sections_never_panic() {
     let good = weights_file().to_bytes().unwrap();
     hostile_section_variants(&good, SectionId::PROBE_WEIGHTS, 400, 0x9e37);
+}
+
+/// The brightness exponent the weights were fitted with (format 1.8) rides
+/// in `PWGT`'s header word `w1`: written as `f32` bits at minor 8, read back
+/// and applied by [`ProbeCloud::from_file`]; zero leaves the 1.6 bytes.
+#[test]
+fn the_brightness_exponent_rides_in_pwgt_w1_at_minor_8() {
+    let mut f = weights_file();
+    f.brightness_exponent = 0.5;
+    let bytes = f.to_bytes().unwrap();
+    assert_eq!(minor_of(&bytes), 8);
+    let (off, _) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
+    let w1 = u32::from_le_bytes(bytes[off + 4..off + 8].try_into().unwrap());
+    assert_eq!(f32::from_bits(w1), 0.5);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    // -0.0 is 0.0: the 1.6 bytes, minor 6.
+    let mut zero = weights_file();
+    zero.brightness_exponent = -0.0;
+    assert_eq!(zero.to_bytes().unwrap(), weights_file().to_bytes().unwrap());
+    assert_eq!(minor_of(&zero.to_bytes().unwrap()), 6);
+    // The loaded cloud blends with it.
+    let mut g = full_file();
+    g.probe_weights = weights_file().probe_weights;
+    g.brightness_exponent = 1.0;
+    let cloud =
+        ProbeCloud::from_file(&ProbeFile::from_bytes(&g.to_bytes().unwrap()).unwrap()).unwrap();
+    assert_eq!(cloud.brightness_weighting(), 1.0);
+    g.brightness_exponent = 0.0;
+    let plain = ProbeCloud::from_file(&g).unwrap();
+    assert_eq!(plain.brightness_weighting(), 0.0);
+}
+
+/// An exponent out of range or not a number, in a file or handed to the
+/// writer, is a typed error; so is one without probe weights to carry it.
+#[test]
+fn bad_brightness_exponents_are_typed_errors() {
+    let good = weights_file().to_bytes().unwrap();
+    let (off, _) = find_section(&good, SectionId::PROBE_WEIGHTS);
+    for bad in [f32::NAN, -0.5, 4.5, f32::INFINITY] {
+        let r = load_patched(&good, |b| put_u32(b, off + 4, bad.to_bits()));
+        assert!(
+            matches!(
+                r,
+                Err(FormatError::InvalidValue {
+                    id: SectionId::PROBE_WEIGHTS,
+                    element: 0,
+                    ..
+                })
+            ),
+            "{bad}: {r:?}"
+        );
+        let mut f = weights_file();
+        f.brightness_exponent = bad;
+        assert!(f.to_bytes().is_err(), "{bad}");
+    }
+    let mut f = cvis_file();
+    f.brightness_exponent = 1.0;
+    assert!(matches!(f.to_bytes(), Err(FormatError::Unrepresentable(_))));
 }

@@ -40,7 +40,9 @@
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
-use probekit::cloud::blend_fit::{capture_training_set, fit_probe_weights, BlendFitSettings};
+use probekit::cloud::blend_fit::{
+    capture_training_set, fit_blend, BlendFitSettings, BRIGHTNESS_CHOICES,
+};
 use probekit::cloud::cell_visibility::{
     bake_cell_planes, bake_cell_visibility, CellLattice, CELL_PLANE_SEED,
 };
@@ -80,7 +82,12 @@ fn main() -> Result<(), Box<dyn Error>> {
         _ => LightShells::Auto,
     };
     let visibility = args.iter().any(|a| a == "--visibility");
-    let brightness: f32 = arg(&args, "--brightness", 0.0);
+    // `auto`: the exponent the weight fit chooses (`probekit bake`'s default).
+    let brightness_arg: String = arg(&args, "--brightness", "0".to_string());
+    let brightness: Option<f32> = match brightness_arg.as_str() {
+        "auto" => None,
+        a => Some(a.parse()?),
+    };
     let weights = !args.iter().any(|a| a == "--no-weights");
     let no_planes = args.iter().any(|a| a == "--no-cell-planes");
     let lattice = CellLattice::from_name(&arg(&args, "--cell-visibility", "auto".to_string()))
@@ -127,7 +134,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             cloud.set_visibility_maps(VisibilityMaps::from_moments(&moments))?;
             cloud.set_cell_visibility_bits(Some(cells))?;
             cloud.set_cell_planes(planes)?;
-            cloud.set_brightness_weighting(brightness)?;
+            cloud.set_brightness_weighting(brightness.unwrap_or(0.0))?;
             if weights {
                 let d = BlendFitSettings::new(s.seed);
                 let fit = BlendFitSettings {
@@ -139,8 +146,16 @@ fn main() -> Result<(), Box<dyn Error>> {
                 };
                 let n = fit.points_per_probe as usize * pos.len();
                 let t = capture_training_set(&baker, &bbox, cloud.mesh(), n, &s, &fit, &|_, _| {})?;
-                let w = fit_probe_weights(&cloud, &t, &fit)?;
-                cloud.set_probe_weights(Some(w))?;
+                let exps = brightness.map_or(BRIGHTNESS_CHOICES.to_vec(), |a| vec![a]);
+                let f = fit_blend(&cloud, &t, &fit, &exps)?;
+                if brightness.is_none() {
+                    println!(
+                        "{name}: brightness exponent {} (objective {:.4})",
+                        f.brightness, f.objective
+                    );
+                }
+                cloud.set_brightness_weighting(f.brightness)?;
+                cloud.set_probe_weights(Some(f.weights))?;
             }
             let mut ws = WalkState::new();
             if top {

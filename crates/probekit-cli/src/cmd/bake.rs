@@ -168,6 +168,13 @@ pub struct BakeArgs {
     /// probe weight fit (≥ 0; 0 fits relative error alone).
     #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_ABSOLUTE_WEIGHT)]
     pub fit_absolute_weight: f32,
+    /// Brightness exponent α the cloud blends with and the probe weights
+    /// are fitted for (0 to 4; 0: the plain blend, 1: harmonic mean of the
+    /// probes' brightness), stored with the weights; `auto` (default): fit
+    /// the weights for α = 0, 0.5 and 1 and keep the one that predicts the
+    /// training points best.
+    #[arg(long, default_value = "auto", value_name = "auto|A")]
+    pub brightness_weight: String,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -380,6 +387,16 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         regularization: a.fit_regularization,
         absolute_weight: a.fit_absolute_weight,
         seed: settings.seed,
+        brightness: match a.brightness_weight.as_str() {
+            "auto" => None,
+            s => {
+                let v: f32 = s.parse().map_err(|_| {
+                    anyhow!("--brightness-weight {s}: expected auto or a number 0 to 4")
+                })?;
+                super::util::check_brightness_weight(v)?;
+                Some(v)
+            }
+        },
     });
     if let Some(w) = &weights {
         if w.points_per_probe == 0 || w.samples == 0 {
@@ -733,17 +750,17 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             );
             let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));
             let pb = counting_bar(FIT_BAR);
-            file.probe_weights = Some(
-                probekit::cloud::blend_fit::fit_file_probe_weights(
-                    &baker,
-                    &file,
-                    &scene.bake_box(),
-                    &capture,
-                    &fit,
-                    &|d, t| advance(&pb, d, t),
-                )
-                .with_context(|| out.clone())?,
-            );
+            let fitted = probekit::cloud::blend_fit::fit_file_probe_weights(
+                &baker,
+                &file,
+                &scene.bake_box(),
+                &capture,
+                &fit,
+                &|d, t| advance(&pb, d, t),
+            )
+            .with_context(|| out.clone())?;
+            file.probe_weights = Some(fitted.weights);
+            file.brightness_exponent = fitted.brightness;
             pb.finish_and_clear();
         }
     }

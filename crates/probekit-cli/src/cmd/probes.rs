@@ -161,11 +161,14 @@ fn parse_group_scales(args: &[String]) -> Result<Vec<(String, Vec3)>> {
 
 /// Runs `probekit query`: `{"irradiance":[r,g,b]}` for `--at`, or
 /// `{"irradiance":[[r,g,b],...]}` for `--points`. With `--group-scale` the
-/// file's coefficients are first relit (`ProbeFile::relit`).
+/// file's coefficients are relit (`ProbeFile::relit`): a cloud in place, as
+/// an engine does, so it keeps the blend of its baked light.
 pub fn query(a: &QueryArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let mut file = load_probes(&a.probes)?;
     let scales = parse_group_scales(&a.group_scale)?;
+    let interp = parse_interp(&a.interp)?;
+    let mut probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
     if !scales.is_empty() {
         if file.groups.is_empty() {
             bail!(
@@ -173,13 +176,25 @@ pub fn query(a: &QueryArgs) -> Result<()> {
             );
         }
         let named: Vec<(&str, Vec3)> = scales.iter().map(|(n, s)| (n.as_str(), *s)).collect();
-        file.coefficients = file.relit(&named).with_context(|| {
+        let relit = file.relit(&named).with_context(|| {
             let names: Vec<&str> = file.group_names().collect();
             format!("{name}: --group-scale (groups: {})", names.join(", "))
         })?;
+        match &mut probes {
+            Predictor::Cloud(c) => {
+                let coeffs = relit.to_f32().with_context(|| name.clone())?;
+                let dst = c.coefficients_mut();
+                if dst.len() != coeffs.len() {
+                    bail!("{name}: relit coefficients do not match the cloud's");
+                }
+                dst.copy_from_slice(&coeffs);
+            }
+            _ => {
+                file.coefficients = relit;
+                probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
+            }
+        }
     }
-    let mut probes =
-        Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
     a.visibility.apply(&mut probes)?;
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
@@ -233,7 +248,8 @@ pub struct InspectArgs {
 /// `cell_visibility`: `{"subdivision","cells","stored_cells","planes"}` of
 /// the `CVSP` / `CVIS` section — cells in all, those not clear, which have a
 /// record, and the tetrahedra with an occluder plane (`CPLN`) — or null; `probe_weights`: `{"min","median","max","below_half",
-/// "above_two"}` of the fitted weights (`PWGT`), or null);
+/// "above_two","brightness_exponent"}` of the fitted weights (`PWGT`) and the
+/// brightness exponent they were fitted for, or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -284,6 +300,7 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
                     "max": s[s.len() - 1],
                     "below_half": s.iter().filter(|&&x| x < 0.5).count(),
                     "above_two": s.iter().filter(|&&x| x > 2.0).count(),
+                    "brightness_exponent": file.brightness_exponent,
                 })
             }),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),

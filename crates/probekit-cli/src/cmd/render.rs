@@ -45,9 +45,10 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 1024)]
     pub samples: u32,
     /// Clouds: brightness exponent of the test object's blend, 0 to 4
-    /// (default 0, off; as `query --brightness-weight`).
-    #[arg(long, default_value_t = 0.0)]
-    pub brightness_weight: f32,
+    /// (default: the one stored with the file's probe weights, 0 without;
+    /// as `query --brightness-weight`).
+    #[arg(long)]
+    pub brightness_weight: Option<f32>,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -121,7 +122,9 @@ pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
 
 /// Runs `probekit render`.
 pub fn run(a: &RenderArgs) -> Result<()> {
-    check_brightness_weight(a.brightness_weight)?;
+    if let Some(w) = a.brightness_weight {
+        check_brightness_weight(w)?;
+    }
     let file = load_probes(&a.probes)?;
     let scene = load_scene(&a.scene)?;
     let object = match a.object.as_str() {

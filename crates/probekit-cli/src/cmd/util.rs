@@ -106,10 +106,12 @@ pub struct VisibilityArgs {
     /// at most 16): higher drops partly hidden probes faster.
     #[arg(long)]
     pub visibility_sharpness: Option<u32>,
-    /// Clouds: brightness exponent α, 0 to 4 (default 0, off): each probe's
-    /// weight is divided by its mean irradiance to the power α, so one bright
-    /// probe does not light a dark cell (1: harmonic mean; fewer leaks, a low
-    /// bias next to lights; see `ProbeCloud::set_brightness_weighting`).
+    /// Clouds: brightness exponent α, 0 to 4 (default: the one the file's
+    /// probe weights were fitted with, 0 without them or with
+    /// `--no-probe-weights`): each probe's weight is divided by its mean
+    /// irradiance to the power α, so one bright probe does not light a dark
+    /// cell (1: harmonic mean; fewer leaks, a low bias next to lights; see
+    /// `ProbeCloud::set_brightness_weighting`).
     #[arg(long)]
     pub brightness_weight: Option<f32>,
 }
@@ -163,7 +165,11 @@ impl VisibilityArgs {
                     m.set_sharpness(k);
                 }
             }
-            if let Some(a) = self.brightness_weight {
+            // The file's exponent belongs to its fitted weights.
+            let a = self
+                .brightness_weight
+                .or(self.no_probe_weights.then_some(0.0));
+            if let Some(a) = a {
                 let in_range = c.set_brightness_weighting(a).is_ok();
                 debug_assert!(in_range, "checked by VisibilityArgs::check");
             }

@@ -94,6 +94,10 @@ pub struct ProbeCloud {
     /// Brightness exponent `α` of [`ProbeCloud::set_brightness_weighting`]
     /// (0: off).
     brightness: f32,
+    /// Each probe's `Ē_i` for the brightness weighting: the luminance of
+    /// its DC coefficient as built (relighting through
+    /// [`ProbeCloud::coefficients_mut`] keeps the blend, so it stays linear).
+    luminance: Vec<f32>,
     /// Fitted per-probe blend weights ([`ProbeCloud::set_probe_weights`]).
     probe_weights: Option<Vec<f32>>,
     probe_weights_on: bool,
@@ -113,7 +117,10 @@ impl ProbeCloud {
     /// Builds a cloud from a loaded file: its positions, its `TETS` vertices
     /// and neighbours (via [`TetMesh::new`], which validates them) and its
     /// coefficients decoded to f32 (`order²` per probe), and its distance
-    /// moments (`VISM`) when present, which switch visibility weighting on.
+    /// moments (`VISM`) when present, which switch visibility weighting on,
+    /// its cell visibility and occluder planes (`CVSP`, `CPLN`), and its
+    /// fitted probe weights with the brightness exponent they were fitted
+    /// for (`PWGT`).
     pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
         let mesh = Self::mesh_from_file(file)?;
         let mut cloud = Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)?;
@@ -133,6 +140,7 @@ impl ProbeCloud {
         }
         if let Some(w) = &file.probe_weights {
             cloud.set_probe_weights(Some(w.clone()))?;
+            cloud.set_brightness_weighting(file.brightness_exponent)?;
         }
         Ok(cloud)
     }
@@ -161,10 +169,15 @@ impl ProbeCloud {
             )
             .into());
         }
+        let luminance = coeffs
+            .chunks_exact(n)
+            .map(|c| probekit_sh::LUMINANCE.dot(c[0]))
+            .collect();
         Ok(Self {
             mesh,
             coeffs,
             order,
+            luminance,
             visibility: None,
             visibility_on: true,
             cells: None,
@@ -290,9 +303,12 @@ impl ProbeCloud {
 
     /// Sets the brightness exponent `α` (0, the default, switches it off):
     /// each probe's blend weight is divided by `Ē_i^α`, `Ē_i` the
-    /// luminance of its mean irradiance (its DC coefficient), floored at
-    /// 10⁻³ of the brightest probe of the cell, then the weights are
-    /// renormalized. The blend stays a convex combination of the probes'
+    /// luminance of its mean irradiance (its DC coefficient) as the cloud
+    /// was built — a cloud relit in place ([`ProbeCloud::coefficients_mut`])
+    /// keeps the blend of its baked light, so relighting stays linear —
+    /// floored at 10⁻³ of the brightest probe of the cell, then the weights
+    /// are renormalized. A file's probe weights carry the exponent they were
+    /// fitted for ([`ProbeCloud::from_file`]). The blend stays a convex combination of the probes'
     /// SH, continuous in `p`, and exact for a constant field; at `α = 1`
     /// the blended mean irradiance is the weighted *harmonic* mean of the
     /// probes' `(Σ b_i/Ē_i)⁻¹`, at most `Ē_j / b_j` for every probe `j`: one bright probe
@@ -395,11 +411,7 @@ impl ProbeCloud {
         if self.brightness <= 0.0 {
             return f;
         }
-        let n = self.coeffs_per_probe();
-        let lum = |k: usize| {
-            let c = self.coeffs[probes[k] as usize * n];
-            probekit_sh::LUMINANCE.dot(c)
-        };
+        let lum = |k: usize| self.luminance[probes[k] as usize];
         let e: [f32; 4] = core::array::from_fn(|k| if bary[k] != 0.0 { lum(k) } else { 0.0 });
         let top = e.iter().copied().fold(0.0f32, f32::max);
         if !(top > 0.0 && top.is_finite()) {
@@ -508,7 +520,9 @@ impl ProbeCloud {
 
     /// Every probe's radiance SH (`order²` per probe, probe after probe),
     /// writable: an engine relights a loaded cloud in place with
-    /// [`crate::format::Relighter::relight_into`], no allocation.
+    /// [`crate::format::Relighter::relight_into`], no allocation. The blend
+    /// weights do not change (the brightness weighting keeps the baked
+    /// light's `Ē_i`), so the relit irradiance is linear in the group scales.
     pub fn coefficients_mut(&mut self) -> &mut [Vec3] {
         &mut self.coeffs
     }

@@ -340,6 +340,13 @@ pub struct ProbeFile {
     /// section, every probe weighs 1). See
     /// [`crate::cloud::ProbeCloud::set_probe_weights`].
     pub probe_weights: Option<Vec<f32>>,
+    /// Brightness exponent `α` the probe weights were fitted with and the
+    /// cloud blends with ([`crate::cloud::ProbeCloud::set_brightness_weighting`]),
+    /// stored in `PWGT`'s header word `w1` as `f32` bits (format 1.8; a
+    /// 1.6/1.7 file's zero reads as 0, the plain blend). In
+    /// `0..=`[`crate::cloud::MAX_BRIGHTNESS_EXPONENT`]; non-zero only with
+    /// `probe_weights`.
+    pub brightness_exponent: f32,
     /// Occluder planes of a cloud's tetrahedra (`CPLN`, format 1.7), a
     /// refinement of `cell_visibility` for cells one flat wall cuts; only
     /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
@@ -376,6 +383,7 @@ impl ProbeFile {
             visibility: None,
             cell_visibility: None,
             probe_weights: None,
+            brightness_exponent: 0.0,
             cell_planes: None,
             metadata: String::new(),
         }

@@ -694,15 +694,17 @@ fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatErr
     .ok_or(FormatError::CountOverflow(s.id))
 }
 
-/// `PWGT` (1.6): one little-endian `f32` per probe (range checked by
-/// [`super::validate`]).
-fn parse_probe_weights(s: &Sec<'_>) -> Result<Vec<f32>, FormatError> {
-    let [count, ..] = s.header()?;
+/// `PWGT` (1.6): one little-endian `f32` per probe, and (1.8) the
+/// brightness exponent as `f32` bits in header word `w1` (both range
+/// checked by [`super::validate`]).
+fn parse_probe_weights(s: &Sec<'_>) -> Result<(Vec<f32>, f32), FormatError> {
+    let [count, alpha, ..] = s.header()?;
     let [data] = s.arrays([bytes_for(count, 4)])?;
-    Ok(data
+    let w = data
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
+        .collect();
+    Ok((w, f32::from_bits(alpha)))
 }
 
 /// A `CPLN` section (1.7) as stored, its arrays checked against the section
@@ -832,7 +834,11 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
                     parse_cell_visibility_sparse(&s)?
                 });
             }
-            SectionId::PROBE_WEIGHTS => file.probe_weights = Some(parse_probe_weights(&s)?),
+            SectionId::PROBE_WEIGHTS => {
+                let (w, alpha) = parse_probe_weights(&s)?;
+                file.probe_weights = Some(w);
+                file.brightness_exponent = alpha;
+            }
             SectionId::CELL_PLANES => planes = Some(parse_cell_planes(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {

@@ -432,6 +432,20 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             });
         }
     }
+    // Brightness exponent (1.8): in range, and only beside probe weights
+    // (it is stored in their header).
+    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.brightness_exponent) {
+        return Err(FormatError::InvalidValue {
+            id: SectionId::PROBE_WEIGHTS,
+            element: 0,
+            reason: "brightness exponent (header word w1) outside 0..=4 or not a number",
+        });
+    }
+    if f.brightness_exponent != 0.0 && f.probe_weights.is_none() {
+        return Err(FormatError::Unrepresentable(
+            "a brightness exponent is stored with probe weights (PWGT) only",
+        ));
+    }
 
     // Occluder planes (1.7): a cloud's, refining its cell visibility, one
     // lookup entry per tetrahedron (the planes themselves are checked by

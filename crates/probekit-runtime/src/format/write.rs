@@ -289,7 +289,9 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     }
 
     if let Some(w) = &f.probe_weights {
-        let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, 0, 0, 0]);
+        // -0.0 is written as 0.0 (equal contents, equal bytes).
+        let alpha = (f.brightness_exponent + 0.0).to_bits();
+        let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, alpha, 0, 0]);
         for x in w {
             s.bytes(&x.to_le_bytes());
         }
@@ -335,16 +337,19 @@ impl ProbeFile {
     /// (1), a regular octree, written compactly as `OCTC` (2), distance
     /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
     /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
-    /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7).
+    /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7), or a
+    /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
         let forest = self.octree.as_ref().is_some_and(|o| o.is_forest());
-        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id)).max(if forest {
-            layout::MINOR_FOREST
-        } else {
-            0
-        });
+        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id))
+            .max(if forest { layout::MINOR_FOREST } else { 0 })
+            .max(if self.brightness_exponent != 0.0 {
+                layout::MINOR_BRIGHTNESS
+            } else {
+                0
+            });
         debug_assert!(minor <= VERSION_MINOR);
         Ok(assemble_file(self.kind.id(), minor, 0, &sections))
     }

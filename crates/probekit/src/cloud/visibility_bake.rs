@@ -83,10 +83,15 @@ impl VisibilityBake {
                 }
             }),
             cell_planes: file.cell_planes.is_some(),
+            // A file from before the exponent was fitted records none: it
+            // blends with the one it stores (0).
             probe_weights: file.probe_weights.as_ref().map(|_| {
                 BlendFitSettings::from_json(
                     &meta["settings"]["probe_weights"],
-                    &BlendFitSettings::new(seed),
+                    &BlendFitSettings {
+                        brightness: Some(file.brightness_exponent),
+                        ..BlendFitSettings::new(seed)
+                    },
                 )
             }),
         }
@@ -130,6 +135,7 @@ impl VisibilityBake {
             file.cell_planes = bake_file_cell_planes(tracer, file, cells_progress)?;
         }
         file.probe_weights = None;
+        file.brightness_exponent = 0.0;
         Ok(())
     }
 
@@ -147,15 +153,18 @@ impl VisibilityBake {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(), VisibilityBakeError> {
         file.probe_weights = None;
+        file.brightness_exponent = 0.0;
         if let Some(fit) = &self.probe_weights {
-            file.probe_weights = Some(fit_file_probe_weights(
+            let f = fit_file_probe_weights(
                 baker,
                 file,
                 &baker.scene().bake_box(),
                 capture,
                 fit,
                 progress,
-            )?);
+            )?;
+            file.probe_weights = Some(f.weights);
+            file.brightness_exponent = f.brightness;
         }
         Ok(())
     }

@@ -150,9 +150,10 @@ pub struct RenderSettings {
     /// Diffuse albedo of the test object.
     pub albedo: f32,
     /// Clouds: brightness exponent of the test object's blend
-    /// ([`ProbeCloud::set_brightness_weighting`]; 0, the default, is off).
-    /// Volumes ignore it.
-    pub brightness_weight: f32,
+    /// ([`ProbeCloud::set_brightness_weighting`]; `None`, the default: the
+    /// one the file stores with its probe weights, 0 without). Volumes
+    /// ignore it.
+    pub brightness_weight: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -167,7 +168,7 @@ impl Default for RenderSettings {
             bounces: 3,
             seed: 1,
             albedo: 0.8,
-            brightness_weight: 0.0,
+            brightness_weight: None,
         }
     }
 }
@@ -388,8 +389,8 @@ pub fn render(
         return Err(RenderError::BadSettings("albedo must be ≥ 0".into()));
     }
     let mut source = Source::from_file(file)?;
-    if let Source::Cloud(c) = &mut source {
-        c.set_brightness_weighting(settings.brightness_weight)
+    if let (Source::Cloud(c), Some(a)) = (&mut source, settings.brightness_weight) {
+        c.set_brightness_weighting(a)
             .map_err(|e| RenderError::BadSettings(e.to_string()))?;
     }
     // Walls are shaded without visibility or brightness weighting (module

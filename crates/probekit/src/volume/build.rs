@@ -872,6 +872,7 @@ fn finish(
         visibility: None,
         cell_visibility: None,
         probe_weights: None,
+        brightness_exponent: 0.0,
         cell_planes: None,
         metadata: String::new(),
     };
