@@ -51,7 +51,17 @@
 //! point (the squared error is a quadratic form in the normalized weights).
 //! Sequential and deterministic.
 //!
-//! Measured in BENCHMARKS.md ("Fitted probe weights").
+//! **The brightness exponent** ([`fit_blend`]): the weights can be fitted
+//! for a blend that also divides each probe's weight by its mean
+//! brightness to the power `α` ([`ProbeCloud::set_brightness_weighting`]:
+//! in a cell where one probe sees light the others do not, it counts
+//! less). `probekit bake` fits them for `α` = 0, 0.5 and 1
+//! ([`BRIGHTNESS_CHOICES`]) and keeps the exponent whose fits predict
+//! held-out training points best under the same objective (two-fold
+//! cross-validation), and stores it with the weights.
+//!
+//! Measured in BENCHMARKS.md ("Fitted probe weights", "The brightness
+//! exponent, fitted with the probe weights").
 
 use crate::bake::sampling::SampleRng;
 use crate::bake::{BakeError, Baker, CaptureSettings};
@@ -310,6 +320,7 @@ pub fn capture_training_set(
 /// weights without probe weights (normalized), and the Gram matrix of the
 /// probes' irradiance errors `G_kl = ⟨C_k − E, C_l − E⟩` (band-weighted SH
 /// inner product), divided by the point's squared relative-error scale.
+#[derive(Clone)]
 struct Row {
     probes: [u32; 4],
     w: [f32; 4],
@@ -400,22 +411,31 @@ pub struct FittedBlend {
     pub objective: f64,
 }
 
+/// Most an exponent may raise the held-out absolute error (what `rel_rmse`
+/// measures) over the lowest of the candidates' and still be chosen by
+/// [`fit_blend`]: 1 %.
+pub const BRIGHTNESS_ABSOLUTE_TOLERANCE: f64 = 0.01;
+
 /// Chooses the brightness exponent `α` from `exponents` (each in
 /// `0..=`[`probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT`]) by two-fold
 /// cross-validation, then fits probe weights for it on all training points.
 /// For each `α`, weights are fitted on the even-numbered training points and
-/// scored (the mean scaled squared error of the module docs' objective) on
-/// the odd-numbered ones, and the other way round; the lowest summed score
-/// wins (ties: the first). Held-out scores, not the fit's own objective: a
-/// blend with more freedom to fit the training points (the harmonic one can
-/// pull a cell's value far from its probes' mean) would otherwise be chosen
-/// for fitting them, not for predicting the points between them. The score
-/// is the same for every exponent, so the choice is the blend that predicts
-/// path-traced points best, not a rule: a scene whose leaks are a bright
-/// probe in a dark cell (a doorway probe beside a closet) gets `α > 0`, one
-/// whose error is the gradient next to a light keeps the plain blend. With
-/// one exponent, no cross-validation. `cloud`'s own exponent and probe
-/// weights are ignored. Errors as [`fit_probe_weights`], and
+/// scored on the odd-numbered ones, and the other way round, twice: by the
+/// module docs' objective (relative plus `β` times absolute squared error)
+/// and by the absolute squared error alone (relative to the mean squared
+/// irradiance: what `rel_rmse` measures). Of the exponents whose absolute
+/// score is within [`BRIGHTNESS_ABSOLUTE_TOLERANCE`] of the lowest, the one
+/// with the lowest objective score wins (ties: the first). Held-out scores,
+/// not the fit's own objective: the harmonic blend, with more freedom to fit
+/// the training points, would otherwise be chosen for fitting them rather
+/// than for predicting the points between them. And the tolerance because
+/// the objective's relative term can favour an exponent that fixes dark
+/// points (leaks) at the cost of the bright ones: measured, on the demo the
+/// exponents' absolute scores are within 0.5 % and the objective halves the
+/// closet leaks with `α` = 1; in the Cornell box `α` = 1 lowers the
+/// objective by 1–4 % and raises `rel_rmse` by 1–3 %, which the tolerance
+/// refuses. With one exponent, no cross-validation. `cloud`'s own exponent
+/// and probe weights are ignored. Errors as [`fit_probe_weights`], and
 /// [`BlendFitError::Settings`] on an empty list or an exponent out of range.
 /// Deterministic.
 pub fn fit_blend(
@@ -442,27 +462,37 @@ pub fn fit_blend(
     };
     let mut chosen = (exponents[0], f64::NAN);
     if exponents.len() > 1 && training.positions.len() >= 2 {
-        let mut best = f64::INFINITY;
+        let n = training.positions.len() as f64;
+        // (objective score, absolute score) per exponent.
+        let mut scores = Vec::with_capacity(exponents.len());
         for &alpha in exponents {
-            let all = rows(&with(alpha)?, training, beta);
-            let (even, odd): (Vec<_>, Vec<_>) =
-                all.into_iter().enumerate().partition(|(j, _)| j % 2 == 0);
-            let even: Vec<Row> = even.into_iter().map(|x| x.1).collect();
-            let odd: Vec<Row> = odd.into_iter().map(|x| x.1).collect();
-            let score = |fit_on: &[Row], score_on: &[Row]| {
-                let s: Vec<f64> = descend(fit_on, nprobes, rho)
+            let c = with(alpha)?;
+            let objective = rows(&c, training, Some(beta));
+            let absolute = rows(&c, training, None);
+            let fold = |k: usize| -> Vec<f64> {
+                let part: Vec<Row> = objective.iter().skip(k).step_by(2).cloned().collect();
+                descend(&part, nprobes, rho)
                     .iter()
                     .map(|&x| (x as f64).exp())
-                    .collect();
-                score_on
-                    .iter()
-                    .map(|r| r.error(factors(r, &s)))
-                    .sum::<f64>()
+                    .collect()
             };
-            let cv = (score(&even, &odd) + score(&odd, &even)) / training.positions.len() as f64;
-            if cv < best {
-                best = cv;
-                chosen = (alpha, cv);
+            let (even, odd) = (fold(0), fold(1));
+            // Weights fitted on one fold score the other.
+            let held_out = |rows: &[Row]| {
+                rows.iter()
+                    .enumerate()
+                    .map(|(j, r)| r.error(factors(r, if j % 2 == 0 { &odd } else { &even })))
+                    .sum::<f64>()
+                    / n
+            };
+            scores.push((held_out(&objective), held_out(&absolute)));
+        }
+        let lowest = scores.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
+        for (&alpha, &(obj, abs)) in exponents.iter().zip(&scores) {
+            if abs <= lowest * (1.0 + BRIGHTNESS_ABSOLUTE_TOLERANCE)
+                && (chosen.1.is_nan() || obj < chosen.1)
+            {
+                chosen = (alpha, obj);
             }
         }
     } else {
@@ -486,7 +516,7 @@ fn fit_weights(cloud: &ProbeCloud, training: &TrainingSet, fit: &BlendFitSetting
             objective: 0.0,
         };
     }
-    let rows = rows(cloud, training, fit.absolute_weight as f64);
+    let rows = rows(cloud, training, Some(fit.absolute_weight as f64));
     let rho = fit.regularization as f64;
     let t = descend(&rows, nprobes, rho);
     let s: Vec<f64> = t.iter().map(|&x| (x as f64).exp()).collect();
@@ -501,8 +531,9 @@ fn fit_weights(cloud: &ProbeCloud, training: &TrainingSet, fit: &BlendFitSetting
 
 /// The training points as [`Row`]s of `cloud`'s plain blend (probe weights
 /// off), each point's Gram matrix scaled by its relative-error scale plus
-/// `beta` over the mean squared irradiance (see the module docs).
-fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> Vec<Row> {
+/// `beta` over the mean squared irradiance (see the module docs), or with
+/// `None` by the inverse mean squared irradiance alone (the absolute error).
+fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: Option<f64>) -> Vec<Row> {
     let n = cloud.coeffs_per_probe();
     let mut plain = cloud.clone();
     plain.set_probe_weighting(false);
@@ -535,7 +566,10 @@ fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> Vec<Row> {
     for (j, p) in training.positions.iter().enumerate() {
         let (probes, w) = plain.weights_at(*p, &mut ws);
         let e = truth(j);
-        let scale = 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square;
+        let scale = match beta {
+            Some(beta) => 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square,
+            None => 1.0 / mean_square,
+        };
         let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
             if w[k] > 0.0 {
                 let c = plain.probe_sh(probes[k] as usize);
@@ -712,18 +746,7 @@ mod tests {
     /// field `truth`: the RMS over 200 Fibonacci-sphere normals of the
     /// irradiance difference, over the RMS of the true irradiance.
     fn sphere_rel_error(cloud: &ProbeCloud, p: Vec3, truth: &ShRgb) -> f32 {
-        let mut ws = WalkState::new();
-        let (mut se, mut st) = (0.0f64, 0.0f64);
-        let n = 200;
-        for i in 0..n {
-            let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
-            let r = (1.0 - z * z).sqrt();
-            let phi = i as f32 * 2.399_963;
-            let d = Vec3::new(r * phi.cos(), z, r * phi.sin());
-            let t = truth.irradiance(d);
-            se += (cloud.irradiance(p, d, &mut ws) - t).length_squared() as f64;
-            st += t.length_squared() as f64;
-        }
+        let (se, st) = sphere_errors(cloud, p, truth);
         (se / st).sqrt() as f32
     }
 
@@ -863,19 +886,26 @@ mod tests {
         (se / n as f64, st / n as f64)
     }
 
-    /// The exponent is chosen by the data: where the field is linear in
-    /// space (what barycentric blending reproduces exactly) the plain blend
-    /// wins; where a ramp of bright probes meets a dark region between two
-    /// probe layers (a lit corridor beside a closet: the bright layer's
-    /// probes are right in the ramp's cells and wrong in the next, so no
-    /// probe weight fixes both) an exponent > 0 wins. Each choice is
-    /// checked against an independent measure of the module's objective:
-    /// relative and absolute squared errors integrated over 200 normals
-    /// at fresh points (not the fit's Gram matrices), for every exponent
-    /// refitted — the chosen one is the lowest.
+    /// The exponent is chosen by the data, and checked against an
+    /// independent measure of both criteria (relative-plus-absolute and
+    /// absolute squared errors integrated over 200 normals at fresh points,
+    /// not the fit's Gram matrices), for every exponent refitted:
+    /// * a field linear in space (what barycentric blending reproduces
+    ///   exactly) keeps the plain blend;
+    /// * one outlier probe 50× brighter than the constant field around it
+    ///   (a doorway probe seeing light the cell does not), weights held at 1
+    ///   by a huge `ρ`, gets an exponent > 0: lower error on both criteria;
+    /// * a bright ramp meeting a dark region between two probe layers, weights
+    ///   held at 1: an exponent > 0 lowers the relative error of the dark
+    ///   points, but raises the absolute one far beyond the tolerance, so
+    ///   the plain blend is kept.
+    ///
+    /// In each case the choice is the one the rule makes on the measured
+    /// errors.
     #[test]
     fn fit_blend_chooses_the_exponent_the_data_asks_for() {
         let linear = |p: Vec3| lobed(1.0 + 2.0 * p.x, 0.5 + 0.25 * p.y);
+        let constant = |_: Vec3| lobed(1.0, 0.4);
         let ramp_then_dark = |p: Vec3| {
             if p.x < 1.5 {
                 lobed(10.0 + 40.0 * p.x, 4.0 + 16.0 * p.x)
@@ -884,14 +914,22 @@ mod tests {
             }
         };
         let mut g = Lcg::new(5);
-        // The step's rows are fitted with weights held at 1 (a huge ρ): 64
-        // free weights on 300 points per fold overfit this toy, and the
-        // exponent is what is tested.
-        for (name, field, rho, plain_wins) in [
-            ("linear", &linear as &dyn Fn(Vec3) -> ShRgb, 1e-5, true),
-            ("ramp then dark", &ramp_then_dark, 1e9, false),
-        ] {
-            let cloud = field_cloud(field);
+        type Field<'a> = &'a dyn Fn(Vec3) -> ShRgb;
+        let cases: [(&str, Field, Option<usize>, f32, bool); 3] = [
+            ("linear", &linear, None, 1e-5, true),
+            ("outlier", &constant, Some(21), 1e9, false),
+            ("ramp then dark", &ramp_then_dark, None, 1e9, true),
+        ];
+        for (name, field, outlier, rho, plain_wins) in cases {
+            let mut cloud = field_cloud(field);
+            if let Some(i) = outlier {
+                let n = cloud.coeffs_per_probe();
+                for c in &mut cloud.coefficients_mut()[i * n..(i + 1) * n] {
+                    *c *= 50.0;
+                }
+                cloud = ProbeCloud::new(cloud.mesh().clone(), 3, cloud.coefficients_mut().to_vec())
+                    .unwrap();
+            }
             let pts: Vec<Vec3> = (0..600).map(|_| g.v(0.05, 2.95)).collect();
             let training = TrainingSet {
                 sh: pts.iter().map(|&p| field(p)).collect(),
@@ -916,21 +954,30 @@ mod tests {
                 let k = e.len() as f64;
                 let mean = e.iter().map(|x| x.1.sqrt()).sum::<f64>() / k;
                 let mean_square = e.iter().map(|x| x.1).sum::<f64>() / k;
-                e.iter()
+                let objective = e
+                    .iter()
                     .map(|&(se, st)| {
                         se / (st.sqrt() + 0.01 * mean).powi(2) + beta * se / mean_square
                     })
                     .sum::<f64>()
-                    / k
+                    / k;
+                let absolute = e.iter().map(|x| x.0).sum::<f64>() / k / mean_square;
+                (objective, absolute)
             };
-            let errors = BRIGHTNESS_CHOICES.map(measured);
-            let best = (0..errors.len())
-                .min_by(|&a, &b| errors[a].total_cmp(&errors[b]))
+            let m = BRIGHTNESS_CHOICES.map(measured);
+            let lowest = m.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+            let rule = (0..m.len())
+                .filter(|&i| m[i].1 <= lowest * (1.0 + BRIGHTNESS_ABSOLUTE_TOLERANCE))
+                .min_by(|&a, &b| m[a].0.total_cmp(&m[b].0))
                 .unwrap();
             assert_eq!(
-                BRIGHTNESS_CHOICES[best], chosen.brightness,
-                "{name}: measured {errors:?}"
+                BRIGHTNESS_CHOICES[rule], chosen.brightness,
+                "{name}: measured (objective, absolute) {m:?}"
             );
+            if name == "ramp then dark" {
+                // The objective alone would have taken an exponent > 0.
+                assert!(m[2].0 < m[0].0 && m[2].1 > 1.1 * m[0].1, "{m:?}");
+            }
         }
         // Bad input: no exponent, or one out of range.
         let cloud = outlier_cloud(3);
