@@ -6,7 +6,8 @@
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
-//!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness A]] [--seeds 1,2,3] [--seed S]
+//!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--normal-brightness A]]
+//!     [--seeds 1,2,3] [--seed S]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -31,7 +32,14 @@
 //! planes `CPLN` unless `--no-cell-planes`) — as
 //! `probekit eval` does on such a file.
 //! `--brightness A` (with `--visibility`): and with brightness weighting
-//! `A` (`probekit eval --brightness-weight A`).
+//! `A` (`probekit eval --brightness-weight A`), the weights fitted for it;
+//! `auto`: the exponent the fit chooses (`probekit bake`'s default), printed.
+//! `--normal-brightness A` (with `--visibility`; an experiment, not a
+//! run-time feature): after the blend, each probe's weight is divided by
+//! its own irradiance *for the point's normal* to the power `A` (luminance,
+//! floored at 10⁻³ of the cell's brightest) and the probes' irradiances are
+//! blended with the renormalized weights — a per-normal harmonic-style
+//! blend, no longer one SH per point.
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and the points. Prints one line
@@ -83,6 +91,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     };
     let visibility = args.iter().any(|a| a == "--visibility");
     // `auto`: the exponent the weight fit chooses (`probekit bake`'s default).
+    let normal_brightness: Option<f32> = args
+        .iter()
+        .any(|a| a == "--normal-brightness")
+        .then(|| arg(&args, "--normal-brightness", 0.0));
     let brightness_arg: String = arg(&args, "--brightness", "0".to_string());
     let brightness: Option<f32> = match brightness_arg.as_str() {
         "auto" => None,
@@ -163,7 +175,10 @@ fn main() -> Result<(), Box<dyn Error>> {
                 *diag.borrow_mut() = Some(cloud.clone());
             }
             pts.iter()
-                .map(|p| cloud.irradiance(p.position, p.normal, &mut ws))
+                .map(|p| match normal_brightness {
+                    Some(a) => per_normal_blend(&cloud, p.position, p.normal, a, &mut ws),
+                    None => cloud.irradiance(p.position, p.normal, &mut ws),
+                })
                 .collect()
         } else {
             interpolate_cloud(&mesh, &sh, &pts)
@@ -256,4 +271,36 @@ fn main() -> Result<(), Box<dyn Error>> {
         eval("adaptive", &a.positions)?;
     }
     Ok(())
+}
+
+/// `--normal-brightness`: the cloud's blend weights at `p`, each divided by
+/// the luminance of its probe's irradiance for `normal` to the power `a`
+/// (floored at 10⁻³ of the cell's brightest), renormalized, blending the
+/// probes' irradiances for `normal`.
+fn per_normal_blend(cloud: &ProbeCloud, p: Vec3, normal: Vec3, a: f32, ws: &mut WalkState) -> Vec3 {
+    let (idx, w) = cloud.weights_at(p, ws);
+    let e: [Vec3; 4] = std::array::from_fn(|k| {
+        if w[k] > 0.0 {
+            ShRgb::from_coeffs(cloud.probe_sh(idx[k] as usize).to_vec())
+                .map_or(Vec3::ZERO, |s| s.irradiance(normal))
+        } else {
+            Vec3::ZERO
+        }
+    });
+    let lum = |v: Vec3| probekit_sh::LUMINANCE.dot(v).max(0.0);
+    let top = (0..4)
+        .filter(|&k| w[k] > 0.0)
+        .map(|k| lum(e[k]))
+        .fold(0.0f32, f32::max);
+    let (mut sum, mut out) = (0.0f32, Vec3::ZERO);
+    for k in (0..4).filter(|&k| w[k] > 0.0) {
+        let f = w[k] * lum(e[k]).max(1e-3 * top).max(1e-30).powf(-a);
+        sum += f;
+        out += f * e[k];
+    }
+    if sum > 0.0 {
+        out / sum
+    } else {
+        cloud.irradiance(p, normal, ws)
+    }
 }
