@@ -281,8 +281,7 @@ fn per_normal_blend(cloud: &ProbeCloud, p: Vec3, normal: Vec3, a: f32, ws: &mut 
     let (idx, w) = cloud.weights_at(p, ws);
     let e: [Vec3; 4] = std::array::from_fn(|k| {
         if w[k] > 0.0 {
-            ShRgb::from_coeffs(cloud.probe_sh(idx[k] as usize).to_vec())
-                .map_or(Vec3::ZERO, |s| s.irradiance(normal))
+            probekit_sh::convolve::irradiance(cloud.probe_sh(idx[k] as usize), normal)
         } else {
             Vec3::ZERO
         }

@@ -168,7 +168,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
     let mut file = load_probes(&a.probes)?;
     let scales = parse_group_scales(&a.group_scale)?;
     let interp = parse_interp(&a.interp)?;
-    let mut probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
+    let mut relit = None;
     if !scales.is_empty() {
         if file.groups.is_empty() {
             bail!(
@@ -176,24 +176,26 @@ pub fn query(a: &QueryArgs) -> Result<()> {
             );
         }
         let named: Vec<(&str, Vec3)> = scales.iter().map(|(n, s)| (n.as_str(), *s)).collect();
-        let relit = file.relit(&named).with_context(|| {
+        relit = Some(file.relit(&named).with_context(|| {
             let names: Vec<&str> = file.group_names().collect();
             format!("{name}: --group-scale (groups: {})", names.join(", "))
-        })?;
-        match &mut probes {
-            Predictor::Cloud(c) => {
-                let coeffs = relit.to_f32().with_context(|| name.clone())?;
-                let dst = c.coefficients_mut();
-                if dst.len() != coeffs.len() {
-                    bail!("{name}: relit coefficients do not match the cloud's");
-                }
-                dst.copy_from_slice(&coeffs);
-            }
-            _ => {
-                file.coefficients = relit;
-                probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
-            }
+        })?);
+    }
+    // A volume loads the relit coefficients; a cloud (what `Predictor`
+    // builds from a file with tetrahedra) is relit in place after loading.
+    if file.tetrahedra.is_none() {
+        if let Some(r) = relit.take() {
+            file.coefficients = r;
         }
+    }
+    let mut probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
+    if let (Some(r), Predictor::Cloud(c)) = (relit, &mut probes) {
+        let coeffs = r.to_f32().with_context(|| name.clone())?;
+        let dst = c.coefficients_mut();
+        if dst.len() != coeffs.len() {
+            bail!("{name}: relit coefficients do not match the cloud's");
+        }
+        dst.copy_from_slice(&coeffs);
     }
     a.visibility.apply(&mut probes)?;
     let mut st = WalkState::new();

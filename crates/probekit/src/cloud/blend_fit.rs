@@ -452,60 +452,61 @@ pub fn fit_blend(
             "no brightness exponent to choose from",
         ));
     }
+    if exponents
+        .iter()
+        .any(|a| !(0.0..=MAX_BRIGHTNESS_EXPONENT).contains(a))
+    {
+        return Err(BlendFitError::Settings(
+            "brightness exponent must lie in 0 to 4",
+        ));
+    }
     check(cloud, training, fit)?;
+    let with = |alpha: f32| -> Result<ProbeCloud, BlendFitError> {
+        let mut c = cloud.clone();
+        c.set_brightness_weighting(alpha)?;
+        Ok(c)
+    };
+    if exponents.len() == 1 || training.positions.len() < 2 {
+        return Ok(fit_weights(&with(exponents[0])?, training, fit));
+    }
     let beta = fit.absolute_weight as f64;
     let rho = fit.regularization as f64;
     let nprobes = cloud.probe_count();
-    let with = |alpha: f32| -> Result<ProbeCloud, BlendFitError> {
-        let mut c = cloud.clone();
-        c.set_probe_weights(None)?;
-        c.set_brightness_weighting(alpha)
-            .map_err(|_| BlendFitError::Settings("brightness exponent must lie in 0 to 4"))?;
-        Ok(c)
-    };
-    let mut chosen = (exponents[0], f64::NAN);
-    if exponents.len() > 1 && training.positions.len() >= 2 {
-        let n = training.positions.len() as f64;
-        // (objective score, absolute score) per exponent.
-        let mut scores = Vec::with_capacity(exponents.len());
-        for &alpha in exponents {
-            let c = with(alpha)?;
-            let objective = rows(&c, training, Some(beta));
-            let absolute = rows(&c, training, None);
-            let fold = |k: usize| -> Vec<f64> {
-                let part: Vec<Row> = objective.iter().skip(k).step_by(2).cloned().collect();
-                descend(&part, nprobes, rho)
-                    .iter()
-                    .map(|&x| (x as f64).exp())
-                    .collect()
-            };
-            let (even, odd) = (fold(0), fold(1));
-            // Weights fitted on one fold score the other.
-            let held_out = |rows: &[Row]| {
-                rows.iter()
-                    .enumerate()
-                    .map(|(j, r)| r.error(factors(r, if j % 2 == 0 { &odd } else { &even })))
-                    .sum::<f64>()
-                    / n
-            };
-            scores.push((held_out(&objective), held_out(&absolute)));
+    let n = training.positions.len() as f64;
+    // Per exponent: its rows, held-out objective score, held-out absolute score.
+    let mut candidates = Vec::with_capacity(exponents.len());
+    for &alpha in exponents {
+        let (rows, to_absolute) = rows(&with(alpha)?, training, beta);
+        let fold = |k: usize| -> Vec<f64> {
+            let part: Vec<Row> = rows.iter().skip(k).step_by(2).cloned().collect();
+            descend(&part, nprobes, rho)
+                .iter()
+                .map(|&x| (x as f64).exp())
+                .collect()
+        };
+        let (even, odd) = (fold(0), fold(1));
+        // Weights fitted on one fold score the other; a row's error is
+        // linear in its Gram matrix, so the absolute score rescales it.
+        let (mut objective, mut absolute) = (0.0, 0.0);
+        for (j, r) in rows.iter().enumerate() {
+            let e = r.error(factors(r, if j % 2 == 0 { &odd } else { &even }));
+            objective += e;
+            absolute += e * to_absolute[j];
         }
-        let lowest = scores.iter().map(|s| s.1).fold(f64::INFINITY, f64::min);
-        for (&alpha, &(obj, abs)) in exponents.iter().zip(&scores) {
-            if abs <= lowest * (1.0 + BRIGHTNESS_ABSOLUTE_TOLERANCE)
-                && (chosen.1.is_nan() || obj < chosen.1)
-            {
-                chosen = (alpha, obj);
-            }
-        }
-    } else {
-        with(exponents[0])?;
+        candidates.push((rows, objective / n, absolute / n));
     }
-    let mut f = fit_weights(&with(chosen.0)?, training, fit);
-    if !chosen.1.is_nan() {
-        f.objective = chosen.1;
-    }
-    Ok(f)
+    let lowest = candidates.iter().map(|c| c.2).fold(f64::INFINITY, f64::min);
+    let best = (0..candidates.len())
+        .filter(|&i| candidates[i].2 <= lowest * (1.0 + BRIGHTNESS_ABSOLUTE_TOLERANCE))
+        .min_by(|&a, &b| candidates[a].1.total_cmp(&candidates[b].1))
+        .unwrap_or(0);
+    let (rows, score, _) = candidates.swap_remove(best);
+    let (t, _) = solve(&rows, nprobes, rho);
+    Ok(FittedBlend {
+        weights: t.iter().map(|&x| x.exp()).collect(),
+        brightness: exponents[best],
+        objective: score,
+    })
 }
 
 /// [`fit_probe_weights`] after validation, with the objective, for the
@@ -519,12 +520,8 @@ fn fit_weights(cloud: &ProbeCloud, training: &TrainingSet, fit: &BlendFitSetting
             objective: 0.0,
         };
     }
-    let rows = rows(cloud, training, Some(fit.absolute_weight as f64));
-    let rho = fit.regularization as f64;
-    let t = descend(&rows, nprobes, rho);
-    let s: Vec<f64> = t.iter().map(|&x| (x as f64).exp()).collect();
-    let objective = rows.iter().map(|r| r.error(factors(r, &s))).sum::<f64>() / rows.len() as f64
-        + rho * t.iter().map(|&x| (x as f64).powi(2)).sum::<f64>();
+    let (rows, _) = rows(cloud, training, fit.absolute_weight as f64);
+    let (t, objective) = solve(&rows, nprobes, fit.regularization as f64);
     FittedBlend {
         weights: t.iter().map(|&x| x.exp()).collect(),
         brightness: cloud.brightness_weighting(),
@@ -532,11 +529,22 @@ fn fit_weights(cloud: &ProbeCloud, training: &TrainingSet, fit: &BlendFitSetting
     }
 }
 
+/// [`descend`] on `rows`, with the objective `J` at its result: the rows'
+/// mean error plus `rho Σ t_i²`.
+fn solve(rows: &[Row], nprobes: usize, rho: f64) -> (Vec<f32>, f64) {
+    let t = descend(rows, nprobes, rho);
+    let s: Vec<f64> = t.iter().map(|&x| (x as f64).exp()).collect();
+    let objective = rows.iter().map(|r| r.error(factors(r, &s))).sum::<f64>() / rows.len() as f64
+        + rho * t.iter().map(|&x| (x as f64).powi(2)).sum::<f64>();
+    (t, objective)
+}
+
 /// The training points as [`Row`]s of `cloud`'s plain blend (probe weights
 /// off), each point's Gram matrix scaled by its relative-error scale plus
-/// `beta` over the mean squared irradiance (see the module docs), or with
-/// `None` by the inverse mean squared irradiance alone (the absolute error).
-fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: Option<f64>) -> Vec<Row> {
+/// `beta` over the mean squared irradiance (see the module docs); and per
+/// row, the factor that turns its error into the absolute error alone (the
+/// inverse mean squared irradiance over the row's scale).
+fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Vec<Row>, Vec<f64>) {
     let n = cloud.coeffs_per_probe();
     let mut plain = cloud.clone();
     plain.set_probe_weighting(false);
@@ -566,13 +574,12 @@ fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: Option<f64>) -> Vec<Ro
     let floor = 0.01 * mean;
     let mut ws = WalkState::new();
     let mut rows = Vec::with_capacity(training.positions.len());
+    let mut to_absolute = Vec::with_capacity(training.positions.len());
     for (j, p) in training.positions.iter().enumerate() {
         let (probes, w) = plain.weights_at(*p, &mut ws);
         let e = truth(j);
-        let scale = match beta {
-            Some(beta) => 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square,
-            None => 1.0 / mean_square,
-        };
+        let scale = 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square;
+        to_absolute.push(1.0 / mean_square / scale);
         let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
             if w[k] > 0.0 {
                 let c = plain.probe_sh(probes[k] as usize);
@@ -599,7 +606,7 @@ fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: Option<f64>) -> Vec<Ro
         }
         rows.push(Row { probes, w, g });
     }
-    rows
+    (rows, to_absolute)
 }
 
 /// Per-slot factors of `r` for probe weights `s`.
@@ -859,14 +866,18 @@ mod tests {
     }
 
     /// The lattice of [`outlier_cloud`] holding `field(position)` at each
-    /// probe.
-    fn field_cloud(field: &dyn Fn(Vec3) -> ShRgb) -> ProbeCloud {
+    /// probe, 50× that at probe `outlier`.
+    fn field_cloud(field: &dyn Fn(Vec3) -> ShRgb, outlier: Option<usize>) -> ProbeCloud {
         let c = outlier_cloud(0);
         let coeffs = c
             .mesh()
             .positions()
             .iter()
-            .flat_map(|&p| field(p).coeffs().to_vec())
+            .enumerate()
+            .flat_map(|(i, &p)| {
+                let k = if Some(i) == outlier { 50.0 } else { 1.0 };
+                field(p).coeffs().iter().map(|&x| x * k).collect::<Vec<_>>()
+            })
             .collect();
         ProbeCloud::new(c.mesh().clone(), 3, coeffs).unwrap()
     }
@@ -924,15 +935,7 @@ mod tests {
             ("ramp then dark", &ramp_then_dark, None, 1e9, true),
         ];
         for (name, field, outlier, rho, plain_wins) in cases {
-            let mut cloud = field_cloud(field);
-            if let Some(i) = outlier {
-                let n = cloud.coeffs_per_probe();
-                for c in &mut cloud.coefficients_mut()[i * n..(i + 1) * n] {
-                    *c *= 50.0;
-                }
-                cloud = ProbeCloud::new(cloud.mesh().clone(), 3, cloud.coefficients_mut().to_vec())
-                    .unwrap();
-            }
+            let cloud = field_cloud(field, outlier);
             let pts: Vec<Vec3> = (0..600).map(|_| g.v(0.05, 2.95)).collect();
             let training = TrainingSet {
                 sh: pts.iter().map(|&p| field(p)).collect(),
