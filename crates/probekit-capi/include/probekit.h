@@ -164,8 +164,10 @@ PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
  * and their weights (sum 1, unused slots 0) into out_weights[4]; barycentric
  * times each probe's visibility (VISM, CVSP refined by CPLN) and fitted weight
  * (PWGT) when the file stores them, renormalized. The
- * weights the shaders' pk_blend_l1 / pk_blend_l2 take. PK_ERR_WRONG_KIND if the
- * handle is not a cloud. */
+ * weights the shaders' pk_blend_l1 / pk_blend_l2 take; a file whose PWGT
+ * stores a directional brightness exponent (format 1.9) blends per direction
+ * in pk_sh, which a 4-probe blend with these weights does not reproduce: use
+ * pk_sh per object there. PK_ERR_WRONG_KIND if the handle is not a cloud. */
 PkStatus pk_cloud_weights(const PkProbes *probes, PkWalkState *state,
                           const float *position, uint32_t *out_indices,
                           float *out_weights);

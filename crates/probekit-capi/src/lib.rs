@@ -669,7 +669,10 @@ pub unsafe extern "C" fn pk_sh_many(
 /// refined by the occluder planes of `CPLN`) and its fitted weight
 /// (`PWGT`), renormalized. These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
-/// probes equals [`pk_sh`]. Not a cloud: [`PkStatus::WrongKind`]. `state`
+/// probes equals [`pk_sh`] — except for a file whose `PWGT` stores a
+/// directional brightness exponent (format 1.9): [`pk_sh`] then blends per
+/// direction (`ProbeCloud::set_directional_brightness`), which four weights
+/// cannot express, so use [`pk_sh`] per object. Not a cloud: [`PkStatus::WrongKind`]. `state`
 /// as in [`pk_irradiance`]. No allocation.
 #[no_mangle]
 pub unsafe extern "C" fn pk_cloud_weights(

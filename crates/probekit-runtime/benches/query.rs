@@ -5,7 +5,8 @@
 //! and batched queries outside the hull (closest-hull-point outer cells);
 //! and the cost of visibility weighting (`cloud_visibility`: distance
 //! moments, cell visibility, both, and both with fitted probe weights; cell
-//! visibility with occluder planes).
+//! visibility with occluder planes; everything with the brightness
+//! exponent, then with directional brightness on top).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -231,6 +232,16 @@ fn visibility(c: &mut Criterion) {
     cloud.set_probe_weighting(false);
     cloud.set_cell_planes(Some(planes)).unwrap();
     g.bench_function("irradiance_cells_and_planes", |b| b.iter(|| walk(&cloud)));
+    // What `probekit bake` stores by default: everything on, brightness
+    // exponent 1, then with directional brightness 0.25 on top.
+    cloud.set_visibility(true);
+    cloud.set_probe_weighting(true);
+    cloud.set_brightness_weighting(1.0).unwrap();
+    g.bench_function("irradiance_all_brightness", |b| b.iter(|| walk(&cloud)));
+    cloud.set_directional_brightness(0.25).unwrap();
+    g.bench_function("irradiance_all_brightness_directional", |b| {
+        b.iter(|| walk(&cloud))
+    });
     g.finish();
 }
 

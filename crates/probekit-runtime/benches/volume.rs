@@ -45,6 +45,7 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
         cell_visibility: None,
         probe_weights: None,
         brightness_exponent: 0.0,
+        directional_exponent: 0.0,
         cell_planes: None,
         metadata: String::new(),
     }

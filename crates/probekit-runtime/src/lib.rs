@@ -49,6 +49,15 @@ mod math {
         return libm::floorf(x);
     }
 
+    /// `x.sqrt()`.
+    #[inline]
+    pub(crate) fn sqrt(x: f32) -> f32 {
+        #[cfg(feature = "std")]
+        return x.sqrt();
+        #[cfg(not(feature = "std"))]
+        return libm::sqrtf(x);
+    }
+
     /// `x.cbrt()`.
     #[inline]
     pub(crate) fn cbrt(x: f32) -> f32 {

@@ -124,7 +124,7 @@ fn files_without_cell_planes_keep_their_minor_version() {
     assert_eq!(minor_of(&cvis_file().to_bytes().unwrap()), 5);
     assert_eq!(minor_of(&weights_file().to_bytes().unwrap()), 6);
     assert!(minor_of(&full_file().to_bytes().unwrap()) < 4);
-    assert_eq!(layout::VERSION_MINOR, 8);
+    assert_eq!(layout::VERSION_MINOR, 9);
     assert_eq!(layout::minor_for_sections([ID]), 7);
 }
 
@@ -391,7 +391,7 @@ fn cell_planes_need_a_cloud_with_cell_visibility() {
 #[test]
 fn a_reader_skips_unknown_sections_of_newer_minors_only() {
     // A CPLN-bearing file is a 1.7 file; an unknown id next to it is
-    // refused at this reader's minor (1.8) and skipped at 1.9.
+    // refused at this reader's minor (1.9) and skipped at 1.10.
     let good = planes_file().to_bytes().unwrap();
     let mut sections = sections_of(&good);
     sections.insert(

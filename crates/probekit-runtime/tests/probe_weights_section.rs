@@ -1,4 +1,4 @@
-//! Fitted probe weights: `PWGT` (format 1.6; its brightness exponent, 1.8) round trips at minor 6 with the
+//! Fitted probe weights: `PWGT` (format 1.6; its brightness exponent, 1.8; its directional one, 1.9) round trips at minor 6 with the
 //! bytes of the documented layout, reaches [`ProbeCloud`], and hostile
 //! sections (out-of-range or non-finite weights, wrong counts, a non-cloud
 //! file, truncation, byte mutations) are refused with typed errors, never a
@@ -131,30 +131,84 @@ fn the_brightness_exponent_rides_in_pwgt_w1_at_minor_8() {
     assert_eq!(plain.brightness_weighting(), 0.0);
 }
 
-/// An exponent out of range or not a number, in a file or handed to the
-/// writer, is a typed error; so is one without probe weights to carry it.
+/// An exponent (brightness in `w1`, directional in `w2`) out of range or
+/// not a number, in a file or handed to the writer, is a typed error; so is
+/// one without probe weights to carry it.
 #[test]
 fn bad_brightness_exponents_are_typed_errors() {
     let good = weights_file().to_bytes().unwrap();
     let (off, _) = find_section(&good, SectionId::PROBE_WEIGHTS);
-    for bad in [f32::NAN, -0.5, 4.5, f32::INFINITY] {
-        let r = load_patched(&good, |b| put_u32(b, off + 4, bad.to_bits()));
-        assert!(
-            matches!(
-                r,
-                Err(FormatError::InvalidValue {
-                    id: SectionId::PROBE_WEIGHTS,
-                    element: 0,
-                    ..
-                })
-            ),
-            "{bad}: {r:?}"
-        );
-        let mut f = weights_file();
-        f.brightness_exponent = bad;
-        assert!(f.to_bytes().is_err(), "{bad}");
+    type Field = fn(&mut ProbeFile) -> &mut f32;
+    let fields: [(usize, Field); 2] = [
+        (1, |f| &mut f.brightness_exponent),
+        (2, |f| &mut f.directional_exponent),
+    ];
+    for (word, field) in fields {
+        for bad in [f32::NAN, -0.5, 4.5, f32::INFINITY, f32::NEG_INFINITY] {
+            let r = load_patched(&good, |b| put_u32(b, off + 4 * word, bad.to_bits()));
+            assert!(
+                matches!(
+                    r,
+                    Err(FormatError::InvalidValue {
+                        id: SectionId::PROBE_WEIGHTS,
+                        element: 0,
+                        ..
+                    })
+                ),
+                "w{word} {bad}: {r:?}"
+            );
+            let mut f = weights_file();
+            *field(&mut f) = bad;
+            assert!(f.to_bytes().is_err(), "w{word} {bad}");
+        }
+        let mut f = cvis_file();
+        *field(&mut f) = 1.0;
+        assert!(matches!(f.to_bytes(), Err(FormatError::Unrepresentable(_))));
     }
-    let mut f = cvis_file();
-    f.brightness_exponent = 1.0;
-    assert!(matches!(f.to_bytes(), Err(FormatError::Unrepresentable(_))));
+}
+
+/// The directional brightness exponent (format 1.9) rides in `PWGT`'s
+/// header word `w2`: written as `f32` bits at minor 9 (with or without the
+/// brightness exponent beside it in `w1`), read back and applied by
+/// [`ProbeCloud::from_file`]; zero leaves the older bytes. A 1.8 reader's
+/// view (the word zeroed, as a file written before 1.9) blends without it.
+#[test]
+fn the_directional_exponent_rides_in_pwgt_w2_at_minor_9() {
+    let mut f = weights_file();
+    f.brightness_exponent = 0.5;
+    f.directional_exponent = 0.25;
+    let bytes = f.to_bytes().unwrap();
+    assert_eq!(minor_of(&bytes), 9);
+    let (off, _) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
+    let word =
+        |i: usize| u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap());
+    assert_eq!(f32::from_bits(word(1)), 0.5);
+    assert_eq!(f32::from_bits(word(2)), 0.25);
+    assert_eq!(word(3), 0);
+    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    let mut only = weights_file();
+    only.directional_exponent = 1.0;
+    assert_eq!(minor_of(&only.to_bytes().unwrap()), 9);
+    // -0.0 is 0.0: the 1.8 bytes.
+    let mut zero = f.clone();
+    zero.directional_exponent = -0.0;
+    let mut eight = f.clone();
+    eight.directional_exponent = 0.0;
+    assert_eq!(zero.to_bytes().unwrap(), eight.to_bytes().unwrap());
+    assert_eq!(minor_of(&eight.to_bytes().unwrap()), 8);
+    // The loaded cloud blends with it; with the word zeroed, without.
+    let mut g = full_file();
+    g.probe_weights = weights_file().probe_weights;
+    g.directional_exponent = 0.25;
+    let gb = g.to_bytes().unwrap();
+    let cloud = ProbeCloud::from_file(&ProbeFile::from_bytes(&gb).unwrap()).unwrap();
+    assert_eq!(cloud.directional_brightness(), 0.25);
+    let (goff, _) = find_section(&gb, SectionId::PROBE_WEIGHTS);
+    let old = load_patched(&gb, |b| put_u32(b, goff + 8, 0)).unwrap();
+    assert_eq!(
+        ProbeCloud::from_file(&old)
+            .unwrap()
+            .directional_brightness(),
+        0.0
+    );
 }

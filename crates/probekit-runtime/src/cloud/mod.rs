@@ -47,6 +47,7 @@ use glam::{DVec3, Vec3};
 use thiserror::Error;
 
 pub mod cell_visibility;
+pub mod directional;
 pub mod probes;
 pub mod visibility;
 pub use cell_visibility::{CellPlanes, CellVisibility};

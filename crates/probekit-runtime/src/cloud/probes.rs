@@ -8,6 +8,7 @@
 //! wall stop leaking their light.
 
 use super::cell_visibility::{CellPlanes, CellVisibility};
+use super::directional::{self, DirectionTable, DIRECTIONS};
 use super::visibility::VisibilityMaps;
 use super::{CloudError, Location, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
@@ -98,9 +99,25 @@ pub struct ProbeCloud {
     /// its DC coefficient as built (relighting through
     /// [`ProbeCloud::coefficients_mut`] keeps the blend, so it stays linear).
     luminance: Vec<f32>,
+    /// Directional brightness exponent `γ` of
+    /// [`ProbeCloud::set_directional_brightness`] (0: off).
+    directional: f32,
+    /// What the directional blend needs (boxed: ~1 KB of tables).
+    directional_data: Box<DirectionalData>,
     /// Fitted per-probe blend weights ([`ProbeCloud::set_probe_weights`]).
     probe_weights: Option<Vec<f32>>,
     probe_weights_on: bool,
+}
+
+/// The directional blend's data of a [`ProbeCloud`].
+#[derive(Debug, Clone)]
+struct DirectionalData {
+    /// The constant tables.
+    table: DirectionTable,
+    /// Each probe's `L_i(d)`: the luminance of its irradiance for the twelve
+    /// directions of [`directional::directions`], as built (like
+    /// `ProbeCloud::luminance`).
+    luminance: Vec<[f32; DIRECTIONS]>,
 }
 
 /// The range a fitted probe weight ([`ProbeCloud::set_probe_weights`], the
@@ -119,7 +136,7 @@ impl ProbeCloud {
     /// coefficients decoded to f32 (`order²` per probe), and its distance
     /// moments (`VISM`) when present, which switch visibility weighting on,
     /// its cell visibility and occluder planes (`CVSP`, `CPLN`), and its
-    /// fitted probe weights with the brightness exponent they were fitted
+    /// fitted probe weights with the brightness exponents they were fitted
     /// for (`PWGT`).
     pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
         let mesh = Self::mesh_from_file(file)?;
@@ -141,6 +158,7 @@ impl ProbeCloud {
         if let Some(w) = &file.probe_weights {
             cloud.set_probe_weights(Some(w.clone()))?;
             cloud.set_brightness_weighting(file.brightness_exponent)?;
+            cloud.set_directional_brightness(file.directional_exponent)?;
         }
         Ok(cloud)
     }
@@ -173,7 +191,14 @@ impl ProbeCloud {
             .chunks_exact(n)
             .map(|c| probekit_sh::LUMINANCE.dot(c[0]))
             .collect();
+        let table = DirectionTable::new();
+        let luminance_d = coeffs.chunks_exact(n).map(|c| table.luminance(c)).collect();
         Ok(Self {
+            directional: 0.0,
+            directional_data: Box::new(DirectionalData {
+                table,
+                luminance: luminance_d,
+            }),
             mesh,
             coeffs,
             order,
@@ -333,6 +358,46 @@ impl ProbeCloud {
     /// [`ProbeCloud::set_brightness_weighting`]).
     pub fn brightness_weighting(&self) -> f32 {
         self.brightness
+    }
+
+    /// Sets the directional brightness exponent `γ` (0, the default,
+    /// switches it off): [`ProbeCloud::sh_at`] blends the cell per direction,
+    /// each probe's weight divided by the luminance of its irradiance *for
+    /// that direction* to the power `γ` (as the cloud was built, so
+    /// relighting stays linear), and projects the twelve directions' blends
+    /// back to SH ([`super::directional`]). Where the mean brightness
+    /// ([`ProbeCloud::set_brightness_weighting`]) damps a probe that is
+    /// bright on average, this damps a probe bright only towards one side —
+    /// a doorway probe seeing a lit corridor, next to a dark closet — for the
+    /// normals facing that side. Still one radiance SH per point, a convex
+    /// blend per direction, exact for a constant field, and the plain blend
+    /// at `γ = 0`. A file's probe weights carry the exponent they were fitted
+    /// for ([`ProbeCloud::from_file`]). Errors on a value outside
+    /// `0..=`[`MAX_BRIGHTNESS_EXPONENT`] or not a number.
+    pub fn set_directional_brightness(&mut self, beta: f32) -> Result<(), ProbeCloudError> {
+        if !(0.0..=MAX_BRIGHTNESS_EXPONENT).contains(&beta) {
+            return Err(ProbeCloudError::BrightnessExponent(beta));
+        }
+        self.directional = beta;
+        Ok(())
+    }
+
+    /// The directional brightness exponent (0: off; see
+    /// [`ProbeCloud::set_directional_brightness`]).
+    pub fn directional_brightness(&self) -> f32 {
+        self.directional
+    }
+
+    /// Probe `i`'s baked directional luminances `L_i(d)` for the twelve
+    /// directions of [`super::directional::directions`] (see
+    /// [`ProbeCloud::set_directional_brightness`]).
+    pub fn directional_luminance(&self, i: usize) -> &[f32; DIRECTIONS] {
+        &self.directional_data.luminance[i]
+    }
+
+    /// The directional blend's constant tables.
+    pub fn direction_table(&self) -> &DirectionTable {
+        &self.directional_data.table
     }
 
     /// Attaches (or with `None` removes) fitted per-probe blend weights
@@ -535,7 +600,9 @@ impl ProbeCloud {
 
     /// Interpolated radiance SH at `p` into `out` (its first
     /// `min(out.len(), order²)` coefficients): the blend of
-    /// [`ProbeCloud::weights_at`] (visibility-weighted when on). No allocation.
+    /// [`ProbeCloud::weights_at`] (visibility-weighted when on), done per
+    /// direction for bands ≤ 2 when directional brightness is on
+    /// ([`ProbeCloud::set_directional_brightness`]). No allocation.
     pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
         let n = self.coeffs_per_probe();
         let m = out.len().min(n);
@@ -550,6 +617,41 @@ impl ProbeCloud {
                 *o += *c * w;
             }
         }
+        if self.directional > 0.0 {
+            self.directional_blend(&probes, &weights, &mut out[..m]);
+        }
+    }
+
+    /// Overwrites bands ≤ 2 of `out` with the directional blend of the cell
+    /// `probes` with blend weights `weights` (see [`super::directional`]).
+    fn directional_blend(&self, probes: &[u32; 4], weights: &[f32; 4], out: &mut [Vec3]) {
+        let active = weights.map(|w| w > 0.0);
+        let data = &self.directional_data;
+        let lum = probes.map(|i| &data.luminance[i as usize]);
+        let f = directional::factors(lum, active, self.directional);
+        let e: [[Vec3; DIRECTIONS]; 4] = core::array::from_fn(|k| {
+            if active[k] {
+                data.table.irradiance(self.probe_sh(probes[k] as usize))
+            } else {
+                [Vec3::ZERO; DIRECTIONS]
+            }
+        });
+        let blended: [Vec3; DIRECTIONS] = core::array::from_fn(|d| {
+            let (mut sum, mut acc) = (0.0f32, Vec3::ZERO);
+            for k in 0..4 {
+                if active[k] {
+                    let u = weights[k] * f[d][k];
+                    sum += u;
+                    acc += e[k][d] * u;
+                }
+            }
+            if sum > 0.0 && sum.is_finite() {
+                acc / sum
+            } else {
+                (0..4).fold(Vec3::ZERO, |a, k| a + e[k][d] * weights[k])
+            }
+        });
+        data.table.project(&blended, out);
     }
 
     /// Irradiance `E(n)` (not divided by π) at `p` for unit normal `n`: the

@@ -581,3 +581,183 @@ fn probe_weights_keep_the_blend_continuous_across_faces() {
     }
     assert!(checked > 100, "{checked}");
 }
+
+/// A cloud on the `k` Kuhn grid, L2, probe `i`'s coefficients from `sh(i)`.
+fn l2_cloud(k: u32, sh: &dyn Fn(usize, Vec3) -> [Vec3; 9]) -> ProbeCloud {
+    let mesh = grid_mesh(k);
+    let coeffs: Vec<Vec3> = mesh
+        .positions()
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &p)| sh(i, p))
+        .collect();
+    ProbeCloud::new(mesh, 3, coeffs).unwrap()
+}
+
+/// Positive-irradiance L2 SH whose light comes more from `+x` the larger
+/// `lobe` (pseudo-random small higher bands from `seed`).
+fn lit_from_x(dc: f32, lobe: f32, seed: u64) -> [Vec3; 9] {
+    let mut g = Lcg(seed);
+    let mut c: [Vec3; 9] = core::array::from_fn(|_| g.v(-0.03, 0.03));
+    c[0] = Vec3::new(dc, 0.9 * dc, 0.8 * dc);
+    // Y1,1 = −0.4886·x: a negative coefficient brightens +x.
+    c[3] = Vec3::splat(-lobe);
+    c
+}
+
+/// Directional brightness, against an independent computation of its
+/// definition: at the twelve icosahedron vertices (built here from `φ`),
+/// each probe's irradiance (`probekit_sh::irradiance`), weights
+/// `w_k·L_k(d)^−γ` renormalized, the blend projected with
+/// `probekit_sh::basis::eval_basis` and divided by the band factors. Also:
+/// `γ = 0` is the plain blend; equal probes are kept; an error on a bad
+/// exponent.
+#[test]
+fn directional_brightness_blends_per_direction_and_projects() {
+    let sh = |i: usize, p: Vec3| lit_from_x(1.0 + p.y, 0.2 + 0.6 * (i % 3) as f32, i as u64);
+    let mut cloud = l2_cloud(3, &sh);
+    let mut g = Lcg(21);
+    let mut ws = WalkState::new();
+    let pts: Vec<Vec3> = (0..60).map(|_| g.v(0.01, 1.99)).collect();
+    let plain: Vec<[Vec3; 9]> = pts
+        .iter()
+        .map(|&p| {
+            let mut o = [Vec3::ZERO; 9];
+            cloud.sh_at(p, &mut ws, &mut o);
+            o
+        })
+        .collect();
+    for bad in [-0.1, f32::NAN, 4.5] {
+        assert!(matches!(
+            cloud.set_directional_brightness(bad),
+            Err(ProbeCloudError::BrightnessExponent(_))
+        ));
+    }
+    assert_eq!(cloud.directional_brightness(), 0.0);
+    let phi = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut dirs = Vec::new();
+    for a in [-1.0, 1.0] {
+        for b in [-1.0, 1.0] {
+            dirs.push(DVec3::new(0.0, a, b * phi).normalize().as_vec3());
+            dirs.push(DVec3::new(a, b * phi, 0.0).normalize().as_vec3());
+            dirs.push(DVec3::new(b * phi, 0.0, a).normalize().as_vec3());
+        }
+    }
+    for gamma in [0.0f32, 0.25, 0.7] {
+        cloud.set_directional_brightness(gamma).unwrap();
+        for (j, &p) in pts.iter().enumerate() {
+            let mut got = [Vec3::ZERO; 9];
+            cloud.sh_at(p, &mut ws, &mut got);
+            let (idx, w) = cloud.weights_at(p, &mut ws);
+            let mut want = [Vec3::ZERO; 9];
+            for &d in &dirs {
+                let e: Vec<Vec3> = idx
+                    .iter()
+                    .map(|&i| probekit_sh::irradiance(cloud.probe_sh(i as usize), d))
+                    .collect();
+                let lum: Vec<f32> = e.iter().map(|x| probekit_sh::LUMINANCE.dot(*x)).collect();
+                let top = (0..4)
+                    .filter(|&k| w[k] > 0.0)
+                    .map(|k| lum[k])
+                    .fold(0.0, f32::max);
+                let u: Vec<f32> = (0..4)
+                    .map(|k| w[k] * lum[k].max(1e-3 * top).powf(-gamma))
+                    .collect();
+                let sum: f32 = u.iter().sum();
+                let blend: Vec3 = (0..4).map(|k| e[k] * (u[k] / sum)).sum();
+                let mut y = [0.0f32; 9];
+                probekit_sh::basis::eval_basis(3, d, &mut y);
+                for c in 0..9 {
+                    let l = if c == 0 {
+                        0
+                    } else if c < 4 {
+                        1
+                    } else {
+                        2
+                    };
+                    let a = probekit_sh::clamped_cosine_band(l) as f32;
+                    want[c] += blend * (y[c] * 4.0 * std::f32::consts::PI / 12.0 / a);
+                }
+            }
+            for c in 0..9 {
+                assert!(
+                    (got[c] - want[c]).length() < 1e-4 * (1.0 + want[c].length()),
+                    "γ {gamma} {p} coeff {c}: {:?} vs {:?}",
+                    got[c],
+                    want[c]
+                );
+                if gamma == 0.0 {
+                    assert!((got[c] - plain[j][c]).length() < 1e-5);
+                }
+            }
+        }
+    }
+    // Equal probes: the blend is that probe, whatever γ.
+    let mut same = l2_cloud(3, &|_, _| lit_from_x(1.0, 0.7, 3));
+    same.set_directional_brightness(1.0).unwrap();
+    let want = lit_from_x(1.0, 0.7, 3);
+    for &p in &pts {
+        let mut o = [Vec3::ZERO; 9];
+        same.sh_at(p, &mut ws, &mut o);
+        for c in 0..9 {
+            assert!((o[c] - want[c]).length() < 1e-5, "{p} {c}");
+        }
+    }
+}
+
+/// The leak it is for: a probe lit strongly from `+x` beside dark probes
+/// (a doorway probe seeing a lit corridor). Directional brightness lowers
+/// the blended irradiance facing `+x` far more than facing `−x`, where the
+/// probes agree; relighting in place scales the blend linearly (the
+/// directional brightness is the baked one), and the result stays
+/// continuous across faces.
+#[test]
+fn directional_brightness_damps_a_probe_bright_towards_one_side() {
+    let bright = 13; // the centre probe (1, 1, 1) of the 3 × 3 × 3 grid
+                     // Grey; facing −x the bright probe's irradiance equals the dark ones'
+                     // (0.886·dc − 1.023·lobe = 0.266), facing +x it is 7.5× theirs.
+    let sh = |i: usize, _: Vec3| {
+        let mut c = [Vec3::ZERO; 9];
+        if i == bright {
+            c[0] = Vec3::splat(1.279);
+            c[3] = Vec3::splat(-0.848);
+        } else {
+            c[0] = Vec3::splat(0.3);
+        }
+        c
+    };
+    let mut cloud = l2_cloud(3, &sh);
+    assert_eq!(cloud.mesh().positions()[bright], Vec3::ONE);
+    let mut ws = WalkState::new();
+    let p = Vec3::new(1.3, 0.8, 1.2);
+    let e0 = [Vec3::X, -Vec3::X].map(|n| cloud.irradiance(p, n, &mut ws).x);
+    cloud.set_directional_brightness(0.5).unwrap();
+    let e1 = [Vec3::X, -Vec3::X].map(|n| cloud.irradiance(p, n, &mut ws).x);
+    let drop = [0, 1].map(|k| (e0[k] - e1[k]) / e0[k]);
+    assert!(
+        drop[0] > 0.2 && drop[0] > 3.0 * drop[1].abs(),
+        "{e0:?} → {e1:?}"
+    );
+    // Relit ×3 in place: ×3 out, same blend.
+    let mut relit = cloud.clone();
+    relit.coefficients_mut().iter_mut().for_each(|c| *c *= 3.0);
+    for n in [Vec3::X, Vec3::Y, -Vec3::Z] {
+        let (a, b) = (
+            cloud.irradiance(p, n, &mut ws),
+            relit.irradiance(p, n, &mut ws),
+        );
+        assert!((b - 3.0 * a).length() < 1e-4 * b.length(), "{a} {b}");
+    }
+    // Continuous across the faces of the cell around p.
+    let mut g = Lcg(4);
+    for _ in 0..200 {
+        let q = g.v(0.05, 1.95);
+        let d = g.v(-1.0, 1.0).normalize_or_zero() * 1e-4;
+        let n = g.v(-1.0, 1.0).normalize_or_zero();
+        let (a, b) = (
+            cloud.irradiance(q + d, n, &mut ws),
+            cloud.irradiance(q - d, n, &mut ws),
+        );
+        assert!((a - b).length() < 1e-2 * (0.1 + a.length()), "{q}: {a} {b}");
+    }
+}

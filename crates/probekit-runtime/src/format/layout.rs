@@ -15,17 +15,23 @@ pub const VERSION_MAJOR: u16 = 1;
 /// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse; 1.6
 /// added `PWGT`, fitted per-probe blend weights; 1.7 added `CPLN`, occluder
 /// planes of cells; 1.8 stores the brightness exponent the weights were
-/// fitted with in `PWGT`'s header word `w1`, [`MINOR_BRIGHTNESS`]). Files
+/// fitted with in `PWGT`'s header word `w1`, [`MINOR_BRIGHTNESS`]; 1.9 the
+/// directional brightness exponent in `w2`, [`MINOR_DIRECTIONAL`]). Files
 /// with a larger minor load; their unknown sections are
 /// skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 8;
+pub const VERSION_MINOR: u16 = 9;
 
 /// Minor version that stores a non-zero brightness exponent in `PWGT`'s
 /// header word `w1` (a reader of 1.6 or 1.7 ignores the word and blends
 /// without it).
 pub const MINOR_BRIGHTNESS: u16 = 8;
+
+/// Minor version that stores a non-zero directional brightness exponent in
+/// `PWGT`'s header word `w2` (a reader of 1.6 to 1.8 ignores the word and
+/// blends without it).
+pub const MINOR_DIRECTIONAL: u16 = 9;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).

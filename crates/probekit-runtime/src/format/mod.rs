@@ -347,6 +347,13 @@ pub struct ProbeFile {
     /// `0..=`[`crate::cloud::MAX_BRIGHTNESS_EXPONENT`]; non-zero only with
     /// `probe_weights`.
     pub brightness_exponent: f32,
+    /// Directional brightness exponent `γ` the cloud blends with on top of
+    /// the probe weights
+    /// ([`crate::cloud::ProbeCloud::set_directional_brightness`]), stored in
+    /// `PWGT`'s header word `w2` as `f32` bits (format 1.9,
+    /// [`layout::MINOR_DIRECTIONAL`]; older files read 0, no directional
+    /// blend). Same range and rule as `brightness_exponent`.
+    pub directional_exponent: f32,
     /// Occluder planes of a cloud's tetrahedra (`CPLN`, format 1.7), a
     /// refinement of `cell_visibility` for cells one flat wall cuts; only
     /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
@@ -384,6 +391,7 @@ impl ProbeFile {
             cell_visibility: None,
             probe_weights: None,
             brightness_exponent: 0.0,
+            directional_exponent: 0.0,
             cell_planes: None,
             metadata: String::new(),
         }

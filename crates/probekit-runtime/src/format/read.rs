@@ -694,17 +694,17 @@ fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatErr
     .ok_or(FormatError::CountOverflow(s.id))
 }
 
-/// `PWGT` (1.6): one little-endian `f32` per probe, and (1.8) the
-/// brightness exponent as `f32` bits in header word `w1` (both range
-/// checked by [`super::validate`]).
-fn parse_probe_weights(s: &Sec<'_>) -> Result<(Vec<f32>, f32), FormatError> {
-    let [count, alpha, ..] = s.header()?;
+/// `PWGT` (1.6): one little-endian `f32` per probe, (1.8) the
+/// brightness exponent as `f32` bits in header word `w1` and (1.9) the
+/// directional one in `w2` (all range checked by [`super::validate`]).
+fn parse_probe_weights(s: &Sec<'_>) -> Result<(Vec<f32>, f32, f32), FormatError> {
+    let [count, alpha, beta, _] = s.header()?;
     let [data] = s.arrays([bytes_for(count, 4)])?;
     let w = data
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
-    Ok((w, f32::from_bits(alpha)))
+    Ok((w, f32::from_bits(alpha), f32::from_bits(beta)))
 }
 
 /// A `CPLN` section (1.7) as stored, its arrays checked against the section
@@ -835,9 +835,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
                 });
             }
             SectionId::PROBE_WEIGHTS => {
-                let (w, alpha) = parse_probe_weights(&s)?;
+                let (w, alpha, beta) = parse_probe_weights(&s)?;
                 file.probe_weights = Some(w);
                 file.brightness_exponent = alpha;
+                file.directional_exponent = beta;
             }
             SectionId::CELL_PLANES => planes = Some(parse_cell_planes(&s)?),
             SectionId::METADATA => file.metadata = parse_metadata(&s)?,

@@ -446,6 +446,20 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             "a brightness exponent is stored with probe weights (PWGT) only",
         ));
     }
+    // Directional brightness exponent (1.9): the same rules, header word w2.
+    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.directional_exponent) {
+        return Err(FormatError::InvalidValue {
+            id: SectionId::PROBE_WEIGHTS,
+            element: 0,
+            reason:
+                "directional brightness exponent (header word w2) outside 0..=4 or not a number",
+        });
+    }
+    if f.directional_exponent != 0.0 && f.probe_weights.is_none() {
+        return Err(FormatError::Unrepresentable(
+            "a directional brightness exponent is stored with probe weights (PWGT) only",
+        ));
+    }
 
     // Occluder planes (1.7): a cloud's, refining its cell visibility, one
     // lookup entry per tetrahedron (the planes themselves are checked by

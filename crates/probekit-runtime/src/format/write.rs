@@ -291,7 +291,8 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     if let Some(w) = &f.probe_weights {
         // -0.0 is written as 0.0 (equal contents, equal bytes).
         let alpha = (f.brightness_exponent + 0.0).to_bits();
-        let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, alpha, 0, 0]);
+        let beta = (f.directional_exponent + 0.0).to_bits();
+        let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, alpha, beta, 0]);
         for x in w {
             s.bytes(&x.to_le_bytes());
         }
@@ -338,7 +339,8 @@ impl ProbeFile {
     /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
     /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
     /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7), or a
-    /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8).
+    /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8), or a
+    /// non-zero directional one ([`layout::MINOR_DIRECTIONAL`], 9).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
@@ -347,6 +349,11 @@ impl ProbeFile {
             .max(if forest { layout::MINOR_FOREST } else { 0 })
             .max(if self.brightness_exponent != 0.0 {
                 layout::MINOR_BRIGHTNESS
+            } else {
+                0
+            })
+            .max(if self.directional_exponent != 0.0 {
+                layout::MINOR_DIRECTIONAL
             } else {
                 0
             });

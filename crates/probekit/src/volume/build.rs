@@ -873,6 +873,7 @@ fn finish(
         cell_visibility: None,
         probe_weights: None,
         brightness_exponent: 0.0,
+        directional_exponent: 0.0,
         cell_planes: None,
         metadata: String::new(),
     };

@@ -1,0 +1,261 @@
+//! Directional brightness: the blend of a cloud cell done per direction, so
+//! that a probe bright only *towards* something (a doorway probe seeing a
+//! lit corridor through a closet's gap) counts less for the normals that
+//! face it, and the result is still one radiance SH per point.
+//!
+//! **What.** With exponent `γ > 0` ([`super::ProbeCloud::set_directional_brightness`]),
+//! for each of the twelve directions `d` of [`directions`] (the vertices of
+//! an icosahedron) every probe `i` of the cell gets the weight
+//! `w_i(d) = w_i · L_i(d)^−γ / Σ_k w_k · L_k(d)^−γ`: `w_i` the cloud's
+//! blend weight at the point (barycentric × visibility × fitted probe
+//! weight × mean brightness), `L_i(d)` the luminance of the probe's
+//! irradiance for normal `d` as the cloud was built (floored at 10⁻³ of
+//! the cell's brightest for that direction). The blended irradiance
+//! `E(d) = Σ_i w_i(d) E_i(d)` at the twelve directions is projected back to
+//! SH bands 0–2 with equal quadrature weights `4π/12` and divided by the
+//! clamped-cosine band factors, giving radiance SH. Bands above 2 (whose
+//! irradiance is 0 or tiny: `A_3 = 0`, `A_4 = −π/24`) keep the plain blend.
+//!
+//! **Why twelve points.** The icosahedron's vertices are a spherical
+//! 5-design (Delsarte, Goethals & Seidel, "Spherical codes and designs",
+//! 1977): equal-weight quadrature over them integrates every polynomial of
+//! degree ≤ 5 exactly, so the product of two functions of bands ≤ 2 (degree
+//! 4) too. The projection of an irradiance of bands ≤ 2 is therefore exact:
+//! at `γ = 0`, or when every probe of the cell has the same directional
+//! brightness, the result is the plain blend, bit for bit up to rounding.
+//!
+//! **Properties.** Per direction a convex combination, so a constant field
+//! is kept and the blend is continuous in the point wherever the weights
+//! are (on a face the fourth probe's weight is 0 in every direction).
+//! `L_i(d)` is baked, like the mean brightness, so a cloud relit in place
+//! blends as built and the relit irradiance stays linear in the group
+//! scales. The cost is twelve directional irradiances per probe of the cell
+//! and 48 powers per query.
+//!
+//! Our own method, measured in BENCHMARKS.md ("Directional brightness");
+//! the per-direction weighting is in the spirit of DDGI's per-direction
+//! visibility (Majercik et al. 2019), applied to brightness.
+
+use glam::Vec3;
+
+/// Number of quadrature directions ([`directions`]).
+pub const DIRECTIONS: usize = 12;
+
+/// Highest SH band the directional blend projects (bands 0–2, 9
+/// coefficients); higher bands keep the plain blend.
+pub const DIRECTIONAL_COEFFS: usize = 9;
+
+/// The twelve unit directions of the directional blend: the vertices of a
+/// regular icosahedron, `(0, ±1, ±φ)`, `(±1, ±φ, 0)`, `(±φ, 0, ±1)`
+/// normalized (`φ` the golden ratio), in that order with the first sign
+/// outermost. A spherical 5-design (see the module docs).
+pub fn directions() -> [Vec3; DIRECTIONS] {
+    let phi = (1.0 + crate::math::sqrt(5.0)) / 2.0;
+    let mut out = [Vec3::ZERO; DIRECTIONS];
+    let mut i = 0;
+    for s1 in [-1.0f32, 1.0] {
+        for s2 in [-1.0f32, 1.0] {
+            out[i] = Vec3::new(0.0, s1, s2 * phi).normalize();
+            out[i + 1] = Vec3::new(s1, s2 * phi, 0.0).normalize();
+            out[i + 2] = Vec3::new(s2 * phi, 0.0, s1).normalize();
+            i += 3;
+        }
+    }
+    out
+}
+
+/// The constant tables of the directional blend: for each direction `d` of
+/// [`directions`] and coefficient `c < 9`, `A_l·Y_c(d)` (a radiance SH's
+/// irradiance at `d`) and `(4π/12)·Y_c(d)/A_l` (the projection of an
+/// irradiance sampled at the directions back to radiance SH); `A_l` the
+/// clamped-cosine band factors π, 2π/3, π/4.
+#[derive(Debug, Clone)]
+pub struct DirectionTable {
+    irradiance: [[f32; DIRECTIONAL_COEFFS]; DIRECTIONS],
+    projection: [[f32; DIRECTIONAL_COEFFS]; DIRECTIONS],
+}
+
+impl Default for DirectionTable {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl DirectionTable {
+    /// Builds the tables (about a hundred basis evaluations).
+    pub fn new() -> Self {
+        let mut irradiance = [[0.0; DIRECTIONAL_COEFFS]; DIRECTIONS];
+        let mut projection = [[0.0; DIRECTIONAL_COEFFS]; DIRECTIONS];
+        let w = 4.0 * core::f32::consts::PI / DIRECTIONS as f32;
+        for (d, dir) in directions().into_iter().enumerate() {
+            let y = probekit_sh::basis::eval_l2(dir);
+            for c in 0..DIRECTIONAL_COEFFS {
+                let a = band_factor(c);
+                irradiance[d][c] = a * y[c];
+                projection[d][c] = w * y[c] / a;
+            }
+        }
+        Self {
+            irradiance,
+            projection,
+        }
+    }
+
+    /// Irradiance (not divided by π) of radiance SH `coeffs` (its bands ≤ 2)
+    /// for each of the twelve directions.
+    pub fn irradiance(&self, coeffs: &[Vec3]) -> [Vec3; DIRECTIONS] {
+        let m = coeffs.len().min(DIRECTIONAL_COEFFS);
+        core::array::from_fn(|d| {
+            let t = &self.irradiance[d];
+            (0..m).fold(Vec3::ZERO, |e, c| e + coeffs[c] * t[c])
+        })
+    }
+
+    /// Luminance ([`probekit_sh::LUMINANCE`]) of [`Self::irradiance`].
+    pub fn luminance(&self, coeffs: &[Vec3]) -> [f32; DIRECTIONS] {
+        self.irradiance(coeffs)
+            .map(|e| probekit_sh::LUMINANCE.dot(e))
+    }
+
+    /// Radiance SH (the first `min(out.len(), 9)` coefficients of `out`,
+    /// overwritten) whose irradiance is the projection of `e`, an
+    /// irradiance sampled at the twelve directions. Exact for an irradiance
+    /// of bands ≤ 2 (see the module docs).
+    pub fn project(&self, e: &[Vec3; DIRECTIONS], out: &mut [Vec3]) {
+        let m = out.len().min(DIRECTIONAL_COEFFS);
+        for (c, o) in out[..m].iter_mut().enumerate() {
+            *o = (0..DIRECTIONS).fold(Vec3::ZERO, |s, d| s + e[d] * self.projection[d][c]);
+        }
+    }
+}
+
+/// The clamped-cosine factor `A_l` of coefficient `c` (bands ≤ 2).
+fn band_factor(c: usize) -> f32 {
+    probekit_sh::clamped_cosine_band(if c == 0 {
+        0
+    } else if c < 4 {
+        1
+    } else {
+        2
+    }) as f32
+}
+
+/// `x^−γ` for the common exponents without a `powf`.
+#[inline]
+fn inverse_power(x: f32, gamma: f32) -> f32 {
+    if gamma == 0.25 {
+        1.0 / crate::math::sqrt(crate::math::sqrt(x))
+    } else if gamma == 0.5 {
+        1.0 / crate::math::sqrt(x)
+    } else if gamma == 1.0 {
+        1.0 / x
+    } else {
+        crate::math::powf(x, -gamma)
+    }
+}
+
+/// Per-direction factors `L_k(d)^−γ` of a cell's four probes: `lum[k]` the
+/// probes' directional luminances ([`DirectionTable::luminance`] of the
+/// baked SH), `active[k]` whether slot `k` is used. Each direction's
+/// luminances are floored at 10⁻³ of its brightest active one; a direction
+/// without a positive, finite brightest gets 1 for all. Unused slots get 1.
+pub fn factors(
+    lum: [&[f32; DIRECTIONS]; 4],
+    active: [bool; 4],
+    gamma: f32,
+) -> [[f32; 4]; DIRECTIONS] {
+    core::array::from_fn(|d| {
+        let top = (0..4)
+            .filter(|&k| active[k])
+            .map(|k| lum[k][d])
+            .fold(0.0f32, f32::max);
+        if !(top > 0.0 && top.is_finite()) || gamma <= 0.0 {
+            return [1.0; 4];
+        }
+        core::array::from_fn(|k| {
+            if active[k] {
+                inverse_power(lum[k][d].max(1e-3 * top), gamma)
+            } else {
+                1.0
+            }
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sh(seed: u32) -> [Vec3; 9] {
+        // Deterministic pseudo-random coefficients.
+        let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+        core::array::from_fn(|_| {
+            let mut v = [0.0f32; 3];
+            for c in &mut v {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                *c = (x % 2001) as f32 / 1000.0 - 1.0;
+            }
+            Vec3::from(v)
+        })
+    }
+
+    /// The twelve directions are unit, distinct, and antipodal in pairs.
+    #[test]
+    fn directions_are_an_icosahedron() {
+        let d = directions();
+        for a in &d {
+            assert!((a.length() - 1.0).abs() < 1e-6);
+            assert!(d.iter().any(|b| (*a + *b).length() < 1e-6), "no antipode");
+            // Five nearest neighbours at the icosahedron's edge angle.
+            let near = d
+                .iter()
+                .filter(|b| (a.dot(**b) - 1.0 / 5f32.sqrt()).abs() < 1e-5)
+                .count();
+            assert_eq!(near, 5);
+        }
+    }
+
+    /// The projection reproduces bands ≤ 2 exactly (the 5-design property),
+    /// checked against the SH crate's own irradiance evaluation.
+    #[test]
+    fn projection_of_band_limited_irradiance_is_exact() {
+        let t = DirectionTable::new();
+        for seed in 0..20 {
+            let c = sh(seed);
+            let e = t.irradiance(&c);
+            for (d, dir) in directions().into_iter().enumerate() {
+                let want = probekit_sh::irradiance(&c, dir);
+                assert!((e[d] - want).length() < 1e-4, "{d}: {:?} {want:?}", e[d]);
+            }
+            let mut back = [Vec3::ZERO; 9];
+            t.project(&e, &mut back);
+            for k in 0..9 {
+                assert!((back[k] - c[k]).length() < 1e-4, "seed {seed} coeff {k}");
+            }
+        }
+    }
+
+    /// Factors: 1 at γ = 0 or in unused slots, the floor at 10⁻³ of the
+    /// brightest, and the inverse power otherwise (against `powf`).
+    #[test]
+    fn factors_floor_and_power() {
+        let mut lum = [[1.0f32; DIRECTIONS]; 4];
+        lum[0] = [16.0; DIRECTIONS];
+        lum[1] = [0.0; DIRECTIONS];
+        lum[2][3] = -5.0;
+        let refs = [&lum[0], &lum[1], &lum[2], &lum[3]];
+        let active = [true, true, true, false];
+        assert_eq!(factors(refs, active, 0.0), [[1.0; 4]; DIRECTIONS]);
+        for gamma in [0.25f32, 0.5, 0.7, 1.0] {
+            let f = factors(refs, active, gamma);
+            for fd in &f {
+                assert!((fd[0] - 16f32.powf(-gamma)).abs() < 1e-6);
+                assert!((fd[1] - 0.016f32.powf(-gamma)).abs() < 1e-4 * fd[1]);
+                assert_eq!(fd[3], 1.0);
+            }
+            assert!((f[3][2] - 0.016f32.powf(-gamma)).abs() < 1e-4 * f[3][2]);
+        }
+    }
+}
