@@ -257,7 +257,8 @@ fn bake_inspect_query_with_and_without_visibility() {
 /// `bake` fits probe weights (`PWGT`) and their brightness exponent by
 /// default, `inspect` reports them, `query` uses them unless
 /// `--no-probe-weights`, the metadata records the fit's settings, a fixed
-/// `--brightness-weight` is stored as given, and bad fit settings are
+/// `--brightness-weight` is stored as given, so is the directional
+/// brightness (0.25 by default, `query` blends with it), and bad fit settings are
 /// one-line errors.
 #[test]
 fn bake_fits_probe_weights_and_query_uses_them() {
@@ -299,7 +300,7 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
     assert!(
         meta.contains(
-            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"points_per_probe\":4"
+            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"directional\":0.25,\"points_per_probe\":4"
         ),
         "{meta}"
     );
@@ -317,6 +318,20 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     );
     let h = json(d, &["inspect", "h.probes", "--json"]);
     assert_eq!(h["probe_weights"]["brightness_exponent"], 0.75);
+    // Directional brightness: 0.25 by default, stored as given.
+    assert_eq!(pw["directional_exponent"], 0.25);
+    assert_eq!(h["probe_weights"]["directional_exponent"], 0.25);
+    json(
+        d,
+        &[
+            &common[..],
+            &fit[..],
+            &["-o", "g.probes", "--directional-brightness", "0", "--json"],
+        ]
+        .concat(),
+    );
+    let g = json(d, &["inspect", "g.probes", "--json"]);
+    assert_eq!(g["probe_weights"]["directional_exponent"], 0.0);
 
     write_points(d);
     let q = |f: &str, extra: &[&str]| query(d, f, extra);
@@ -330,6 +345,32 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         q("h.probes", &[]),
         q("h.probes", &["--brightness-weight", "0"])
     );
+    // The file's directional exponent is the default; the weights are the
+    // same with or without it (not fitted for).
+    assert_eq!(
+        q("w.probes", &[]),
+        q("w.probes", &["--directional-brightness", "0.25"])
+    );
+    assert_ne!(
+        q("w.probes", &[]),
+        q("w.probes", &["--directional-brightness", "0"])
+    );
+    assert_eq!(
+        q("g.probes", &[]),
+        q("w.probes", &["--directional-brightness", "0"])
+    );
+    fails_one_line(
+        d,
+        &[
+            "query",
+            "w.probes",
+            "--points",
+            "pts.csv",
+            "--directional-brightness",
+            "9",
+        ],
+        "--directional-brightness",
+    );
 
     for (flag, bad) in [
         ("--fit-points", "0"),
@@ -339,6 +380,8 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         ("--fit-absolute-weight", "-2"),
         ("--brightness-weight", "5"),
         ("--brightness-weight", "often"),
+        ("--directional-brightness", "-1"),
+        ("--directional-brightness", "nan"),
     ] {
         fails_one_line(
             d,

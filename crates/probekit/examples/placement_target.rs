@@ -6,7 +6,7 @@
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
-//!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--normal-brightness A]]
+//!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--directional G] [--normal-brightness A]]
 //!     [--seeds 1,2,3] [--seed S]
 //! ```
 //!
@@ -34,6 +34,9 @@
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`), the weights fitted for it;
 //! `auto`: the exponent the fit chooses (`probekit bake`'s default), printed.
+//! `--directional G` (with `--visibility`; default 0 here, 0.25 in
+//! `probekit bake`): and with directional brightness `G` on top of the
+//! fitted weights (`probekit bake --directional-brightness G`).
 //! `--normal-brightness A` (with `--visibility`; an experiment, not a
 //! run-time feature): after the blend, each probe's weight is divided by
 //! its own irradiance *for the point's normal* to the power `A` (luminance,
@@ -154,6 +157,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                     samples: arg(&args, "--fit-samples", d.samples),
                     regularization: arg(&args, "--fit-regularization", d.regularization),
                     absolute_weight: arg(&args, "--fit-absolute-weight", d.absolute_weight),
+                    directional: arg(&args, "--directional", 0.0),
                     ..d
                 };
                 let n = fit.points_per_probe as usize * pos.len();
@@ -167,6 +171,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                     );
                 }
                 cloud.set_brightness_weighting(f.brightness)?;
+                cloud.set_directional_brightness(f.directional)?;
                 cloud.set_probe_weights(Some(f.weights))?;
             }
             let mut ws = WalkState::new();

@@ -176,6 +176,14 @@ pub struct BakeArgs {
     /// by more than 1 % (`probekit::cloud::blend_fit::fit_blend`).
     #[arg(long, default_value = "auto", value_name = "auto|A")]
     pub brightness_weight: String,
+    /// Directional brightness exponent γ the cloud blends with on top of
+    /// the fitted probe weights (0 to 4; 0: off), stored with them: per
+    /// normal direction, a probe bright only towards one side (a doorway
+    /// seeing a lit corridor) counts less for the normals facing it. Not
+    /// fitted for: a fixed bias against leaks
+    /// (`probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL`).
+    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL, value_name = "G")]
+    pub directional_brightness: f32,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -397,6 +405,10 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 super::util::check_brightness_weight(v)?;
                 Some(v)
             }
+        },
+        directional: {
+            super::util::check_directional_brightness(a.directional_brightness)?;
+            a.directional_brightness
         },
     });
     if let Some(w) = &weights {
@@ -762,6 +774,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             .with_context(|| out.clone())?;
             file.probe_weights = Some(fitted.weights);
             file.brightness_exponent = fitted.brightness;
+            file.directional_exponent = fitted.directional;
             pb.finish_and_clear();
         }
     }

@@ -250,8 +250,9 @@ pub struct InspectArgs {
 /// `cell_visibility`: `{"subdivision","cells","stored_cells","planes"}` of
 /// the `CVSP` / `CVIS` section — cells in all, those not clear, which have a
 /// record, and the tetrahedra with an occluder plane (`CPLN`) — or null; `probe_weights`: `{"min","median","max","below_half",
-/// "above_two","brightness_exponent"}` of the fitted weights (`PWGT`) and the
-/// brightness exponent they were fitted for, or null);
+/// "above_two","brightness_exponent","directional_exponent"}` of the fitted
+/// weights (`PWGT`), the brightness exponent they were fitted for and the
+/// directional one the cloud blends with, or null);
 /// volumes: [`probekit::volume::inspect_json`].
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -303,6 +304,7 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
                     "below_half": s.iter().filter(|&&x| x < 0.5).count(),
                     "above_two": s.iter().filter(|&&x| x > 2.0).count(),
                     "brightness_exponent": file.brightness_exponent,
+                    "directional_exponent": file.directional_exponent,
                 })
             }),
             "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),

@@ -3,7 +3,7 @@
 //! [--samples N] [--json]`: the scene lit by the probes beside the same
 //! path-traced, and the error (library: [`probekit::render`]).
 
-use super::util::{check_brightness_weight, load_probes, load_scene};
+use super::util::{check_brightness_weight, check_directional_brightness, load_probes, load_scene};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
@@ -49,6 +49,11 @@ pub struct RenderArgs {
     /// as `query --brightness-weight`).
     #[arg(long)]
     pub brightness_weight: Option<f32>,
+    /// Clouds: directional brightness exponent of the test object's blend,
+    /// 0 to 4 (default: the one stored with the file's probe weights, 0
+    /// without; as `query --directional-brightness`).
+    #[arg(long)]
+    pub directional_brightness: Option<f32>,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -125,6 +130,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     if let Some(w) = a.brightness_weight {
         check_brightness_weight(w)?;
     }
+    if let Some(g) = a.directional_brightness {
+        check_directional_brightness(g)?;
+    }
     let file = load_probes(&a.probes)?;
     let scene = load_scene(&a.scene)?;
     let object = match a.object.as_str() {
@@ -140,6 +148,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         samples: a.samples,
         bounces: bake_bounces(&file, &scene),
         brightness_weight: a.brightness_weight,
+        directional_brightness: a.directional_brightness,
         ..RenderSettings::default()
     };
     let what = format!("{} with {}", a.scene, a.probes.display());

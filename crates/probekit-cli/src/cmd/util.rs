@@ -114,22 +114,42 @@ pub struct VisibilityArgs {
     /// `ProbeCloud::set_brightness_weighting`).
     #[arg(long)]
     pub brightness_weight: Option<f32>,
+    /// Clouds: directional brightness exponent γ, 0 to 4 (default: the one
+    /// stored with the file's probe weights, 0 without them or with
+    /// `--no-probe-weights`): per normal direction, each probe's weight is
+    /// divided by its irradiance for that direction to the power γ, so a
+    /// probe bright only towards a doorway does not light the dark side of
+    /// its cell (see `ProbeCloud::set_directional_brightness`).
+    #[arg(long)]
+    pub directional_brightness: Option<f32>,
 }
 
 /// Checks a `--brightness-weight` value: the range
 /// `ProbeCloud::set_brightness_weighting` accepts (NaN refused), so a bad
 /// value fails before any work, for volumes too.
 pub fn check_brightness_weight(a: f32) -> Result<()> {
+    check_exponent("--brightness-weight", a)
+}
+
+/// Checks a `--directional-brightness` value, as
+/// [`check_brightness_weight`].
+pub fn check_directional_brightness(g: f32) -> Result<()> {
+    check_exponent("--directional-brightness", g)
+}
+
+/// Checks that `flag`'s value `x` lies in
+/// `0..=`[`probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT`].
+fn check_exponent(flag: &str, x: f32) -> Result<()> {
     let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
-    if !(0.0..=max).contains(&a) {
-        bail!("--brightness-weight {a}: expected 0 to {max}");
+    if !(0.0..=max).contains(&x) {
+        bail!("{flag} {x}: expected 0 to {max}");
     }
     Ok(())
 }
 
 impl VisibilityArgs {
-    /// Checks the values (a finite bias, a sharpness of at most 16, a
-    /// brightness exponent in 0..=4).
+    /// Checks the values (a finite bias, a sharpness of at most 16,
+    /// brightness exponents in 0..=4).
     fn check(&self) -> Result<()> {
         if let Some(b) = self.visibility_bias.filter(|b| !b.is_finite()) {
             bail!("--visibility-bias {b}: expected a finite distance in metres");
@@ -139,6 +159,9 @@ impl VisibilityArgs {
         }
         if let Some(a) = self.brightness_weight {
             check_brightness_weight(a)?;
+        }
+        if let Some(g) = self.directional_brightness {
+            check_directional_brightness(g)?;
         }
         Ok(())
     }
@@ -171,6 +194,13 @@ impl VisibilityArgs {
                 .or(self.no_probe_weights.then_some(0.0));
             if let Some(a) = a {
                 let in_range = c.set_brightness_weighting(a).is_ok();
+                debug_assert!(in_range, "checked by VisibilityArgs::check");
+            }
+            let g = self
+                .directional_brightness
+                .or(self.no_probe_weights.then_some(0.0));
+            if let Some(g) = g {
+                let in_range = c.set_directional_brightness(g).is_ok();
                 debug_assert!(in_range, "checked by VisibilityArgs::check");
             }
         }

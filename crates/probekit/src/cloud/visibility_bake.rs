@@ -90,6 +90,7 @@ impl VisibilityBake {
                     &meta["settings"]["probe_weights"],
                     &BlendFitSettings {
                         brightness: Some(file.brightness_exponent),
+                        directional: file.directional_exponent,
                         ..BlendFitSettings::new(seed)
                     },
                 )
@@ -136,6 +137,7 @@ impl VisibilityBake {
         }
         file.probe_weights = None;
         file.brightness_exponent = 0.0;
+        file.directional_exponent = 0.0;
         Ok(())
     }
 
@@ -154,6 +156,7 @@ impl VisibilityBake {
     ) -> Result<(), VisibilityBakeError> {
         file.probe_weights = None;
         file.brightness_exponent = 0.0;
+        file.directional_exponent = 0.0;
         if let Some(fit) = &self.probe_weights {
             let f = fit_file_probe_weights(
                 baker,
@@ -165,6 +168,7 @@ impl VisibilityBake {
             )?;
             file.probe_weights = Some(f.weights);
             file.brightness_exponent = f.brightness;
+            file.directional_exponent = f.directional;
         }
         Ok(())
     }

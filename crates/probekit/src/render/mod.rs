@@ -154,6 +154,11 @@ pub struct RenderSettings {
     /// one the file stores with its probe weights, 0 without). Volumes
     /// ignore it.
     pub brightness_weight: Option<f32>,
+    /// Clouds: directional brightness exponent of the test object's blend
+    /// ([`ProbeCloud::set_directional_brightness`]; `None`, the default:
+    /// the one the file stores with its probe weights, 0 without). Volumes
+    /// ignore it.
+    pub directional_brightness: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -169,6 +174,7 @@ impl Default for RenderSettings {
             seed: 1,
             albedo: 0.8,
             brightness_weight: None,
+            directional_brightness: None,
         }
     }
 }
@@ -393,19 +399,27 @@ pub fn render(
         c.set_brightness_weighting(a)
             .map_err(|e| RenderError::BadSettings(e.to_string()))?;
     }
-    // Walls are shaded without visibility or brightness weighting (module
+    if let (Source::Cloud(c), Some(g)) = (&mut source, settings.directional_brightness) {
+        c.set_directional_brightness(g)
+            .map_err(|e| RenderError::BadSettings(e.to_string()))?;
+    }
+    // Walls are shaded without visibility or brightness weighting of either
+    // kind (module
     // docs): a second view of the cloud with them off, only when the first
     // has one on.
     let unweighted = match &source {
         Source::Cloud(c)
             if c.visibility_enabled()
                 || c.cell_visibility_enabled()
-                || c.brightness_weighting() > 0.0 =>
+                || c.brightness_weighting() > 0.0
+                || c.directional_brightness() > 0.0 =>
         {
             let mut c = c.clone();
             c.set_visibility(false);
             c.set_cell_visibility(false);
             c.set_brightness_weighting(0.0)
+                .map_err(|e| RenderError::BadSettings(e.to_string()))?;
+            c.set_directional_brightness(0.0)
                 .map_err(|e| RenderError::BadSettings(e.to_string()))?;
             Some(Source::Cloud(c))
         }
