@@ -6,11 +6,13 @@
 //! **What.** With exponent `γ > 0` ([`super::ProbeCloud::set_directional_brightness`]),
 //! for each of the twelve directions `d` of [`directions`] (the vertices of
 //! an icosahedron) every probe `i` of the cell gets the weight
-//! `w_i(d) = w_i · L_i(d)^−γ / Σ_k w_k · L_k(d)^−γ`: `w_i` the cloud's
-//! blend weight at the point (barycentric × visibility × fitted probe
-//! weight × mean brightness), `L_i(d)` the luminance of the probe's
-//! irradiance for normal `d` as the cloud was built (floored at 10⁻³ of
-//! the cell's brightest for that direction). The blended irradiance
+//! `w_i(d) = w_i · f_i(d) / Σ_k w_k · f_k(d)`: `w_i` the cloud's blend
+//! weight at the point (barycentric × visibility × fitted probe weight ×
+//! mean brightness), and `f_i(d) = (L_i(d) / (t·r(d)))^−γ` for a probe
+//! brighter than `t` = [`DIRECTIONAL_RATIO`] times the cell's weighted
+//! harmonic mean `r(d)`, 1 otherwise ([`factors`]); `L_i(d)` the luminance
+//! of the probe's irradiance for normal `d` as the cloud was built (floored
+//! at 10⁻³ of the cell's brightest for that direction). The blended irradiance
 //! `E(d) = Σ_i w_i(d) E_i(d)` at the twelve directions is projected back to
 //! SH bands 0–2 with equal quadrature weights `4π/12` and divided by the
 //! clamped-cosine band factors, giving radiance SH. Bands above 2 (whose
@@ -30,7 +32,7 @@
 //! `L_i(d)` is baked, like the mean brightness, so a cloud relit in place
 //! blends as built and the relit irradiance stays linear in the group
 //! scales. The cost is twelve directional irradiances per probe of the cell
-//! and 48 powers per query.
+//! and up to 48 powers per query.
 //!
 //! Our own method, measured in BENCHMARKS.md ("Directional brightness");
 //! the per-direction weighting is in the spirit of DDGI's per-direction
@@ -154,27 +156,47 @@ fn inverse_power(x: f32, gamma: f32) -> f32 {
     }
 }
 
-/// Per-direction factors `L_k(d)^−γ` of a cell's four probes: `lum[k]` the
-/// probes' directional luminances ([`DirectionTable::luminance`] of the
-/// baked SH), `active[k]` whether slot `k` is used. Each direction's
-/// luminances are floored at 10⁻³ of its brightest active one; a direction
-/// without a positive, finite brightest gets 1 for all. Unused slots get 1.
+/// How much brighter than the cell (for a direction) a probe may be before
+/// the directional blend damps it: `t` of [`factors`]. Measured on
+/// builtin:demo (BENCHMARKS.md, "Directional brightness"): 3 keeps the
+/// closet free of leaks at a third of the error cost of damping every
+/// difference (`t` = 1).
+pub const DIRECTIONAL_RATIO: f32 = 3.0;
+
+/// Per-direction factors of a cell's four probes: `lum[k]` the probes'
+/// directional luminances ([`DirectionTable::luminance`] of the baked SH),
+/// `weights[k]` their blend weights (≥ 0; slots with 0 unused). For each
+/// direction `d`, each used probe's luminance is floored at 10⁻³ of the
+/// brightest used one, `r(d) = (Σ_k w_k / L_k(d))⁻¹ · Σ_k w_k` is the cell's
+/// weighted harmonic mean luminance, and the factor is
+/// `(max(L_k(d), t·r(d)) / (t·r(d)))^−γ` with `t` = [`DIRECTIONAL_RATIO`]:
+/// 1 for a probe less than `t` times the cell's brightness in that
+/// direction, `(t·r/L_k)^γ` for a brighter one. The harmonic mean follows the
+/// dimmer probes (what a dark closet's cell is made of) and is continuous in
+/// the weights, so a probe whose weight goes to 0 at a face changes nothing
+/// there. A direction without a positive, finite brightest gets 1 for all,
+/// as do unused slots and `γ ≤ 0`.
 pub fn factors(
     lum: [&[f32; DIRECTIONS]; 4],
-    active: [bool; 4],
+    weights: [f32; 4],
     gamma: f32,
 ) -> [[f32; 4]; DIRECTIONS] {
+    let used = weights.map(|w| w > 0.0);
+    let total: f32 = weights.iter().filter(|w| **w > 0.0).sum();
     core::array::from_fn(|d| {
         let top = (0..4)
-            .filter(|&k| active[k])
+            .filter(|&k| used[k])
             .map(|k| lum[k][d])
             .fold(0.0f32, f32::max);
-        if !(top > 0.0 && top.is_finite()) || gamma <= 0.0 {
+        if !(top > 0.0 && top.is_finite()) || gamma <= 0.0 || !(total > 0.0 && total.is_finite()) {
             return [1.0; 4];
         }
+        let l: [f32; 4] = core::array::from_fn(|k| lum[k][d].max(1e-3 * top));
+        let inverse: f32 = (0..4).filter(|&k| used[k]).map(|k| weights[k] / l[k]).sum();
+        let threshold = DIRECTIONAL_RATIO * total / inverse;
         core::array::from_fn(|k| {
-            if active[k] {
-                inverse_power(lum[k][d].max(1e-3 * top), gamma)
+            if used[k] && l[k] > threshold {
+                inverse_power(l[k] / threshold, gamma)
             } else {
                 1.0
             }
@@ -237,25 +259,45 @@ mod tests {
         }
     }
 
-    /// Factors: 1 at γ = 0 or in unused slots, the floor at 10⁻³ of the
-    /// brightest, and the inverse power otherwise (against `powf`).
+    /// Factors against a direct computation of the rule: 1 at γ = 0, in
+    /// unused slots and below the threshold; `(L / (t·r))^−γ` above it, `r`
+    /// the weighted harmonic mean with floored luminances.
     #[test]
-    fn factors_floor_and_power() {
+    fn factors_damp_probes_brighter_than_the_cell() {
         let mut lum = [[1.0f32; DIRECTIONS]; 4];
         lum[0] = [16.0; DIRECTIONS];
         lum[1] = [0.0; DIRECTIONS];
         lum[2][3] = -5.0;
+        lum[3] = [1e6; DIRECTIONS];
         let refs = [&lum[0], &lum[1], &lum[2], &lum[3]];
-        let active = [true, true, true, false];
-        assert_eq!(factors(refs, active, 0.0), [[1.0; 4]; DIRECTIONS]);
+        let w = [0.2f32, 0.3, 0.5, 0.0];
+        assert_eq!(factors(refs, w, 0.0), [[1.0; 4]; DIRECTIONS]);
         for gamma in [0.25f32, 0.5, 0.7, 1.0] {
-            let f = factors(refs, active, gamma);
-            for fd in &f {
-                assert!((fd[0] - 16f32.powf(-gamma)).abs() < 1e-6);
-                assert!((fd[1] - 0.016f32.powf(-gamma)).abs() < 1e-4 * fd[1]);
+            let f = factors(refs, w, gamma);
+            for (d, fd) in f.iter().enumerate() {
+                // Floors at 10⁻³ of 16; slot 3 unused.
+                let l = [16.0f32, 0.016, if d == 3 { 0.016 } else { 1.0 }];
+                let r = 1.0 / (0.2 / l[0] + 0.3 / l[1] + 0.5 / l[2]);
+                let t = DIRECTIONAL_RATIO * r;
+                for k in 0..3 {
+                    let want = if l[k] > t {
+                        (l[k] / t).powf(-gamma)
+                    } else {
+                        1.0
+                    };
+                    assert!(
+                        (fd[k] - want).abs() < 1e-5 * want,
+                        "{d} {k}: {} {want}",
+                        fd[k]
+                    );
+                }
                 assert_eq!(fd[3], 1.0);
+                assert!(fd[0] < 1.0 && fd[1] == 1.0);
             }
-            assert!((f[3][2] - 0.016f32.powf(-gamma)).abs() < 1e-4 * f[3][2]);
         }
+        // Equal probes: no damping.
+        let same = [[2.0f32; DIRECTIONS]; 4];
+        let f = factors([&same[0], &same[1], &same[2], &same[3]], [0.25; 4], 1.0);
+        assert_eq!(f, [[1.0; 4]; DIRECTIONS]);
     }
 }

@@ -362,23 +362,24 @@ impl ProbeCloud {
 
     /// Sets the directional brightness exponent `γ` (0, the default,
     /// switches it off): [`ProbeCloud::sh_at`] blends the cell per direction,
-    /// each probe's weight divided by the luminance of its irradiance *for
-    /// that direction* to the power `γ` (as the cloud was built, so
-    /// relighting stays linear), and projects the twelve directions' blends
-    /// back to SH ([`super::directional`]). Where the mean brightness
+    /// the weight of each probe more than [`super::directional::DIRECTIONAL_RATIO`]
+    /// times brighter *for that direction* than the cell (its weighted
+    /// harmonic mean) divided by the excess to the power `γ` (luminances as
+    /// the cloud was built, so relighting stays linear), and projects the
+    /// twelve directions' blends back to SH ([`super::directional`]). Where the mean brightness
     /// ([`ProbeCloud::set_brightness_weighting`]) damps a probe that is
     /// bright on average, this damps a probe bright only towards one side —
     /// a doorway probe seeing a lit corridor, next to a dark closet — for the
     /// normals facing that side. Still one radiance SH per point, a convex
     /// blend per direction, exact for a constant field, and the plain blend
     /// at `γ = 0`. A file's probe weights carry the exponent they were fitted
-    /// for ([`ProbeCloud::from_file`]). Errors on a value outside
-    /// `0..=`[`MAX_BRIGHTNESS_EXPONENT`] or not a number.
-    pub fn set_directional_brightness(&mut self, beta: f32) -> Result<(), ProbeCloudError> {
-        if !(0.0..=MAX_BRIGHTNESS_EXPONENT).contains(&beta) {
-            return Err(ProbeCloudError::BrightnessExponent(beta));
+    /// for and the directional one ([`ProbeCloud::from_file`]). Errors on a
+    /// value outside `0..=`[`MAX_BRIGHTNESS_EXPONENT`] or not a number.
+    pub fn set_directional_brightness(&mut self, gamma: f32) -> Result<(), ProbeCloudError> {
+        if !(0.0..=MAX_BRIGHTNESS_EXPONENT).contains(&gamma) {
+            return Err(ProbeCloudError::BrightnessExponent(gamma));
         }
-        self.directional = beta;
+        self.directional = gamma;
         Ok(())
     }
 
@@ -628,7 +629,7 @@ impl ProbeCloud {
         let active = weights.map(|w| w > 0.0);
         let data = &self.directional_data;
         let lum = probes.map(|i| &data.luminance[i as usize]);
-        let f = directional::factors(lum, active, self.directional);
+        let f = directional::factors(lum, *weights, self.directional);
         let e: [[Vec3; DIRECTIONS]; 4] = core::array::from_fn(|k| {
             if active[k] {
                 data.table.irradiance(self.probe_sh(probes[k] as usize))
