@@ -258,7 +258,7 @@ fn bake_inspect_query_with_and_without_visibility() {
 /// default, `inspect` reports them, `query` uses them unless
 /// `--no-probe-weights`, the metadata records the fit's settings, a fixed
 /// `--brightness-weight` is stored as given, so is the directional
-/// brightness (0.25 by default, `query` blends with it), and bad fit settings are
+/// brightness (0.5 by default, `query` blends with it), and bad fit settings are
 /// one-line errors.
 #[test]
 fn bake_fits_probe_weights_and_query_uses_them() {
@@ -300,7 +300,7 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
     assert!(
         meta.contains(
-            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"directional\":0.25,\"points_per_probe\":4"
+            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"directional\":0.5,\"points_per_probe\":4"
         ),
         "{meta}"
     );
@@ -318,9 +318,9 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     );
     let h = json(d, &["inspect", "h.probes", "--json"]);
     assert_eq!(h["probe_weights"]["brightness_exponent"], 0.75);
-    // Directional brightness: 0.25 by default, stored as given.
-    assert_eq!(pw["directional_exponent"], 0.25);
-    assert_eq!(h["probe_weights"]["directional_exponent"], 0.25);
+    // Directional brightness: 0.5 by default, stored as given.
+    assert_eq!(pw["directional_exponent"], 0.5);
+    assert_eq!(h["probe_weights"]["directional_exponent"], 0.5);
     json(
         d,
         &[
@@ -349,7 +349,7 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     // same with or without it (not fitted for).
     assert_eq!(
         q("w.probes", &[]),
-        q("w.probes", &["--directional-brightness", "0.25"])
+        q("w.probes", &["--directional-brightness", "0.5"])
     );
     assert_ne!(
         q("w.probes", &[]),

@@ -34,7 +34,7 @@
 //! `--brightness A` (with `--visibility`): and with brightness weighting
 //! `A` (`probekit eval --brightness-weight A`), the weights fitted for it;
 //! `auto`: the exponent the fit chooses (`probekit bake`'s default), printed.
-//! `--directional G` (with `--visibility`; default 0 here, 0.25 in
+//! `--directional G` (with `--visibility`; default 0 here, 0.5 in
 //! `probekit bake`): and with directional brightness `G` on top of the
 //! fitted weights (`probekit bake --directional-brightness G`).
 //! `--normal-brightness A` (with `--visibility`; an experiment, not a

@@ -178,8 +178,9 @@ pub struct BakeArgs {
     pub brightness_weight: String,
     /// Directional brightness exponent γ the cloud blends with on top of
     /// the fitted probe weights (0 to 4; 0: off), stored with them: per
-    /// normal direction, a probe bright only towards one side (a doorway
-    /// seeing a lit corridor) counts less for the normals facing it. Not
+    /// normal direction, a probe more than 3× brighter than its cell towards
+    /// one side (a doorway seeing a lit corridor) counts less for the
+    /// normals facing it. Not
     /// fitted for: a fixed bias against leaks
     /// (`probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL`).
     #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL, value_name = "G")]

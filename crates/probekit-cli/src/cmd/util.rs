@@ -116,10 +116,11 @@ pub struct VisibilityArgs {
     pub brightness_weight: Option<f32>,
     /// Clouds: directional brightness exponent γ, 0 to 4 (default: the one
     /// stored with the file's probe weights, 0 without them or with
-    /// `--no-probe-weights`): per normal direction, each probe's weight is
-    /// divided by its irradiance for that direction to the power γ, so a
-    /// probe bright only towards a doorway does not light the dark side of
-    /// its cell (see `ProbeCloud::set_directional_brightness`).
+    /// `--no-probe-weights`): per normal direction, the weight of a probe
+    /// more than 3× brighter than its cell for that direction is divided by
+    /// the excess to the power γ, so a probe bright only towards a doorway
+    /// does not light the dark side of its cell (see
+    /// `ProbeCloud::set_directional_brightness`).
     #[arg(long)]
     pub directional_brightness: Option<f32>,
 }

@@ -418,11 +418,12 @@ pub const BRIGHTNESS_CHOICES: [f32; 3] = [0.0, 0.5, 1.0];
 /// on top of weights fitted for the blend without it, a deliberate bias
 /// against leaks. Measured on builtin:demo (BENCHMARKS.md, "Directional
 /// brightness"): at ~500 probes it removes the closet leaks of all five
-/// placements for 4–5 % more rel_rmse; weights fitted *for* it (the
-/// objective evaluated per direction) undo that — they raise the doorway
-/// probes back until the objective, which counts no leaks, is at its
-/// minimum — and so do larger exponents' costs (0.5: +12 %).
-pub const DEFAULT_DIRECTIONAL: f32 = 0.25;
+/// placements, and rel_rmse falls 1 %; 0.25 left one closet leak, 1 raised
+/// rel_rmse. Weights fitted *for* the directional blend (the fit's error
+/// per direction) brought the leaks back — the fit raises the doorway
+/// probes again until its objective, which counts no leaks, is at its
+/// minimum — so it is not part of the fit.
+pub const DEFAULT_DIRECTIONAL: f32 = 0.5;
 
 /// A fitted blend: the brightness exponent `α` the cloud should blend with
 /// and the probe weights fitted for it.
