@@ -23,8 +23,8 @@
 //! 1977): equal-weight quadrature over them integrates every polynomial of
 //! degree ≤ 5 exactly, so the product of two functions of bands ≤ 2 (degree
 //! 4) too. The projection of an irradiance of bands ≤ 2 is therefore exact:
-//! at `γ = 0`, or when every probe of the cell has the same directional
-//! brightness, the result is the plain blend, bit for bit up to rounding.
+//! at `γ = 0`, or where no probe of the cell stands out by more than `t`
+//! in any direction, the result is the plain blend, up to rounding.
 //!
 //! **Properties.** Per direction a convex combination, so a constant field
 //! is kept and the blend is continuous in the point wherever the weights
