@@ -389,18 +389,6 @@ impl ProbeCloud {
         self.directional
     }
 
-    /// Probe `i`'s baked directional luminances `L_i(d)` for the twelve
-    /// directions of [`super::directional::directions`] (see
-    /// [`ProbeCloud::set_directional_brightness`]).
-    pub fn directional_luminance(&self, i: usize) -> &[f32; DIRECTIONS] {
-        &self.directional_data.luminance[i]
-    }
-
-    /// The directional blend's constant tables.
-    pub fn direction_table(&self) -> &DirectionTable {
-        &self.directional_data.table
-    }
-
     /// Attaches (or with `None` removes) fitted per-probe blend weights
     /// `s_i`, one per probe, each in [`PROBE_WEIGHT_RANGE`]: probe `i`'s
     /// blend weight is multiplied by `s_i` before the renormalization of
@@ -609,17 +597,22 @@ impl ProbeCloud {
         let m = out.len().min(n);
         out.iter_mut().for_each(|c| *c = Vec3::ZERO);
         let (probes, weights) = self.weights_at(p, state);
+        // The directional blend writes bands ≤ 2 itself; the plain blend
+        // fills the rest.
+        let first = if self.directional > 0.0 {
+            self.directional_blend(&probes, &weights, &mut out[..m]);
+            m.min(directional::DIRECTIONAL_COEFFS)
+        } else {
+            0
+        };
         for (&i, &w) in probes.iter().zip(&weights) {
             if w == 0.0 {
                 continue;
             }
-            let src = &self.coeffs[i as usize * n..i as usize * n + m];
-            for (o, c) in out[..m].iter_mut().zip(src) {
+            let src = &self.coeffs[i as usize * n + first..i as usize * n + m];
+            for (o, c) in out[first..m].iter_mut().zip(src) {
                 *o += *c * w;
             }
-        }
-        if self.directional > 0.0 {
-            self.directional_blend(&probes, &weights, &mut out[..m]);
         }
     }
 
