@@ -57,7 +57,10 @@
 //!    set, so the estimates stay valid — is removed and as many pool points
 //!    re-inserted by error; two such rounds.
 //! 6. A last leak-prevention pass, then pool points that still leak, within
-//!    a twentieth of the budget over it.
+//!    a twentieth of the budget over it; before the pool points, probes for
+//!    pockets of free space that see none of their tetrahedron's probes
+//!    (behind a wall's end or a closet's corner, which crosses no edge:
+//!    [`super::orphan_points`]), within a fortieth of the budget more.
 //!
 //! It stops early when the estimated relative RMSE over the pool
 //! (`sqrt(Σ err / Σ mean-square irradiance)`, the definition of
@@ -142,6 +145,9 @@ pub(super) const BOUNDARY_SNAP: f32 = 1.2 * PROBE_CLEARANCE;
 
 /// New candidates spawned around each inserted probe.
 const SPAWN: usize = 4;
+
+/// Rounds of [`super::orphan_points`] at the end of adaptive placement.
+const ORPHAN_PASSES: u32 = 2;
 
 /// Share of each insertion batch reserved for pool points that leak through
 /// geometry (fail the leak test [`leaks`] while blending a probe hidden
@@ -1042,8 +1048,17 @@ pub(super) fn adaptive(
     let extra = (budget / 20).max(4);
     let before = a.st.positions.len();
     a.st.fix_leaks_within(ls, extra, Some(bbox))?;
-    a.origin.resize(a.st.positions.len(), None);
     let mut left = extra.saturating_sub(a.st.positions.len() - before);
+    // Pockets behind a wall's end or corner that see none of their
+    // tetrahedron's probes get one, within an allowance of their own: from
+    // the edge test's allowance they would crowd out its probes.
+    a.st.fix_orphans(
+        PROBE_CLEARANCE - CLEARANCE_TOLERANCE,
+        ORPHAN_PASSES,
+        (budget / 40).max(2),
+        bbox,
+    )?;
+    a.origin.resize(a.st.positions.len(), None);
     while let Some(s) = a.score()? {
         let leaking = s.leak.iter().filter(|&&l| l).count();
         a.st.stats.leaking_pool_points = Some(leaking);

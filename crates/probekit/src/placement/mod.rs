@@ -16,6 +16,12 @@
 //! points are re-tetrahedralized; this repeats a few times. Interpolation
 //! across a wall is then confined to a thin band around it.
 //!
+//! Beyond seed 003, `adaptive` also fills **orphan pockets**
+//! ([`orphan_points`]): a wall's end or a closet's corner can reach into a
+//! tetrahedron without crossing any of its edges, so the edge test adds
+//! nothing there, and the free space behind it sees none of the
+//! tetrahedron's four probes; a probe goes into each such pocket.
+//!
 //! No placed probe is inside geometry: candidates are rejected by a
 //! first-hit back-face vote ([`inside_geometry`]), and captures whose
 //! validity says invalid are dropped.
@@ -34,6 +40,7 @@ use crate::scene::Aabb;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::ShRgb;
+use rayon::prelude::*;
 use std::collections::BTreeSet;
 use thiserror::Error;
 
@@ -162,6 +169,9 @@ pub struct PlacementStats {
     pub rejected_inside: usize,
     /// Probes inserted by leak prevention.
     pub leak_probes: usize,
+    /// Probes inserted for pockets of free space that see none of their
+    /// tetrahedron's probes ([`orphan_points`]; adaptive).
+    pub orphan_probes: usize,
     /// Crossing extent before leak prevention (see [`crossing_extent`]), metres.
     pub crossing_before: f32,
     /// Crossing extent after leak prevention, metres.
@@ -250,24 +260,46 @@ pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
     back * 2 > DIRS.len()
 }
 
+/// The 26 unit directions towards the faces, edges and corners of a cube
+/// around a point (the axes, face diagonals and cube diagonals), in a fixed
+/// order: the rays of [`is_free`], [`is_open`] and [`push_off_surfaces`].
+fn cube_directions() -> impl Iterator<Item = Vec3> {
+    (0..27).filter(|&i| i != 13).map(|i: i32| {
+        Vec3::new(
+            (i / 9 - 1) as f32,
+            (i / 3 % 3 - 1) as f32,
+            (i % 3 - 1) as f32,
+        )
+        .normalize()
+    })
+}
+
 /// True when `p` is in free space: not [`inside_geometry`] and no surface
 /// within `clearance` metres along any of 26 directions (the axes, face
 /// diagonals and cube diagonals).
 pub fn is_free(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    for x in -1i32..=1 {
-        for y in -1i32..=1 {
-            for z in -1i32..=1 {
-                if (x, y, z) == (0, 0, 0) {
-                    continue;
-                }
-                let d = Vec3::new(x as f32, y as f32, z as f32).normalize();
-                if tracer.closest_hit(&Ray::new(p, d), clearance).is_some() {
-                    return false;
-                }
+    !cube_directions().any(|d| tracer.closest_hit(&Ray::new(p, d), clearance).is_some())
+        && !inside_geometry(tracer, p)
+}
+
+/// A stricter [`is_free`]: no surface within `clearance` metres along any of
+/// its 26 directions, and fewer than a quarter of them first see a back
+/// face. In a scene of closed, outward-facing meshes a point of free
+/// space sees front faces first, but for a ray through an edge where two
+/// meshes meet; one inside geometry whose rays leave through faces that
+/// coincide with another mesh's (a wall's top under the ceiling) can outvote
+/// [`inside_geometry`]'s seven rays, but not 26.
+pub fn is_open(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
+    let mut back = 0;
+    for d in cube_directions() {
+        if let Some(h) = tracer.closest_hit(&Ray::new(p, d), f32::INFINITY) {
+            if h.t < clearance {
+                return false;
             }
+            back += usize::from(!h.front_face);
         }
     }
-    !inside_geometry(tracer, p)
+    4 * back < 26
 }
 
 /// Cell-centred uniform grid over `b`: cell size `cell`, or about `budget`
@@ -473,6 +505,37 @@ impl State<'_, '_> {
         }
     }
 
+    /// Up to `passes` rounds of [`orphan_points`] (inside `bounds`), at most
+    /// `limit` probes added in all; returns how many.
+    fn fix_orphans(
+        &mut self,
+        clearance: f32,
+        passes: u32,
+        limit: usize,
+        bounds: &Aabb,
+    ) -> Result<usize, PlacementError> {
+        let mut added = 0;
+        for _ in 0..passes {
+            if added >= limit {
+                break;
+            }
+            let mut new = orphan_points(self.baker.tracer(), &self.positions, clearance)?;
+            new.retain(|p| bounds.contains(*p));
+            let new = self.snap(new);
+            let new = self.filter_free(new);
+            let mut got = self.capture(&new)?;
+            got.retain(|(p, _)| bounds.contains(*p));
+            got.truncate(limit - added);
+            if got.is_empty() {
+                break;
+            }
+            added += got.len();
+            self.stats.orphan_probes += got.len();
+            self.add(got);
+        }
+        Ok(added)
+    }
+
     /// One or more passes of leak prevention; at most `limit` probes added.
     fn fix_leaks(&mut self, ls: &LeakSettings, limit: usize) -> Result<(), PlacementError> {
         self.fix_leaks_within(ls, limit, None)
@@ -544,8 +607,21 @@ pub fn leak_points(
             }
         }
     }
-    // Minimum distance to existing and newly accepted probes (spatial hash).
-    let cell = ls.max_offset.max(1e-3);
+    Ok(spaced(
+        points,
+        cands
+            .into_iter()
+            .map(|(p, o)| (p, ls.min_distance_fraction * o)),
+        ls.max_offset,
+    ))
+}
+
+/// The candidates `(p, r)` kept in order when no existing point of `points`
+/// and no candidate kept before lies within `r` of `p` (a spatial hash of
+/// cell `cell`, which must be at least the largest `r`); non-finite ones are
+/// dropped.
+fn spaced(points: &[Vec3], cands: impl Iterator<Item = (Vec3, f32)>, cell: f32) -> Vec<Vec3> {
+    let cell = cell.max(1e-3);
     let key = |p: Vec3| {
         let q = (p / cell).floor();
         (q.x as i64, q.y as i64, q.z as i64)
@@ -555,11 +631,10 @@ pub fn leak_points(
         hash.entry(key(p)).or_default().push(p);
     }
     let mut out = Vec::new();
-    for (p, o) in cands {
+    for (p, r) in cands {
         if !p.is_finite() {
             continue;
         }
-        let r = ls.min_distance_fraction * o;
         let k = key(p);
         let mut near = false;
         'n: for dx in -1..=1 {
@@ -579,7 +654,98 @@ pub fn leak_points(
             out.push(p);
         }
     }
-    Ok(out)
+    out
+}
+
+/// Spacing of the points [`orphan_points`] tests in each tetrahedron,
+/// metres.
+pub const ORPHAN_SPACING: f32 = 0.1;
+
+/// Subdivisions of a tetrahedron's lattice in [`orphan_points`], at most.
+const ORPHAN_MAX_SUBDIVISION: u32 = 8;
+
+/// Points that see none of the probes of their tetrahedron are looked for
+/// this far from surfaces and more, metres: `probekit eval`'s points keep
+/// 1 cm.
+const ORPHAN_TEST_CLEARANCE: f32 = 0.01;
+
+/// Probes for the pockets of free space that see none of the four probes
+/// of their tetrahedron, for the Delaunay tetrahedralization of `points`,
+/// in a deterministic order. In such a pocket every visibility-aware blend
+/// has only hidden probes to choose from, so the light of the far side of a
+/// wall is all it can give.
+///
+/// Seed 003's edge test ([`leak_points`]) finds a wall that crosses an
+/// edge; a wall's *end* or a corner (a closet's, say) can reach into a
+/// tetrahedron without crossing any of its edges, leaving such a pocket
+/// behind it. In every tetrahedron this tests the points of a barycentric
+/// lattice about [`ORPHAN_SPACING`] apart (at most 8 subdivisions of its
+/// longest edge) that are in open space ([`is_open`]) at 1 cm from surfaces,
+/// as `probekit eval`'s points are: one whose segments to all four probes
+/// are blocked is pushed off nearby surfaces until it keeps `clearance`
+/// (the probes' own; [`push_off_surfaces`]) and becomes a candidate probe
+/// there, unless that fails or another probe or kept candidate is within
+/// [`ORPHAN_SPACING`].
+pub fn orphan_points(
+    tracer: &Tracer,
+    points: &[Vec3],
+    clearance: f32,
+) -> Result<Vec<Vec3>, PlacementError> {
+    use crate::cloud::cell_visibility::segment_clear;
+    use probekit_runtime::cloud::cell_visibility::{lattice_numerators, lattice_position};
+    let tri = tetrahedralize(points)?;
+    let cands: Vec<Vec3> = tri
+        .tets
+        .par_iter()
+        .flat_map_iter(|t| {
+            let v = t.map(|k| points[k as usize]);
+            let longest = (0..4)
+                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+                .map(|(i, j)| v[i].distance(v[j]))
+                .fold(0.0f32, f32::max);
+            let k = ((longest / ORPHAN_SPACING).ceil() as u32).clamp(1, ORPHAN_MAX_SUBDIVISION);
+            lattice_numerators(4, k)
+                .into_iter()
+                .filter(|n| n.iter().all(|&c| c < k))
+                .map(|n| lattice_position(t, points, &n, k))
+                .filter(|&p| {
+                    v.iter().all(|&q| !segment_clear(tracer, p, q))
+                        && is_open(tracer, p, ORPHAN_TEST_CLEARANCE)
+                })
+                .filter_map(|p| push_off_surfaces(tracer, p, clearance))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok(spaced(
+        points,
+        cands.into_iter().map(|p| (p, ORPHAN_SPACING)),
+        ORPHAN_SPACING,
+    ))
+}
+
+/// `p` moved off the surfaces within `clearance` of it (along the 26
+/// directions of [`is_free`], each hit pushing it back by the clearance it
+/// lacks, a few rounds) until it is in open space ([`is_open`]) at
+/// `clearance`; `None` when it does not get there.
+pub fn push_off_surfaces(tracer: &Tracer, mut p: Vec3, clearance: f32) -> Option<Vec3> {
+    for _ in 0..4 {
+        if is_open(tracer, p, clearance) {
+            return Some(p);
+        }
+        let mut shift = Vec3::ZERO;
+        for d in cube_directions() {
+            if let Some(h) = tracer.closest_hit(&Ray::new(p, d), clearance) {
+                shift -= d * (clearance - h.t);
+            }
+        }
+        let len = shift.length();
+        if len.is_nan() || len <= 0.0 {
+            return None;
+        }
+        // At most the clearance per round, a little past it to converge.
+        p += shift * (1.1 * len.min(clearance) / len);
+    }
+    is_open(tracer, p, clearance).then_some(p)
 }
 
 /// Places probes in `bake_box` with `method`. Captures during placement use
