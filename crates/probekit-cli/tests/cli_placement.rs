@@ -220,6 +220,17 @@ fn eval_compare_and_sweep_plot() {
         "{v}"
     );
     assert_eq!(g["points"], v["points"]);
+    // Leaks through geometry are some of the leaks, overall and per region.
+    for f in [&v, g] {
+        let (t, l) = (f["leaks_through_geometry"].as_u64(), f["leaks"].as_u64());
+        assert!(t.unwrap() <= l.unwrap(), "{v}");
+        for (_, r) in f["regions"].as_object().unwrap() {
+            assert!(
+                r["leaks_through_geometry"].as_u64() <= r["leaks"].as_u64(),
+                "{r}"
+            );
+        }
+    }
     // A grid of the file's probe count, less cells inside the wall.
     let (gn, n) = (g["probes"].as_u64().unwrap(), v["probes"].as_u64().unwrap());
     assert!(gn >= 4 && gn <= n, "{v}");

@@ -21,8 +21,8 @@ use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
-    mean_luminance, metrics, reference, region_metrics, sample_points, EvalPoint, Metrics,
-    Predictor,
+    leaks_through_geometry, mean_luminance, metrics, reference, region_metrics, sample_points,
+    EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
@@ -115,7 +115,15 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     };
     let truth = reference(&baker, &pts, &rs).with_context(|| a.scene.display().to_string())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
-    let mut out = figures(&scene, &pts, &pred, &truth, file.positions.len());
+    let hidden = predictor.blends_hidden_probes(baker.tracer(), &pts);
+    let mut out = figures(
+        &scene,
+        &pts,
+        &pred,
+        &truth,
+        hidden.as_deref(),
+        file.positions.len(),
+    );
     let scene_name = a.scene.display().to_string();
     let mut fallback = CaptureSettings::from_scene(&scene);
     fallback.samples = scene.bake.samples.unwrap_or(super::bake::DEFAULT_SAMPLES);
@@ -145,7 +153,9 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
-            out["compare"] = serde_json::json!({ "grid": figures(&scene, &pts, &gp, &truth, g.positions.len()) });
+            let gh = gpred.blends_hidden_probes(baker.tracer(), &pts);
+            let gf = figures(&scene, &pts, &gp, &truth, gh.as_deref(), g.positions.len());
+            out["compare"] = serde_json::json!({ "grid": gf });
         }
         Some(o) => bail!("--compare {o}: expected grid"),
     }
@@ -197,20 +207,36 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// Overall figures, `"probes"` and per-region figures of a prediction.
+/// Overall figures, `"probes"` and per-region figures of a prediction;
+/// with `hidden` (a cloud's [`Predictor::blends_hidden_probes`]), also
+/// `"leaks_through_geometry"`, overall and per region.
 fn figures(
     scene: &Scene,
     pts: &[EvalPoint],
     pred: &[Vec3],
     truth: &[Vec3],
+    hidden: Option<&[bool]>,
     probes: usize,
 ) -> serde_json::Value {
     let mean = mean_luminance(truth);
     let mut out = to_json(&metrics(pred, truth, mean));
     out["probes"] = probes.into();
+    if let Some(h) = hidden {
+        out["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, h).into();
+    }
     let mut regions = serde_json::Map::new();
     for (r, m) in region_metrics(&scene.regions, pts, pred, truth, mean) {
-        regions.insert(r.name.clone(), to_json(&m));
+        let mut j = to_json(&m);
+        if let Some(h) = hidden {
+            let bb = r.aabb();
+            let inside: Vec<bool> = pts
+                .iter()
+                .zip(h)
+                .map(|(p, &h)| h && bb.contains(p.position))
+                .collect();
+            j["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, &inside).into();
+        }
+        regions.insert(r.name.clone(), j);
     }
     out["regions"] = regions.into();
     out

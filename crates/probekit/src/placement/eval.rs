@@ -8,7 +8,11 @@
 //! * `rel_rmse = sqrt(mean |E_pred − E_true|²) / sqrt(mean |E_true|²)` (normalised RMSE);
 //! * `p95_rel_error`: 95th percentile of `|E_pred − E_true| / (|E_true| + 0.01·mean|E_true|)`;
 //! * `leaks`: points whose interpolated luminance exceeds 4× the true
-//!   luminance plus 1 % of the mean true luminance (issue 5).
+//!   luminance plus 1 % of the mean true luminance (issue 5);
+//! * `leaks_through_geometry` (clouds): those leaks whose blend gives weight
+//!   to a probe that geometry hides from the point
+//!   ([`Predictor::blends_hidden_probes`]) — light from behind a wall, as
+//!   against an error of interpolating light in sight.
 
 use super::is_free;
 use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
@@ -202,6 +206,23 @@ pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
     }
 }
 
+/// Leaks ([`is_leak`]) at the points flagged in `hidden` (their blend gives
+/// weight to a probe that geometry hides from them:
+/// [`Predictor::blends_hidden_probes`]): light that comes through a wall, as
+/// against an error of interpolating light in sight.
+pub fn leaks_through_geometry(
+    pred: &[Vec3],
+    truth: &[Vec3],
+    mean_truth_lum: f32,
+    hidden: &[bool],
+) -> usize {
+    pred.iter()
+        .zip(truth)
+        .zip(hidden)
+        .filter(|((&p, &t), &h)| h && is_leak(p, t, mean_truth_lum))
+        .count()
+}
+
 /// [`metrics`] of the points inside each region, in the regions' order;
 /// the leak threshold still uses `mean_truth_lum`, the mean over all points,
 /// so a region's leaks are the overall leaks that fall inside it.
@@ -336,6 +357,37 @@ impl Predictor {
             Predictor::Volume(v, i) => v.sample_sh(p, *i, out)?,
         }
         Ok(())
+    }
+
+    /// For a probe cloud, whether each point's blend gives weight to a probe
+    /// that geometry hides from it (the segment from the point to the probe
+    /// is blocked, [`crate::cloud::cell_visibility::segment_clear`]; the
+    /// weights of [`ProbeCloud::weights_at`], whose positive ones the
+    /// directional blend keeps), in order: a leak at such a point is light
+    /// from behind a wall; one elsewhere is an error of interpolating light
+    /// in sight (a gradient next to a lamp, say). `None` for a volume.
+    pub fn blends_hidden_probes(&self, tracer: &Tracer, points: &[EvalPoint]) -> Option<Vec<bool>> {
+        let Predictor::Cloud(c) = self else {
+            return None;
+        };
+        let pos = c.mesh().positions();
+        let mut st = WalkState::new();
+        Some(
+            points
+                .iter()
+                .map(|p| {
+                    let (idx, w) = c.weights_at(p.position, &mut st);
+                    (0..4).any(|k| {
+                        w[k] > 0.0
+                            && !crate::cloud::cell_visibility::segment_clear(
+                                tracer,
+                                p.position,
+                                pos[idx[k] as usize],
+                            )
+                    })
+                })
+                .collect(),
+        )
     }
 
     /// Irradiance at every point, in order.
