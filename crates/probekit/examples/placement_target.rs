@@ -7,7 +7,7 @@
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--directional G] [--normal-brightness A]]
-//!     [--seeds 1,2,3] [--seed S]
+//!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -44,10 +44,18 @@
 //! blended with the renormalized weights — a per-normal harmonic-style
 //! blend, no longer one SH per point.
 //!
+//! `--leaks-in REGION` (with `--visibility`): the orphan pockets
+//! (`placement::orphan_points`) of each cloud, then every leak in the named
+//! region (any name not in the scene: all leaks) with its cell's four
+//! probes: blend weight, fitted weight, irradiance for the point's normal,
+//! and whether a segment test reaches them from the point.
+//!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and the points. Prints one line
-//! per cloud with `rel_rmse`, `p95_rel_error`, leaks and per-region
-//! `rel_rmse/leaks` (the `probekit eval` figures).
+//! per cloud with `rel_rmse`, `p95_rel_error`, leaks, `through=K` (with
+//! `--visibility`: leaks through geometry, `probekit eval`'s
+//! `leaks_through_geometry`) and per-region `rel_rmse/leaks+through` (the
+//! `probekit eval` figures).
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
@@ -59,8 +67,12 @@ use probekit::cloud::cell_visibility::{
 };
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
-use probekit::placement::eval::{interpolate_cloud, metrics, region_metrics};
-use probekit::placement::{grid_points, inside_geometry, place, LightShells, PlacementMethod};
+use probekit::placement::eval::{
+    interpolate_cloud, leaks_through_geometry, metrics, region_metrics, Predictor,
+};
+use probekit::placement::{
+    grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
+};
 use probekit::scene::Scene;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
@@ -85,6 +97,10 @@ fn main() -> Result<(), Box<dyn Error>> {
         .map(|s| s.trim().parse())
         .collect::<Result<_, _>>()?;
     let top = args.iter().any(|a| a == "--top");
+    let leaks_in: Option<String> = args
+        .iter()
+        .any(|a| a == "--leaks-in")
+        .then(|| arg(&args, "--leaks-in", String::new()));
     let skip_grid = args.iter().any(|a| a == "--no-grid");
     let floor = args.iter().any(|a| a == "--floor");
     let shells = match arg(&args, "--light-shells", "auto".to_string()).as_str() {
@@ -125,12 +141,20 @@ fn main() -> Result<(), Box<dyn Error>> {
     s.seed = arg(&args, "--seed", s.seed);
     let diag: std::cell::RefCell<Option<ProbeCloud>> = std::cell::RefCell::new(None);
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {
+        *diag.borrow_mut() = None;
         let sh: Vec<ShRgb> = baker
             .capture_many(pos, 0, &s, &|_, _| {})?
             .into_iter()
             .map(|r| r.sh)
             .collect();
         let mesh = tetrahedralize(pos)?.to_tet_mesh(pos)?;
+        if leaks_in.is_some() {
+            let o = probekit::placement::orphan_points(baker.tracer(), pos, PROBE_CLEARANCE)?;
+            println!("{name}: {} orphan points", o.len());
+            for p in o.iter().take(20) {
+                println!("   orphan {p:.3?}");
+            }
+        }
         let pred = if visibility {
             let order = sh.first().map_or(1, |s| s.order());
             let coeffs: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().to_vec()).collect();
@@ -175,10 +199,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                 cloud.set_probe_weights(Some(f.weights))?;
             }
             let mut ws = WalkState::new();
-            if top {
-                // The blend at the worst points, for diagnosis.
-                *diag.borrow_mut() = Some(cloud.clone());
-            }
+            // The blend, for the leak split and the diagnosis of the worst points.
+            *diag.borrow_mut() = Some(cloud.clone());
             pts.iter()
                 .map(|p| match normal_brightness {
                     Some(a) => per_normal_blend(&cloud, p.position, p.normal, a, &mut ws),
@@ -189,9 +211,24 @@ fn main() -> Result<(), Box<dyn Error>> {
             interpolate_cloud(&mesh, &sh, &pts)
         };
         let m = metrics(&pred, &truth, mean);
+        // Leaks whose blend reaches a probe behind geometry (`probekit eval`'s
+        // `leaks_through_geometry`), overall and per region after a `+`.
+        let hidden: Vec<bool> = match diag.borrow().as_ref() {
+            Some(c) => Predictor::Cloud(c.clone())
+                .blends_hidden_probes(baker.tracer(), &pts)
+                .unwrap_or_default(),
+            None => vec![false; pts.len()],
+        };
         let mut reg = String::new();
         for (r, mm) in region_metrics(&scene.regions, &pts, &pred, &truth, mean) {
-            reg += &format!(" {}:{:.2}/{}", r.name, mm.rel_rmse, mm.leaks);
+            let bb = r.aabb();
+            let inside: Vec<bool> = pts
+                .iter()
+                .zip(&hidden)
+                .map(|(p, &h)| h && bb.contains(p.position))
+                .collect();
+            let through = leaks_through_geometry(&pred, &truth, mean, &inside);
+            reg += &format!(" {}:{:.2}/{}+{through}", r.name, mm.rel_rmse, mm.leaks);
         }
         if top {
             let mut idx: Vec<usize> = (0..pts.len()).collect();
@@ -223,12 +260,40 @@ fn main() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
+        if let (Some(rn), Some(c)) = (leaks_in.as_ref(), diag.borrow().as_ref()) {
+            let region = scene.regions.iter().find(|r| &r.name == rn);
+            for (i, p) in pts.iter().enumerate() {
+                let inside = region.map_or(true, |r| r.aabb().contains(p.position));
+                if !inside || !probekit::placement::eval::is_leak(pred[i], truth[i], mean) {
+                    continue;
+                }
+                println!(
+                    "  LEAK p={:.3?} n={:.2?} truth={:.4?} pred={:.4?}",
+                    p.position, p.normal, truth[i], pred[i]
+                );
+                let mut ws = WalkState::new();
+                let (idx4, w4) = c.weights_at(p.position, &mut ws);
+                for k in 0..4 {
+                    let j = idx4[k] as usize;
+                    let e = probekit_sh::irradiance(c.probe_sh(j), p.normal);
+                    println!(
+                        "      probe {j} at {:.3?}: weight {:.3}, fitted s {:.3}, E(n) {:.3}, clear {}",
+                        pos[j],
+                        w4[k],
+                        c.probe_weights().map_or(1.0, |s| s[j]),
+                        probekit_sh::LUMINANCE.dot(e),
+                        probekit::cloud::cell_visibility::segment_clear(baker.tracer(), p.position, pos[j])
+                    );
+                }
+            }
+        }
         println!(
-            "{name:>9} probes={:5} rel_rmse={:.3} p95={:.2} leaks={:3} |{reg}",
+            "{name:>9} probes={:5} rel_rmse={:.3} p95={:.2} leaks={:3} through={} |{reg}",
             pos.len(),
             m.rel_rmse,
             m.p95_rel_error,
-            m.leaks
+            m.leaks,
+            leaks_through_geometry(&pred, &truth, mean, &hidden)
         );
         Ok(())
     };
