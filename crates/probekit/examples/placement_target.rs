@@ -68,7 +68,8 @@ use probekit::cloud::cell_visibility::{
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
-    interpolate_cloud, leaks_through_geometry, metrics, region_metrics, Predictor,
+    blends_hidden_probes, interpolate_cloud, leaks_through_geometry, metrics,
+    region_leaks_through_geometry, region_metrics,
 };
 use probekit::placement::{
     grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
@@ -214,21 +215,17 @@ fn main() -> Result<(), Box<dyn Error>> {
         // Leaks whose blend reaches a probe behind geometry (`probekit eval`'s
         // `leaks_through_geometry`), overall and per region after a `+`.
         let hidden: Vec<bool> = match diag.borrow().as_ref() {
-            Some(c) => Predictor::Cloud(c.clone())
-                .blends_hidden_probes(baker.tracer(), &pts)
-                .unwrap_or_default(),
+            Some(c) => blends_hidden_probes(c, baker.tracer(), &pts),
             None => vec![false; pts.len()],
         };
+        let through =
+            region_leaks_through_geometry(&scene.regions, &pts, &pred, &truth, mean, &hidden);
         let mut reg = String::new();
-        for (r, mm) in region_metrics(&scene.regions, &pts, &pred, &truth, mean) {
-            let bb = r.aabb();
-            let inside: Vec<bool> = pts
-                .iter()
-                .zip(&hidden)
-                .map(|(p, &h)| h && bb.contains(p.position))
-                .collect();
-            let through = leaks_through_geometry(&pred, &truth, mean, &inside);
-            reg += &format!(" {}:{:.2}/{}+{through}", r.name, mm.rel_rmse, mm.leaks);
+        for ((r, mm), t) in region_metrics(&scene.regions, &pts, &pred, &truth, mean)
+            .into_iter()
+            .zip(through)
+        {
+            reg += &format!(" {}:{:.2}/{}+{t}", r.name, mm.rel_rmse, mm.leaks);
         }
         if top {
             let mut idx: Vec<usize> = (0..pts.len()).collect();

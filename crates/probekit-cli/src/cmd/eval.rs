@@ -21,8 +21,8 @@ use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
-    leaks_through_geometry, mean_luminance, metrics, reference, region_metrics, sample_points,
-    EvalPoint, Metrics, Predictor,
+    leaks_through_geometry, mean_luminance, metrics, reference, region_leaks_through_geometry,
+    region_metrics, sample_points, EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
@@ -224,17 +224,16 @@ fn figures(
     if let Some(h) = hidden {
         out["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, h).into();
     }
+    let through =
+        hidden.map(|h| region_leaks_through_geometry(&scene.regions, pts, pred, truth, mean, h));
     let mut regions = serde_json::Map::new();
-    for (r, m) in region_metrics(&scene.regions, pts, pred, truth, mean) {
+    for (i, (r, m)) in region_metrics(&scene.regions, pts, pred, truth, mean)
+        .into_iter()
+        .enumerate()
+    {
         let mut j = to_json(&m);
-        if let Some(h) = hidden {
-            let bb = r.aabb();
-            let inside: Vec<bool> = pts
-                .iter()
-                .zip(h)
-                .map(|(p, &h)| h && bb.contains(p.position))
-                .collect();
-            j["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, &inside).into();
+        if let Some(t) = &through {
+            j["leaks_through_geometry"] = t[i].into();
         }
         regions.insert(r.name.clone(), j);
     }

@@ -11,7 +11,7 @@
 //!   luminance plus 1 % of the mean true luminance (issue 5);
 //! * `leaks_through_geometry` (clouds): those leaks whose blend gives weight
 //!   to a probe that geometry hides from the point
-//!   ([`Predictor::blends_hidden_probes`]) — light from behind a wall, as
+//!   ([`blends_hidden_probes`]) — light from behind a wall, as
 //!   against an error of interpolating light in sight.
 
 use super::is_free;
@@ -208,7 +208,7 @@ pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
 
 /// Leaks ([`is_leak`]) at the points flagged in `hidden` (their blend gives
 /// weight to a probe that geometry hides from them:
-/// [`Predictor::blends_hidden_probes`]): light that comes through a wall, as
+/// [`blends_hidden_probes`]): light that comes through a wall, as
 /// against an error of interpolating light in sight.
 pub fn leaks_through_geometry(
     pred: &[Vec3],
@@ -221,6 +221,60 @@ pub fn leaks_through_geometry(
         .zip(hidden)
         .filter(|((&p, &t), &h)| h && is_leak(p, t, mean_truth_lum))
         .count()
+}
+
+/// Whether each point's blend in `cloud` gives weight to a probe that
+/// geometry hides from it (the segment from the point to the probe is
+/// blocked, [`crate::cloud::cell_visibility::segment_clear`]; the weights of
+/// [`ProbeCloud::weights_at`], whose positive ones the directional blend
+/// keeps), in order: a leak at such a point is light from behind a wall; one
+/// elsewhere is an error of interpolating light in sight (a gradient next to
+/// a lamp, say).
+pub fn blends_hidden_probes(
+    cloud: &ProbeCloud,
+    tracer: &Tracer,
+    points: &[EvalPoint],
+) -> Vec<bool> {
+    let pos = cloud.mesh().positions();
+    let mut st = WalkState::new();
+    points
+        .iter()
+        .map(|p| {
+            let (idx, w) = cloud.weights_at(p.position, &mut st);
+            (0..4).any(|k| {
+                w[k] > 0.0
+                    && !crate::cloud::cell_visibility::segment_clear(
+                        tracer,
+                        p.position,
+                        pos[idx[k] as usize],
+                    )
+            })
+        })
+        .collect()
+}
+
+/// [`leaks_through_geometry`] of the points inside each region, in the
+/// regions' order (as [`region_metrics`]; `hidden` flags all points).
+pub fn region_leaks_through_geometry(
+    regions: &[Region],
+    points: &[EvalPoint],
+    pred: &[Vec3],
+    truth: &[Vec3],
+    mean_truth_lum: f32,
+    hidden: &[bool],
+) -> Vec<usize> {
+    regions
+        .iter()
+        .map(|r| {
+            let bb = r.aabb();
+            let inside: Vec<bool> = points
+                .iter()
+                .zip(hidden)
+                .map(|(p, &h)| h && bb.contains(p.position))
+                .collect();
+            leaks_through_geometry(pred, truth, mean_truth_lum, &inside)
+        })
+        .collect()
 }
 
 /// [`metrics`] of the points inside each region, in the regions' order;
@@ -359,35 +413,12 @@ impl Predictor {
         Ok(())
     }
 
-    /// For a probe cloud, whether each point's blend gives weight to a probe
-    /// that geometry hides from it (the segment from the point to the probe
-    /// is blocked, [`crate::cloud::cell_visibility::segment_clear`]; the
-    /// weights of [`ProbeCloud::weights_at`], whose positive ones the
-    /// directional blend keeps), in order: a leak at such a point is light
-    /// from behind a wall; one elsewhere is an error of interpolating light
-    /// in sight (a gradient next to a lamp, say). `None` for a volume.
+    /// [`blends_hidden_probes`] for a probe cloud; `None` for a volume.
     pub fn blends_hidden_probes(&self, tracer: &Tracer, points: &[EvalPoint]) -> Option<Vec<bool>> {
-        let Predictor::Cloud(c) = self else {
-            return None;
-        };
-        let pos = c.mesh().positions();
-        let mut st = WalkState::new();
-        Some(
-            points
-                .iter()
-                .map(|p| {
-                    let (idx, w) = c.weights_at(p.position, &mut st);
-                    (0..4).any(|k| {
-                        w[k] > 0.0
-                            && !crate::cloud::cell_visibility::segment_clear(
-                                tracer,
-                                p.position,
-                                pos[idx[k] as usize],
-                            )
-                    })
-                })
-                .collect(),
-        )
+        match self {
+            Predictor::Cloud(c) => Some(blends_hidden_probes(c, tracer, points)),
+            Predictor::Volume(..) => None,
+        }
     }
 
     /// Irradiance at every point, in order.

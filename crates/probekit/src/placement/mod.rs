@@ -521,19 +521,33 @@ impl State<'_, '_> {
             }
             let mut new = orphan_points(self.baker.tracer(), &self.positions, clearance)?;
             new.retain(|p| bounds.contains(*p));
-            let new = self.snap(new);
-            let new = self.filter_free(new);
-            let mut got = self.capture(&new)?;
-            got.retain(|(p, _)| bounds.contains(*p));
-            got.truncate(limit - added);
-            if got.is_empty() {
+            let got = self.admit(new, |p| bounds.contains(*p), limit - added)?;
+            if got == 0 {
                 break;
             }
-            added += got.len();
-            self.stats.orphan_probes += got.len();
-            self.add(got);
+            added += got;
+            self.stats.orphan_probes += got;
         }
         Ok(added)
+    }
+
+    /// Snaps `new` onto the box layers, keeps those in free space, captures
+    /// them and adds up to `room` of the valid captures for which `inside`
+    /// holds as probes; returns how many.
+    fn admit(
+        &mut self,
+        new: Vec<Vec3>,
+        inside: impl Fn(&Vec3) -> bool,
+        room: usize,
+    ) -> Result<usize, PlacementError> {
+        let new = self.snap(new);
+        let new = self.filter_free(new);
+        let mut got = self.capture(&new)?;
+        got.retain(|(p, _)| inside(p));
+        got.truncate(room);
+        let n = got.len();
+        self.add(got);
+        Ok(n)
     }
 
     /// One or more passes of leak prevention; at most `limit` probes added.
@@ -564,14 +578,9 @@ impl State<'_, '_> {
             if new.is_empty() {
                 break;
             }
-            let new = self.snap(new);
-            let new = self.filter_free(new);
-            let mut got = self.capture(&new)?;
-            got.retain(|(p, _)| inside(p));
-            got.truncate(limit - added_total);
-            added_total += got.len();
-            self.stats.leak_probes += got.len();
-            self.add(got);
+            let got = self.admit(new, inside, limit - added_total)?;
+            added_total += got;
+            self.stats.leak_probes += got;
         }
         Ok(())
     }
