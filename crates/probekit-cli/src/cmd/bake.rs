@@ -75,7 +75,8 @@ pub struct BakeArgs {
     /// `spawn-merge` or `gradient-ascent` (seed 003; `--budget` and the flags below).
     #[arg(long)]
     pub placement: Option<String>,
-    /// Adaptive placement: probe budget.
+    /// Adaptive placement: probe budget, a hard cap (the final leak and
+    /// orphan-pocket probes included).
     #[arg(long, default_value_t = 256)]
     pub budget: usize,
     /// Adaptive placement: stop when the relative RMSE estimated on the

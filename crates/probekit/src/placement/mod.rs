@@ -64,8 +64,8 @@ pub enum PlacementMethod {
     Manual(Vec<Vec3>),
     /// Error-driven refinement (see the module docs).
     Adaptive {
-        /// Probe count to stop at (leak-prevention probes of the last pass may
-        /// exceed it by a few percent).
+        /// Most probes to place: a hard cap, the final leak-prevention and
+        /// orphan-pocket probes included.
         budget: usize,
         /// Stop when the mean relative irradiance error at the candidates of a
         /// round falls below this (e.g. 0.05).
@@ -687,14 +687,17 @@ const ORPHAN_TEST_CLEARANCE: f32 = 0.01;
 /// Seed 003's edge test ([`leak_points`]) finds a wall that crosses an
 /// edge; a wall's *end* or a corner (a closet's, say) can reach into a
 /// tetrahedron without crossing any of its edges, leaving such a pocket
-/// behind it. In every tetrahedron this tests the points of a barycentric
-/// lattice about [`ORPHAN_SPACING`] apart (at most 8 subdivisions of its
-/// longest edge) that are in open space ([`is_open`]) at 1 cm from surfaces,
-/// as `probekit eval`'s points are: one whose segments to all four probes
-/// are blocked is pushed off nearby surfaces until it keeps `clearance`
+/// behind it. In every tetrahedron, and on every face of the hull (beyond
+/// which a point blends the face's three probes), this tests the points of
+/// a barycentric lattice about [`ORPHAN_SPACING`] apart (at most 8
+/// subdivisions of its longest edge) that are in open space ([`is_open`]) at
+/// 1 cm from surfaces, as `probekit eval`'s points are: one whose segments
+/// to all the cell's probes are blocked is pushed off nearby surfaces until it keeps `clearance`
 /// (the probes' own; [`push_off_surfaces`]) and becomes a candidate probe
 /// there, unless that fails or another probe or kept candidate is within
-/// [`ORPHAN_SPACING`].
+/// [`ORPHAN_SPACING`]. The candidates come largest pocket first: ordered
+/// greedily by how many of the orphaned lattice points each sees within
+/// [`ORPHAN_COVER_RADIUS`] that the ones before it do not.
 pub fn orphan_points(
     tracer: &Tracer,
     points: &[Vec3],
@@ -703,17 +706,25 @@ pub fn orphan_points(
     use crate::cloud::cell_visibility::segment_clear;
     use probekit_runtime::cloud::cell_visibility::{lattice_numerators, lattice_position};
     let tri = tetrahedralize(points)?;
-    let cands: Vec<Vec3> = tri
-        .tets
+    // The tetrahedra, and the hull's faces: outside the hull a point blends
+    // the three probes of the face below it (the outer cells), so a face
+    // point that sees none of those three is orphaned there.
+    let mut cells: Vec<Vec<u32>> = tri.tets.iter().map(|t| t.to_vec()).collect();
+    for (t, nb) in tri.tets.iter().zip(&tri.neighbors) {
+        for i in (0..4).filter(|&i| nb[i] == crate::cloud::HULL) {
+            cells.push((0..4).filter(|&j| j != i).map(|j| t[j]).collect());
+        }
+    }
+    let cands: Vec<(Vec3, Option<Vec3>)> = cells
         .par_iter()
         .flat_map_iter(|t| {
-            let v = t.map(|k| points[k as usize]);
-            let longest = (0..4)
-                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+            let v: Vec<Vec3> = t.iter().map(|&k| points[k as usize]).collect();
+            let longest = (0..v.len())
+                .flat_map(|i| (i + 1..v.len()).map(move |j| (i, j)))
                 .map(|(i, j)| v[i].distance(v[j]))
                 .fold(0.0f32, f32::max);
             let k = ((longest / ORPHAN_SPACING).ceil() as u32).clamp(1, ORPHAN_MAX_SUBDIVISION);
-            lattice_numerators(4, k)
+            lattice_numerators(v.len(), k)
                 .into_iter()
                 .filter(|n| n.iter().all(|&c| c < k))
                 .map(|n| lattice_position(t, points, &n, k))
@@ -721,15 +732,69 @@ pub fn orphan_points(
                     v.iter().all(|&q| !segment_clear(tracer, p, q))
                         && is_open(tracer, p, ORPHAN_TEST_CLEARANCE)
                 })
-                .filter_map(|p| push_off_surfaces(tracer, p, clearance))
+                .map(|p| (p, push_off_surfaces(tracer, p, clearance)))
                 .collect::<Vec<_>>()
         })
         .collect();
-    Ok(spaced(
+    let orphans: Vec<Vec3> = cands.iter().map(|c| c.0).collect();
+    let spaced = spaced(
         points,
-        cands.into_iter().map(|p| (p, ORPHAN_SPACING)),
+        cands
+            .iter()
+            .filter_map(|c| c.1)
+            .map(|p| (p, ORPHAN_SPACING)),
         ORPHAN_SPACING,
-    ))
+    );
+    Ok(by_pocket_coverage(tracer, spaced, &orphans))
+}
+
+/// How far a probe for an orphan pocket counts as serving an orphaned
+/// point it sees, metres ([`by_pocket_coverage`]).
+pub const ORPHAN_COVER_RADIUS: f32 = 1.0;
+
+/// `cands` reordered greedily by the orphaned points they serve: first the
+/// candidate that sees (a clear segment, within [`ORPHAN_COVER_RADIUS`])
+/// the most of `orphans`, then the one that sees the most of those left,
+/// and so on (ties to the earlier candidate; those that serve none keep
+/// their order at the end). An allowance of a few probes then goes to the
+/// largest pockets first — a closet's floor rather than a sliver beside a
+/// pillar — instead of to whichever cell came first.
+fn by_pocket_coverage(tracer: &Tracer, cands: Vec<Vec3>, orphans: &[Vec3]) -> Vec<Vec3> {
+    use crate::cloud::cell_visibility::segment_clear;
+    let r2 = ORPHAN_COVER_RADIUS * ORPHAN_COVER_RADIUS;
+    let sees: Vec<Vec<u32>> = cands
+        .par_iter()
+        .map(|&c| {
+            (0..orphans.len() as u32)
+                .filter(|&i| {
+                    let o = orphans[i as usize];
+                    o.distance_squared(c) < r2 && segment_clear(tracer, c, o)
+                })
+                .collect()
+        })
+        .collect();
+    let mut served = vec![false; orphans.len()];
+    let mut taken = vec![false; cands.len()];
+    let mut out = Vec::with_capacity(cands.len());
+    loop {
+        let gain = |k: usize| sees[k].iter().filter(|&&i| !served[i as usize]).count();
+        let best = (0..cands.len())
+            .filter(|&k| !taken[k])
+            .map(|k| (k, gain(k)))
+            .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)));
+        match best {
+            Some((k, g)) if g > 0 => {
+                taken[k] = true;
+                for &i in &sees[k] {
+                    served[i as usize] = true;
+                }
+                out.push(cands[k]);
+            }
+            _ => break,
+        }
+    }
+    out.extend((0..cands.len()).filter(|&k| !taken[k]).map(|k| cands[k]));
+    out
 }
 
 /// `p` moved off the surfaces within `clearance` of it (along the 26

@@ -119,8 +119,9 @@ fn adaptive_places_no_probe_inside_and_is_deterministic() {
     )
     .unwrap();
     assert_eq!(a, b);
+    // The budget is a hard cap (the last leak and orphan passes included).
     assert!(
-        a.positions.len() >= 48 && a.positions.len() <= 60,
+        a.positions.len() >= 40 && a.positions.len() <= 48,
         "{}",
         a.positions.len()
     );
@@ -451,6 +452,22 @@ fn orphaned_share(tracer: &Tracer, probes: &[Vec3], pts: &[Vec3]) -> f32 {
     orphaned as f32 / pts.len() as f32
 }
 
+/// Probes around the demo's closet and none in it, at each height `ys`: two
+/// in the corridor (z 1.1..1.7) and two in room A east of the closet's side
+/// wall.
+fn around_the_closet(ys: &[f32]) -> Vec<Vec3> {
+    ys.iter()
+        .flat_map(|&y| {
+            [
+                Vec3::new(0.1, y, 1.4),
+                Vec3::new(0.8, y, 1.4),
+                Vec3::new(1.6, y, 0.06),
+                Vec3::new(1.6, y, 0.9),
+            ]
+        })
+        .collect()
+}
+
 /// A closet whose walls reach into tetrahedra of corridor and room probes
 /// without crossing an edge into it: seed 003's edge test adds nothing
 /// there, part of the closet sees none of its cell's probes, and
@@ -460,14 +477,7 @@ fn orphaned_share(tracer: &Tracer, probes: &[Vec3], pts: &[Vec3]) -> f32 {
 fn orphan_points_fill_a_closet_that_no_edge_crosses() {
     let scene = Scene::builtin_demo();
     let tracer = Tracer::new(&scene);
-    let mut probes = Vec::new();
-    for y in [0.5f32, 2.5] {
-        // Corridor (z 1.1..1.7) and room A east of the closet's side wall.
-        probes.push(Vec3::new(0.1, y, 1.4));
-        probes.push(Vec3::new(0.8, y, 1.4));
-        probes.push(Vec3::new(1.6, y, 0.06));
-        probes.push(Vec3::new(1.6, y, 0.9));
-    }
+    let probes = around_the_closet(&[0.5, 2.5]);
     let closet = closet_points(3000);
     let before = orphaned_share(&tracer, &probes, &closet);
     assert!(before > 0.02, "orphaned share before: {before}");
@@ -491,6 +501,46 @@ fn orphan_points_fill_a_closet_that_no_edge_crosses() {
     assert!(after < 0.1 * before, "orphaned share {before} -> {after}");
 }
 
+/// Orphan candidates come largest pocket first, counting only the orphaned
+/// points a candidate sees within reach: a hand-made case in the demo with
+/// 20 orphaned points in the closet and 3 in room B. A candidate in room B
+/// (listed first) serves 3, one in the closet 20, and one in room A beside
+/// the closet's side wall, 0.4 m from the closet's points but behind the
+/// wall, none: it goes last.
+#[test]
+fn orphan_candidates_come_largest_pocket_first() {
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    let mut orphans: Vec<Vec3> = (0..20)
+        .map(|i| Vec3::new(0.3 + 0.04 * i as f32, 1.5, 0.5))
+        .collect();
+    orphans.extend((0..3).map(|i| Vec3::new(6.0 + 0.1 * i as f32, 1.5, 3.0)));
+    let room_b = Vec3::new(6.1, 1.2, 3.0);
+    let closet = Vec3::new(0.7, 1.2, 0.5);
+    let beside = Vec3::new(1.6, 1.5, 0.5);
+    let order = by_pocket_coverage(&tracer, vec![beside, room_b, closet], &orphans);
+    assert_eq!(order, vec![closet, room_b, beside]);
+}
+
+/// Below the hull's floor layer a point blends the three probes of the hull
+/// face above it. Here the floor layer's probes all stand outside the
+/// closet, and a probe high in the closet sees its floor from above: every
+/// tetrahedron over the closet's floor has a probe the floor's points see,
+/// but the hull face under them has none, so the orphan search must test
+/// the hull's faces too, and it puts a probe on the closet's floor.
+#[test]
+fn orphan_points_cover_the_hull_faces() {
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    let mut probes = around_the_closet(&[0.06, 2.5]);
+    probes.push(Vec3::new(0.6, 2.5, 0.5));
+    let new = orphan_points(&tracer, &probes, 0.049).unwrap();
+    assert!(
+        new.iter().any(|p| p.x < 1.2 && p.z < 1.0 && p.y < 0.2),
+        "{new:?}"
+    );
+}
+
 /// `push_off_surfaces` lifts a point 1 cm above the floor to the clearance
 /// (and not much further), leaves an open point alone, and gives up inside
 /// a wall, where no surface is within reach to push from.
@@ -509,6 +559,34 @@ fn push_off_surfaces_reaches_the_clearance() {
         push_off_surfaces(&tracer, Vec3::new(4.0, 1.0, 1.0), c),
         None
     );
+}
+
+/// No evaluation point lies in geometry or within 5 mm of it: checked
+/// against the demo's boxes themselves (signed distance to each box, an
+/// independent computation), over the five point sets the placement tables
+/// pool. With `inside_geometry`'s seven rays alone, 5 of these 10 000 points
+/// were inside the dividing wall (where its top meets the ceiling's face, and
+/// its end the front wall's).
+#[test]
+fn evaluation_points_are_outside_every_box_of_the_demo() {
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    for seed in [1, 2, 3, 5, 6] {
+        let pts = sample_points(&tracer, &scene.bake_box(), 2000, seed);
+        assert_eq!(pts.len(), 2000);
+        for p in &pts {
+            for (name, min, max, _) in crate::scene::demo::BOXES {
+                let (min, max) = (Vec3::from(min), Vec3::from(max));
+                let outside = (min - p.position).max(p.position - max);
+                let d = if outside.max_element() > 0.0 {
+                    outside.max(Vec3::ZERO).length()
+                } else {
+                    outside.max_element()
+                };
+                assert!(d > 0.005, "{} is {d} m from {name}", p.position);
+            }
+        }
+    }
 }
 
 /// `is_open` agrees with `is_free` in free space and inside walls, and
