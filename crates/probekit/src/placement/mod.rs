@@ -749,7 +749,7 @@ pub fn orphan_points(
 }
 
 /// How far a probe for an orphan pocket counts as serving an orphaned
-/// point it sees, metres ([`by_pocket_coverage`]).
+/// point it sees, metres: [`orphan_points`] orders its candidates by them.
 pub const ORPHAN_COVER_RADIUS: f32 = 1.0;
 
 /// `cands` reordered greedily by the orphaned points they serve: first the
