@@ -692,12 +692,12 @@ const ORPHAN_TEST_CLEARANCE: f32 = 0.01;
 /// a barycentric lattice about [`ORPHAN_SPACING`] apart (at most 8
 /// subdivisions of its longest edge) that are in open space ([`is_open`]) at
 /// 1 cm from surfaces, as `probekit eval`'s points are: one whose segments
-/// to all the cell's probes are blocked is pushed off nearby surfaces until it keeps `clearance`
-/// (the probes' own; [`push_off_surfaces`]) and becomes a candidate probe
-/// there, unless that fails or another probe or kept candidate is within
-/// [`ORPHAN_SPACING`]. The candidates come largest pocket first: ordered
-/// greedily by how many of the orphaned lattice points each sees within
-/// [`ORPHAN_COVER_RADIUS`] that the ones before it do not.
+/// to all the cell's probes are blocked is pushed off nearby surfaces until
+/// it keeps `clearance` (the probes' own; [`push_off_surfaces`]) and becomes
+/// a candidate probe there, unless that fails or another probe or kept
+/// candidate is within [`ORPHAN_SPACING`]. The candidates come largest
+/// pocket first: ordered greedily by how many of the orphaned lattice points
+/// each sees within [`ORPHAN_COVER_RADIUS`] that the ones before it do not.
 pub fn orphan_points(
     tracer: &Tracer,
     points: &[Vec3],
@@ -773,25 +773,33 @@ fn by_pocket_coverage(tracer: &Tracer, cands: Vec<Vec3>, orphans: &[Vec3]) -> Ve
                 .collect()
         })
         .collect();
+    // Lazy greedy: a candidate's gain only falls as points are served, so
+    // a heap of stale gains (upper bounds) yields the exact greedy order
+    // (highest gain, then lowest index) re-counting only the candidate on
+    // top, instead of every candidate in every round.
+    use std::cmp::Reverse;
     let mut served = vec![false; orphans.len()];
     let mut taken = vec![false; cands.len()];
     let mut out = Vec::with_capacity(cands.len());
-    loop {
-        let gain = |k: usize| sees[k].iter().filter(|&&i| !served[i as usize]).count();
-        let best = (0..cands.len())
-            .filter(|&k| !taken[k])
-            .map(|k| (k, gain(k)))
-            .max_by(|a, b| a.1.cmp(&b.1).then(b.0.cmp(&a.0)));
-        match best {
-            Some((k, g)) if g > 0 => {
-                taken[k] = true;
-                for &i in &sees[k] {
-                    served[i as usize] = true;
-                }
-                out.push(cands[k]);
-            }
-            _ => break,
+    let mut heap: std::collections::BinaryHeap<(usize, Reverse<usize>)> = sees
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (s.len(), Reverse(k)))
+        .collect();
+    while let Some((stale, Reverse(k))) = heap.pop() {
+        let gain = sees[k].iter().filter(|&&i| !served[i as usize]).count();
+        if gain < stale {
+            heap.push((gain, Reverse(k)));
+            continue;
         }
+        if gain == 0 {
+            break;
+        }
+        taken[k] = true;
+        for &i in &sees[k] {
+            served[i as usize] = true;
+        }
+        out.push(cands[k]);
     }
     out.extend((0..cands.len()).filter(|&k| !taken[k]).map(|k| cands[k]));
     out
