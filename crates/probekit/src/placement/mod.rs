@@ -263,7 +263,7 @@ pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
 /// The 26 unit directions towards the faces, edges and corners of a cube
 /// around a point (the axes, face diagonals and cube diagonals), in a fixed
 /// order: the rays of [`is_free`], [`is_open`] and [`push_off_surfaces`].
-fn cube_directions() -> impl Iterator<Item = Vec3> {
+pub(crate) fn cube_directions() -> impl Iterator<Item = Vec3> {
     (0..27).filter(|&i| i != 13).map(|i: i32| {
         Vec3::new(
             (i / 9 - 1) as f32,
