@@ -121,16 +121,10 @@ pub const EMITTER_CLEARANCE: f32 = 0.02;
 /// an emitter (the ceiling a light hangs under) is not seen.
 fn has_clearance(tracer: &crate::trace::Tracer, p: Vec3) -> bool {
     let scene = tracer.scene();
-    let near = |d: Vec3| match tracer
-        .closest_hit(&Ray::new(p, d), PROBE_CLEARANCE - CLEARANCE_TOLERANCE)
-    {
-        None => false,
-        Some(h) => {
-            h.t < EMITTER_CLEARANCE - CLEARANCE_TOLERANCE
-                || scene.emission(h.material, h.uv).max_element() <= 0.0
-        }
-    };
-    !super::cube_directions().any(near) && !super::inside_geometry(tracer, p)
+    super::is_free_of(tracer, p, PROBE_CLEARANCE - CLEARANCE_TOLERANCE, |h| {
+        h.t < EMITTER_CLEARANCE - CLEARANCE_TOLERANCE
+            || scene.emission(h.material, h.uv).max_element() <= 0.0
+    })
 }
 
 /// Pool points per unit of budget.

@@ -37,7 +37,7 @@ pub use adaptive::PROBE_CLEARANCE;
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
 use crate::scene::Aabb;
-use crate::trace::{Ray, Tracer};
+use crate::trace::{Hit, Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::ShRgb;
 use rayon::prelude::*;
@@ -263,7 +263,7 @@ pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
 /// The 26 unit directions towards the faces, edges and corners of a cube
 /// around a point (the axes, face diagonals and cube diagonals), in a fixed
 /// order: the rays of [`is_free`], [`is_open`] and [`push_off_surfaces`].
-pub(crate) fn cube_directions() -> impl Iterator<Item = Vec3> {
+fn cube_directions() -> impl Iterator<Item = Vec3> {
     (0..27).filter(|&i| i != 13).map(|i: i32| {
         Vec3::new(
             (i / 9 - 1) as f32,
@@ -278,8 +278,17 @@ pub(crate) fn cube_directions() -> impl Iterator<Item = Vec3> {
 /// within `clearance` metres along any of 26 directions (the axes, face
 /// diagonals and cube diagonals).
 pub fn is_free(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    !cube_directions().any(|d| tracer.closest_hit(&Ray::new(p, d), clearance).is_some())
-        && !inside_geometry(tracer, p)
+    is_free_of(tracer, p, clearance, |_| true)
+}
+
+/// [`is_free`], counting only the hits within `clearance` for which
+/// `blocks` holds (adaptive placement lets probes nearer to emitters).
+fn is_free_of(tracer: &Tracer, p: Vec3, clearance: f32, blocks: impl Fn(&Hit) -> bool) -> bool {
+    !cube_directions().any(|d| {
+        tracer
+            .closest_hit(&Ray::new(p, d), clearance)
+            .is_some_and(|h| blocks(&h))
+    }) && !inside_geometry(tracer, p)
 }
 
 /// A stricter [`is_free`]: no surface within `clearance` metres along any of
