@@ -231,6 +231,50 @@ fn eval_compare_and_sweep_plot() {
             );
         }
     }
+    // `--worst K`: the points with the most squared error, worst first;
+    // asked for more than there are, every point with an error, and their
+    // shares add up to the whole (the file's and the grid's).
+    assert!(v.get("worst").is_none(), "{v}");
+    let w = eval_compare(p, &["--worst", "1000"]);
+    assert_eq!(w["rel_rmse"], v["rel_rmse"]);
+    for f in [&w, &w["compare"]["grid"]] {
+        let list = f["worst"].as_array().unwrap();
+        assert!(list.len() >= 2 && list.len() <= 25, "{f}");
+        let e = |x: &serde_json::Value, k: &str| -> Vec<f64> {
+            x[k].as_array()
+                .unwrap()
+                .iter()
+                .map(|c| c.as_f64().unwrap())
+                .collect()
+        };
+        // The squared error from the listed truth and prediction.
+        let se = |x: &serde_json::Value| -> f64 {
+            let (t, i) = (e(x, "truth"), e(x, "irradiance"));
+            t.iter().zip(&i).map(|(a, b)| (a - b) * (a - b)).sum()
+        };
+        assert!(list.windows(2).all(|p| se(&p[0]) >= se(&p[1])), "{f}");
+        let shares: Vec<f64> = list.iter().map(|x| x["share"].as_f64().unwrap()).collect();
+        assert!(shares.windows(2).all(|s| s[0] >= s[1]), "{shares:?}");
+        let total: f64 = shares.iter().sum();
+        assert!((total - 1.0).abs() < 1e-4, "{total}");
+        // Each share is its squared error over the sum of them.
+        let sum: f64 = list.iter().map(se).sum();
+        assert!((shares[0] - se(&list[0]) / sum).abs() < 1e-3, "{f}");
+        assert_eq!(e(&list[0], "position").len(), 3);
+        assert!(list[0]["regions"].is_array());
+        // A cloud's points list the probes of their blend: weights that sum
+        // to one, probes of the file.
+        for x in list {
+            let blend = x["blend"].as_array().unwrap();
+            assert!(!blend.is_empty() && blend.len() <= 4, "{x}");
+            let sum: f64 = blend.iter().map(|b| b["weight"].as_f64().unwrap()).sum();
+            assert!((sum - 1.0).abs() < 1e-3, "{x}");
+            for b in blend {
+                assert!(b["probe"].as_u64().unwrap() < f["probes"].as_u64().unwrap());
+                assert_eq!(e(b, "irradiance").len(), 3);
+            }
+        }
+    }
     // A grid of the file's probe count, less cells inside the wall.
     let (gn, n) = (g["probes"].as_u64().unwrap(), v["probes"].as_u64().unwrap());
     assert!(gn >= 4 && gn <= n, "{v}");

@@ -12,7 +12,9 @@
 //! (`probekit::placement::sweep`) on the same points and ground truth (every
 //! swept cloud with the file's kinds of visibility data and the same
 //! query-time flags), draws rel. RMSE against probe count (log-log) and
-//! reports it under `"sweep"`.
+//! reports it under `"sweep"`. `--worst K` lists the K points that carry the
+//! most squared error, worst first, with their shares of it (under
+//! `"worst"`, for the grid too).
 
 use super::util::{load_probes, parse_interp};
 use anyhow::{bail, Context, Result};
@@ -22,13 +24,14 @@ use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
     leaks_through_geometry, mean_luminance, metrics, reference, region_leaks_through_geometry,
-    region_metrics, sample_points, EvalPoint, Metrics, Predictor,
+    region_metrics, sample_points, worst_points, EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
+use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;
 
 /// Arguments of `probekit eval`.
@@ -74,6 +77,13 @@ pub struct EvalArgs {
     /// (default: as the file's metadata records).
     #[arg(long)]
     pub samples: Option<u32>,
+    /// Also list the K points with the largest squared error, worst first,
+    /// under `"worst"`: position, normal, true and predicted irradiance, the
+    /// share of the summed squared error (of `rel_rmse²`) each carries, and
+    /// the regions that hold it. A few points next to a small bright light
+    /// can carry most of `rel_rmse`.
+    #[arg(long, default_value_t = 0)]
+    pub worst: usize,
 }
 
 fn to_json(m: &Metrics) -> serde_json::Value {
@@ -123,6 +133,8 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         &truth,
         hidden.as_deref(),
         file.positions.len(),
+        a.worst,
+        &predictor,
     );
     let scene_name = a.scene.display().to_string();
     let mut fallback = CaptureSettings::from_scene(&scene);
@@ -154,7 +166,16 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
             let gh = gpred.blends_hidden_probes(baker.tracer(), &pts);
-            let gf = figures(&scene, &pts, &gp, &truth, gh.as_deref(), g.positions.len());
+            let gf = figures(
+                &scene,
+                &pts,
+                &gp,
+                &truth,
+                gh.as_deref(),
+                g.positions.len(),
+                a.worst,
+                &gpred,
+            );
             out["compare"] = serde_json::json!({ "grid": gf });
         }
         Some(o) => bail!("--compare {o}: expected grid"),
@@ -209,7 +230,10 @@ pub fn run(a: &EvalArgs) -> Result<()> {
 
 /// Overall figures, `"probes"` and per-region figures of a prediction;
 /// with `hidden` (a cloud's [`Predictor::blends_hidden_probes`]), also
-/// `"leaks_through_geometry"`, overall and per region.
+/// `"leaks_through_geometry"`, overall and per region; with `worst` > 0,
+/// the `worst` points of [`worst_points`] under `"worst"`, for a cloud with
+/// the probes of each point's blend.
+#[allow(clippy::too_many_arguments)]
 fn figures(
     scene: &Scene,
     pts: &[EvalPoint],
@@ -217,6 +241,8 @@ fn figures(
     truth: &[Vec3],
     hidden: Option<&[bool]>,
     probes: usize,
+    worst: usize,
+    predictor: &Predictor,
 ) -> serde_json::Value {
     let mean = mean_luminance(truth);
     let mut out = to_json(&metrics(pred, truth, mean));
@@ -238,5 +264,48 @@ fn figures(
         regions.insert(r.name.clone(), j);
     }
     out["regions"] = regions.into();
+    if worst > 0 {
+        let v3 = |v: Vec3| [v.x, v.y, v.z];
+        out["worst"] = worst_points(pred, truth, worst)
+            .into_iter()
+            .map(|w| {
+                let p = &pts[w.index];
+                let inside: Vec<&str> = scene
+                    .regions
+                    .iter()
+                    .filter(|r| r.aabb().contains(p.position))
+                    .map(|r| r.name.as_str())
+                    .collect();
+                let mut j = serde_json::json!({
+                    "position": v3(p.position),
+                    "normal": v3(p.normal),
+                    "truth": v3(truth[w.index]),
+                    "irradiance": v3(pred[w.index]),
+                    "share": w.share,
+                    "regions": inside,
+                });
+                if let Predictor::Cloud(c) = predictor {
+                    // The blend weights (before any directional brightness)
+                    // and each probe's own irradiance for the point's normal.
+                    let (idx, wt) = c.weights_at(p.position, &mut WalkState::new());
+                    j["blend"] = (0..4)
+                        .filter(|&k| wt[k] > 0.0)
+                        .map(|k| {
+                            let i = idx[k] as usize;
+                            serde_json::json!({
+                                "probe": i,
+                                "position": v3(c.mesh().positions()[i]),
+                                "weight": wt[k],
+                                "irradiance": v3(probekit_sh::irradiance(c.probe_sh(i), p.normal)),
+                            })
+                        })
+                        .collect::<Vec<_>>()
+                        .into();
+                }
+                j
+            })
+            .collect::<Vec<_>>()
+            .into();
+    }
     out
 }

@@ -211,6 +211,44 @@ pub fn metrics(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> Metrics {
     }
 }
 
+/// One of the points that carry the most error ([`worst_points`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorstPoint {
+    /// Index into the evaluated points.
+    pub index: usize,
+    /// Its share of the summed squared error `Σ |E_pred − E_true|²` over all
+    /// points, in `0..=1`: the share of `rel_rmse²` it accounts for.
+    pub share: f32,
+}
+
+/// The `k` points with the largest squared error `|E_pred − E_true|²` (RGB,
+/// as `rel_rmse` sums it), largest first (ties: lower index first), with
+/// their shares of the summed squared error. On a scene with small bright
+/// lights a handful of points next to them can carry most of `rel_rmse`
+/// (the duplex apartment: one point 35 cm from a sphere light held 43 % of
+/// a grid's squared error, BENCHMARKS.md "The duplex at ~500"), which this
+/// shows before one reads too much into a single figure. Empty when no
+/// point has any error.
+pub fn worst_points(pred: &[Vec3], truth: &[Vec3], k: usize) -> Vec<WorstPoint> {
+    let n = pred.len().min(truth.len());
+    let se: Vec<f64> = (0..n)
+        .map(|i| (pred[i] - truth[i]).length_squared() as f64)
+        .collect();
+    let total: f64 = se.iter().sum();
+    if !(total.is_finite() && total > 0.0) {
+        return Vec::new();
+    }
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&a, &b| se[b].total_cmp(&se[a]).then(a.cmp(&b)));
+    idx.into_iter()
+        .take(k)
+        .map(|i| WorstPoint {
+            index: i,
+            share: (se[i] / total) as f32,
+        })
+        .collect()
+}
+
 /// Leaks ([`is_leak`]) at the points flagged in `hidden` (their blend gives
 /// weight to a probe that geometry hides from them:
 /// [`blends_hidden_probes`]): light that comes through a wall, as

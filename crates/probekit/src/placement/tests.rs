@@ -191,6 +191,57 @@ fn metrics_match_hand_computation() {
     assert_eq!(m.points, 2);
 }
 
+/// The worst points come largest first with shares of the summed squared
+/// error, and taking them out leaves exactly the rest of `rel_rmse²`:
+/// `metrics` of the remaining points (an independent sum) times their share
+/// of `Σ |E_true|²` equals `(1 − Σ share) · rel_rmse²`.
+#[test]
+fn worst_points_carry_their_share_of_the_error() {
+    let truth = [
+        Vec3::splat(1.0),
+        Vec3::splat(2.0),
+        Vec3::new(3.0, 0.0, 1.0),
+        Vec3::splat(0.5),
+        Vec3::ZERO,
+    ];
+    let pred = [
+        Vec3::splat(1.5),
+        Vec3::splat(10.0),
+        Vec3::new(3.0, 4.0, 1.0),
+        Vec3::splat(0.5),
+        Vec3::new(0.0, 4.0, 0.0),
+    ];
+    // Squared errors 0.75, 192, 16, 0, 16; sum 224.75.
+    let w = worst_points(&pred, &truth, 3);
+    assert_eq!(
+        w.iter().map(|p| p.index).collect::<Vec<_>>(),
+        vec![1, 2, 4],
+        "ties by index"
+    );
+    assert!((w[0].share - 192.0 / 224.75).abs() < 1e-6);
+    assert!((w[1].share - 16.0 / 224.75).abs() < 1e-6);
+    let all: f32 = worst_points(&pred, &truth, 10)
+        .iter()
+        .map(|p| p.share)
+        .sum();
+    assert!((all - 1.0).abs() < 1e-6);
+    assert_eq!(worst_points(&pred, &truth, 10).len(), 5);
+    let mean = mean_luminance(&truth);
+    let full = metrics(&pred, &truth, mean).rel_rmse;
+    let rest = [0usize, 3];
+    let (rp, rt): (Vec<Vec3>, Vec<Vec3>) = rest.iter().map(|&i| (pred[i], truth[i])).unzip();
+    let st = |t: &[Vec3]| t.iter().map(|v| v.length_squared()).sum::<f32>();
+    let left = metrics(&rp, &rt, mean).rel_rmse.powi(2) * st(&rt) / st(&truth);
+    let shares: f32 = w.iter().map(|p| p.share).sum();
+    assert!(
+        (left - (1.0 - shares) * full * full).abs() < 1e-5,
+        "{left} vs {}",
+        (1.0 - shares) * full * full
+    );
+    // No error at all: nothing to show.
+    assert!(worst_points(&truth, &truth, 3).is_empty());
+}
+
 /// Error of a cloud at `positions` captured with `s`, on fixed eval points.
 fn cloud_error(
     baker: &Baker,
