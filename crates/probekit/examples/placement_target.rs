@@ -10,7 +10,7 @@
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--directional G] [--normal-brightness A]]
-//!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION]
+//!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION] [--analytic-lights]
 //! ```
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
@@ -53,6 +53,17 @@
 //! probes: blend weight, fitted weight, irradiance for the point's normal,
 //! and whether a segment test reaches them from the point.
 //!
+//! `--analytic-lights` (with `--visibility --no-weights`; an experiment,
+//! not a run-time feature yet): the positional (sphere and point) lights in
+//! the bake box are left to an analytic term. Every capture — probes, the
+//! placement's pool and held-out points — leaves out their direct light
+//! ([`CaptureSettings::exclude_direct`], each such light in a group of its
+//! own), each probe records the fraction of each light it sees (its captured
+//! direct DC over the light's unshadowed SH DC), and a point's irradiance is
+//! the blend of the probes' SH plus, per light, its exact unshadowed
+//! irradiance (`rig::lights::Light::irradiance`) times the probes'
+//! fractions blended with the same weights. The ground truth is unchanged.
+//!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and the points. Prints one line
 //! per cloud with `rel_rmse`, `p95_rel_error`, leaks, `through=K` (with
@@ -72,12 +83,12 @@ use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
     blends_hidden_probes, interpolate_cloud, leaks_through_geometry, metrics,
-    region_leaks_through_geometry, region_metrics,
+    region_leaks_through_geometry, region_metrics, worst_points,
 };
 use probekit::placement::{
     grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
 };
-use probekit::scene::Scene;
+use probekit::scene::{LightKind, Scene};
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
 use std::error::Error;
@@ -129,6 +140,23 @@ fn main() -> Result<(), Box<dyn Error>> {
         .ok_or("--cell-visibility: expected auto or 1 to 8")?;
     let baker = Baker::new(&scene)?;
     let bbox = scene.bake_box();
+    // `--analytic-lights`: the positional lights in the bake box, each in a
+    // light group of its own, for captures that split off their direct light.
+    let analytic = args.iter().any(|a| a == "--analytic-lights");
+    if analytic && (weights || !visibility) {
+        return Err("--analytic-lights needs --visibility --no-weights".into());
+    }
+    let mut grouped = scene.clone();
+    let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
+    for (i, l) in grouped.lights.iter_mut().enumerate() {
+        if matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position) {
+            if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
+                l.group = Some(format!("near{i:02}"));
+                near.push((format!("near{i:02}"), rl));
+            }
+        }
+    }
+    let grouped_baker = Baker::new(&grouped)?;
     let EvalSet {
         points: pts,
         truth,
@@ -143,14 +171,55 @@ fn main() -> Result<(), Box<dyn Error>> {
     s.samples = samples;
     // The capture seed, which also seeds placement (pool jitter, spawns).
     s.seed = arg(&args, "--seed", s.seed);
+    if analytic {
+        // Probes, the placement's pool and its held-out points hold the
+        // light less the near lights' direct part.
+        s.exclude_direct = near.iter().map(|(n, _)| n.clone()).collect();
+    }
     let diag: std::cell::RefCell<Option<ProbeCloud>> = std::cell::RefCell::new(None);
     let eval = |name: &str, pos: &[Vec3]| -> Result<(), Box<dyn Error>> {
         *diag.borrow_mut() = None;
-        let sh: Vec<ShRgb> = baker
-            .capture_many(pos, 0, &s, &|_, _| {})?
-            .into_iter()
-            .map(|r| r.sh)
-            .collect();
+        // With `--analytic-lights`: each probe's SH less the direct light of
+        // the near lights, and per near light the fraction of it the probe
+        // sees (its captured direct DC over the unshadowed one).
+        let mut light_vis: Vec<Vec<f32>> = Vec::new();
+        let sh: Vec<ShRgb> = if analytic {
+            let mut s2 = s.clone();
+            s2.groups = true;
+            s2.split_direct = true;
+            let res = grouped_baker.capture_many(pos, 0, &s2, &|_, _| {})?;
+            let mut out = Vec::with_capacity(res.len());
+            for r in res {
+                let order = r.sh.order();
+                let mut vis = Vec::with_capacity(near.len());
+                for (name, light) in &near {
+                    let g = r.groups.iter().find(|(n, _)| n == name);
+                    let gi = r.groups_indirect.iter().find(|(n, _)| n == name);
+                    let (Some((_, g)), Some((_, gi))) = (g, gi) else {
+                        vis.push(0.0);
+                        continue;
+                    };
+                    let direct0 = g.coeffs()[0] - gi.coeffs()[0];
+                    let mut a = vec![Vec3::ZERO; order * order];
+                    light.add_sh(order, r.position, 1.0, &mut a);
+                    let lum = |v: Vec3| probekit_sh::LUMINANCE.dot(v);
+                    vis.push(if lum(a[0]) > 0.0 {
+                        (lum(direct0) / lum(a[0])).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    });
+                }
+                light_vis.push(vis);
+                out.push(r.sh);
+            }
+            out
+        } else {
+            baker
+                .capture_many(pos, 0, &s, &|_, _| {})?
+                .into_iter()
+                .map(|r| r.sh)
+                .collect()
+        };
         let mesh = tetrahedralize(pos)?.to_tet_mesh(pos)?;
         if leaks_in.is_some() {
             let o = probekit::placement::orphan_points(baker.tracer(), pos, PROBE_CLEARANCE)?;
@@ -206,9 +275,23 @@ fn main() -> Result<(), Box<dyn Error>> {
             // The blend, for the leak split and the diagnosis of the worst points.
             *diag.borrow_mut() = Some(cloud.clone());
             pts.iter()
-                .map(|p| match normal_brightness {
-                    Some(a) => per_normal_blend(&cloud, p.position, p.normal, a, &mut ws),
-                    None => cloud.irradiance(p.position, p.normal, &mut ws),
+                .map(|p| {
+                    let mut e = match normal_brightness {
+                        Some(a) => per_normal_blend(&cloud, p.position, p.normal, a, &mut ws),
+                        None => cloud.irradiance(p.position, p.normal, &mut ws),
+                    };
+                    if analytic {
+                        // The near lights' exact unshadowed irradiance, times
+                        // their visibility blended like the SH.
+                        let (idx, w) = cloud.weights_at(p.position, &mut ws);
+                        for (l, (_, light)) in near.iter().enumerate() {
+                            let v: f32 = (0..4).map(|k| w[k] * light_vis[idx[k] as usize][l]).sum();
+                            if v > 0.0 {
+                                e += v * light.irradiance(p.position, p.normal, None);
+                            }
+                        }
+                    }
+                    e
                 })
                 .collect()
         } else {
@@ -231,17 +314,11 @@ fn main() -> Result<(), Box<dyn Error>> {
             reg += &format!(" {}:{:.2}/{}+{t}", r.name, mm.rel_rmse, mm.leaks);
         }
         if top {
-            let mut idx: Vec<usize> = (0..pts.len()).collect();
-            let e = |i: usize| (pred[i] - truth[i]).length_squared();
-            idx.sort_by(|&a, &b| e(b).total_cmp(&e(a)));
-            let tot: f32 = (0..pts.len()).map(e).sum();
-            for &i in idx.iter().take(8) {
+            for w in worst_points(&pred, &truth, 8) {
+                let i = w.index;
                 println!(
                     "   p={:.2?} truth={:.3?} pred={:.3?} share={:.3}",
-                    pts[i].position,
-                    truth[i],
-                    pred[i],
-                    e(i) / tot
+                    pts[i].position, truth[i], pred[i], w.share
                 );
                 if let Some(c) = diag.borrow().as_ref() {
                     let mut ws = WalkState::new();
@@ -335,7 +412,10 @@ fn main() -> Result<(), Box<dyn Error>> {
             tolerance: 0.0,
             light_shells: shells,
         };
-        let a = place(&baker, bbox, &m, &s, &|_, _, _| {})?;
+        // With `--analytic-lights` placement sees the light less the near
+        // lights' direct part (PK_EXCLUDE_DIRECT=near).
+        let place_baker = if analytic { &grouped_baker } else { &baker };
+        let a = place(place_baker, bbox, &m, &s, &|_, _, _| {})?;
         println!(
             "level {b}: grid {} probes, adaptive budget {budget} (1/{gf} of the grid), {} placed",
             g.len(),

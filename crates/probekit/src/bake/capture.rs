@@ -90,6 +90,16 @@ pub struct CaptureSettings {
     pub split_direct: bool,
     /// Also return one SH per light group.
     pub groups: bool,
+    /// Light groups ([`Baker::group_names`]) whose *direct* light the
+    /// capture leaves out of [`CaptureResult::sh`]: what reaches the probe
+    /// from their emitters without scattering. Their light scattered by
+    /// surfaces stays in. For small lights that a runtime evaluates
+    /// analytically (their `1/d²` fall-off is what interpolating probes
+    /// misses most: BENCHMARKS.md, "Analytic near lights"), so that the
+    /// probes hold only the rest. `direct`, `indirect` and the per-group SH
+    /// still report all light. Empty by default; every name must be a group
+    /// of the scene.
+    pub exclude_direct: Vec<String>,
     /// Probe validity and virtual offset.
     pub validity: ValiditySettings,
 }
@@ -104,6 +114,7 @@ impl Default for CaptureSettings {
             russian_roulette_depth: 3,
             split_direct: false,
             groups: false,
+            exclude_direct: Vec::new(),
             validity: ValiditySettings::default(),
         }
     }
@@ -149,7 +160,7 @@ pub struct CaptureResult {
     pub sh: ShRgb,
     /// Direct light only (emitters seen without scattering), if requested.
     pub direct: Option<ShRgb>,
-    /// Indirect light only (`sh − direct`), if requested.
+    /// Indirect light only (all light less `direct`), if requested.
     pub indirect: Option<ShRgb>,
     /// Per light group `(name, radiance SH)`, sorted by name, if requested.
     pub groups: Vec<(String, ShRgb)>,
@@ -316,6 +327,21 @@ impl<'s> Baker<'s> {
             .into_iter()
             .map(|g| self.emitters.groups[g].clone())
             .collect()
+    }
+
+    /// Every name of `s.exclude_direct` is a light group of the scene.
+    fn check_excluded(&self, s: &CaptureSettings) -> Result<(), BakeError> {
+        if s.exclude_direct.is_empty() {
+            return Ok(());
+        }
+        let names = self.group_names();
+        match s.exclude_direct.iter().find(|n| !names.contains(n)) {
+            None => Ok(()),
+            Some(n) => Err(BakeError::BadSettings(format!(
+                "exclude_direct: no light group `{n}` in the scene (groups: {})",
+                names.join(", ")
+            ))),
+        }
     }
 
     fn present_groups(&self) -> Vec<usize> {
@@ -751,6 +777,7 @@ impl<'s> Baker<'s> {
         s: &CaptureSettings,
     ) -> Result<(CaptureResult, Option<Vec<Vec3>>), BakeError> {
         s.validate()?;
+        self.check_excluded(s)?;
         if !point.is_finite() {
             return Err(BakeError::NonFinitePosition {
                 index: probe_index as usize,
@@ -830,7 +857,11 @@ impl<'s> Baker<'s> {
             ShRgb::from_coeffs(c.into_iter().map(|v| v.as_vec3()).collect())
                 .expect("order² coefficients")
         };
-        let sh = sum_slots(&|_| true);
+        // Slot `2g` holds group g's direct light, `2g + 1` its scattered light.
+        let excluded: Vec<usize> = (0..ngroups)
+            .filter(|&g| s.exclude_direct.contains(&self.emitters.groups[g]))
+            .collect();
+        let sh = sum_slots(&|sl| !(sl % 2 == 0 && excluded.contains(&(sl / 2))));
         let (direct, indirect) = if s.split_direct {
             (
                 Some(sum_slots(&|sl| sl % 2 == 0)),
@@ -883,6 +914,7 @@ impl<'s> Baker<'s> {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Vec<CaptureResult>, BakeError> {
         s.validate()?;
+        self.check_excluded(s)?;
         if let Some(i) = points.iter().position(|p| !p.is_finite()) {
             return Err(BakeError::NonFinitePosition {
                 index: first_index + i,

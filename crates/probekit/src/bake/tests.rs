@@ -964,6 +964,88 @@ fn two_group_room(b_scale: Vec3) -> Scene {
     )
 }
 
+/// `exclude_direct` leaves one group's direct light out of `sh` and nothing
+/// else: the excluded capture is the full one less that group's direct SH
+/// (same random numbers, so to rounding); what it leaves out matches the
+/// sphere light's closed-form SH (`rig::lights::Light::add_sh`, an
+/// independent computation) at a probe that sees the whole light; with no
+/// bounces and every group excluded nothing is left; an unknown group is an
+/// error, not a silent no-op.
+#[test]
+fn exclude_direct_leaves_out_one_groups_direct_light() {
+    let scene = two_group_room(Vec3::ONE);
+    let baker = Baker::new(&scene).unwrap();
+    let (probes, _) = group_probe_points();
+    let full_s = CaptureSettings {
+        samples: 4096,
+        split_direct: true,
+        groups: true,
+        ..CaptureSettings::default()
+    };
+    let ex_s = CaptureSettings {
+        exclude_direct: vec!["a".into()],
+        ..full_s.clone()
+    };
+    let full = baker.capture_many(&probes, 0, &full_s, &|_, _| {}).unwrap();
+    let ex = baker.capture_many(&probes, 0, &ex_s, &|_, _| {}).unwrap();
+    let group = |v: &[(String, ShRgb)]| -> Vec<Vec3> {
+        v.iter()
+            .find(|(n, _)| n == "a")
+            .unwrap()
+            .1
+            .coeffs()
+            .to_vec()
+    };
+    for (f, e) in full.iter().zip(&ex) {
+        let (ga, gi) = (group(&f.groups), group(&f.groups_indirect));
+        for k in 0..f.sh.coeffs().len() {
+            let want = f.sh.coeffs()[k] - (ga[k] - gi[k]);
+            let got = e.sh.coeffs()[k];
+            assert!(
+                (got - want).abs().max_element() <= 1e-4 * (1.0 + want.abs().max_element()),
+                "coefficient {k}: {got} vs {want}"
+            );
+        }
+        // The rest of the result still reports all light.
+        assert_eq!(f.direct, e.direct);
+        assert_eq!(f.groups, e.groups);
+    }
+    // Probe 3 at (0.1, 1.9, -0.2) sees the whole sphere light "a": the
+    // light left out is its unshadowed SH.
+    let a = &scene.lights[0];
+    let rl = crate::rig::lights::from_scene_light(a).unwrap();
+    let mut analytic = vec![Vec3::ZERO; 9];
+    rl.add_sh(3, full[3].position, 1.0, &mut analytic);
+    let left_out = full[3].sh.coeffs()[0] - ex[3].sh.coeffs()[0];
+    assert!(
+        (left_out.x / analytic[0].x - 1.0).abs() < 0.05,
+        "{left_out} vs {}",
+        analytic[0]
+    );
+    // No bounces, both groups left out: no light at all.
+    let none = CaptureSettings {
+        bounces: 0,
+        exclude_direct: vec!["a".into(), "b".into()],
+        ..CaptureSettings::default()
+    };
+    let r = baker.capture_many(&probes, 0, &none, &|_, _| {}).unwrap();
+    assert!(r
+        .iter()
+        .all(|c| c.sh.coeffs().iter().all(|v| *v == Vec3::ZERO)));
+    let bad = CaptureSettings {
+        exclude_direct: vec!["lamp".into()],
+        ..CaptureSettings::default()
+    };
+    match baker.capture_many(&probes, 0, &bad, &|_, _| {}) {
+        Err(BakeError::BadSettings(m)) => assert!(m.contains("lamp"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        baker.capture(probes[0], 0, &bad),
+        Err(BakeError::BadSettings(_))
+    ));
+}
+
 /// Five probes spanning a volume (two tetrahedra) and query points inside it.
 fn group_probe_points() -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
     let probes = vec![
