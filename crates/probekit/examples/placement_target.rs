@@ -63,6 +63,7 @@
 //! the blend of the probes' SH plus, per light, its exact unshadowed
 //! irradiance (`rig::lights::Light::irradiance`) times the probes'
 //! fractions blended with the same weights. The ground truth is unchanged.
+//! `--analytic-sun`: the same, and directional lights too.
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
 //! temporary directory, keyed by scene hash and the points. Prints one line
@@ -142,14 +143,17 @@ fn main() -> Result<(), Box<dyn Error>> {
     let bbox = scene.bake_box();
     // `--analytic-lights`: the positional lights in the bake box, each in a
     // light group of its own, for captures that split off their direct light.
-    let analytic = args.iter().any(|a| a == "--analytic-lights");
+    let analytic_sun = args.iter().any(|a| a == "--analytic-sun");
+    let analytic = analytic_sun || args.iter().any(|a| a == "--analytic-lights");
     if analytic && (weights || !visibility) {
         return Err("--analytic-lights needs --visibility --no-weights".into());
     }
     let mut grouped = scene.clone();
     let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
     for (i, l) in grouped.lights.iter_mut().enumerate() {
-        if matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position) {
+        let positional =
+            matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position);
+        if positional || (analytic_sun && l.kind == LightKind::Directional) {
             if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
                 l.group = Some(format!("near{i:02}"));
                 near.push((format!("near{i:02}"), rl));
