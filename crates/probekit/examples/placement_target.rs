@@ -53,7 +53,7 @@
 //! probes: blend weight, fitted weight, irradiance for the point's normal,
 //! and whether a segment test reaches them from the point.
 //!
-//! `--analytic-lights` (with `--visibility --no-weights`; an experiment,
+//! `--analytic-lights` (with `--visibility`; an experiment,
 //! not a run-time feature yet): the positional (sphere and point) lights in
 //! the bake box are left to an analytic term. Every capture — probes, the
 //! placement's pool and held-out points — leaves out their direct light
@@ -62,7 +62,8 @@
 //! direct DC over the light's unshadowed SH DC), and a point's irradiance is
 //! the blend of the probes' SH plus, per light, its exact unshadowed
 //! irradiance (`rig::lights::Light::irradiance`) times the probes'
-//! fractions blended with the same weights. The ground truth is unchanged.
+//! fractions blended with the same weights (fitted probe weights, when on, are
+//! fitted to the light the probes hold). The ground truth is unchanged.
 //! `--analytic-sun`: the same, and directional lights too.
 //!
 //! SCENE defaults to `builtin:demo`. Ground truth is cached in the system
@@ -145,8 +146,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     // light group of its own, for captures that split off their direct light.
     let analytic_sun = args.iter().any(|a| a == "--analytic-sun");
     let analytic = analytic_sun || args.iter().any(|a| a == "--analytic-lights");
-    if analytic && (weights || !visibility) {
-        return Err("--analytic-lights needs --visibility --no-weights".into());
+    if analytic && !visibility {
+        return Err("--analytic-lights needs --visibility".into());
     }
     let mut grouped = scene.clone();
     let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
@@ -262,7 +263,12 @@ fn main() -> Result<(), Box<dyn Error>> {
                     ..d
                 };
                 let n = fit.points_per_probe as usize * pos.len();
-                let t = capture_training_set(&baker, &bbox, cloud.mesh(), n, &s, &fit, &|_, _| {})?;
+                // Under the analytic split the weights are fitted to the
+                // light the probes hold (`s` leaves the near lights' direct
+                // light out, with the grouped scene's baker).
+                let fit_baker = if analytic { &grouped_baker } else { &baker };
+                let t =
+                    capture_training_set(fit_baker, &bbox, cloud.mesh(), n, &s, &fit, &|_, _| {})?;
                 let exps = brightness.map_or(BRIGHTNESS_CHOICES.to_vec(), |a| vec![a]);
                 let f = fit_blend(&cloud, &t, &fit, &exps)?;
                 if brightness.is_none() {
