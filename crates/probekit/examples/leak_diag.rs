@@ -78,12 +78,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         if !is_leak(e, t, mean) {
             continue;
         }
-        let regions: Vec<&str> = scene
-            .regions
-            .iter()
-            .filter(|r| r.aabb().contains(p.position))
-            .map(|r| r.name.as_str())
-            .collect();
+        let regions = scene.region_names_at(p.position);
         if regions.is_empty() && !all {
             continue;
         }

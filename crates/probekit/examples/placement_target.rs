@@ -149,19 +149,26 @@ fn main() -> Result<(), Box<dyn Error>> {
     if analytic && !visibility {
         return Err("--analytic-lights needs --visibility".into());
     }
-    let mut grouped = scene.clone();
+    // Only then: a second copy of the scene and its BVH.
     let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
-    for (i, l) in grouped.lights.iter_mut().enumerate() {
-        let positional =
-            matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position);
-        if positional || (analytic_sun && l.kind == LightKind::Directional) {
-            if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
-                l.group = Some(format!("near{i:02}"));
-                near.push((format!("near{i:02}"), rl));
+    let grouped = analytic.then(|| {
+        let mut grouped = scene.clone();
+        for (i, l) in grouped.lights.iter_mut().enumerate() {
+            let positional =
+                matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position);
+            if positional || (analytic_sun && l.kind == LightKind::Directional) {
+                if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
+                    l.group = Some(format!("near{i:02}"));
+                    near.push((format!("near{i:02}"), rl));
+                }
             }
         }
-    }
-    let grouped_baker = Baker::new(&grouped)?;
+        grouped
+    });
+    let grouped_baker = grouped.as_ref().map(Baker::new).transpose()?;
+    // The baker whose captures leave the near lights' direct light out
+    // (with `s`, below): placement and the weight fit use it too.
+    let split_baker = grouped_baker.as_ref().unwrap_or(&baker);
     let EvalSet {
         points: pts,
         truth,
@@ -188,11 +195,11 @@ fn main() -> Result<(), Box<dyn Error>> {
         // the near lights, and per near light the fraction of it the probe
         // sees (its captured direct DC over the unshadowed one).
         let mut light_vis: Vec<Vec<f32>> = Vec::new();
-        let sh: Vec<ShRgb> = if analytic {
+        let sh: Vec<ShRgb> = if let Some(gb) = &grouped_baker {
             let mut s2 = s.clone();
             s2.groups = true;
             s2.split_direct = true;
-            let res = grouped_baker.capture_many(pos, 0, &s2, &|_, _| {})?;
+            let res = gb.capture_many(pos, 0, &s2, &|_, _| {})?;
             let mut out = Vec::with_capacity(res.len());
             for r in res {
                 let order = r.sh.order();
@@ -264,11 +271,16 @@ fn main() -> Result<(), Box<dyn Error>> {
                 };
                 let n = fit.points_per_probe as usize * pos.len();
                 // Under the analytic split the weights are fitted to the
-                // light the probes hold (`s` leaves the near lights' direct
-                // light out, with the grouped scene's baker).
-                let fit_baker = if analytic { &grouped_baker } else { &baker };
-                let t =
-                    capture_training_set(fit_baker, &bbox, cloud.mesh(), n, &s, &fit, &|_, _| {})?;
+                // light the probes hold.
+                let t = capture_training_set(
+                    split_baker,
+                    &bbox,
+                    cloud.mesh(),
+                    n,
+                    &s,
+                    &fit,
+                    &|_, _| {},
+                )?;
                 let exps = brightness.map_or(BRIGHTNESS_CHOICES.to_vec(), |a| vec![a]);
                 let f = fit_blend(&cloud, &t, &fit, &exps)?;
                 if brightness.is_none() {
@@ -423,9 +435,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             light_shells: shells,
         };
         // With `--analytic-lights` placement sees the light less the near
-        // lights' direct part (PK_EXCLUDE_DIRECT=near).
-        let place_baker = if analytic { &grouped_baker } else { &baker };
-        let a = place(place_baker, bbox, &m, &s, &|_, _, _| {})?;
+        // lights' direct part.
+        let a = place(split_baker, bbox, &m, &s, &|_, _, _| {})?;
         println!(
             "level {b}: grid {} probes, adaptive budget {budget} (1/{gf} of the grid), {} placed",
             g.len(),

@@ -270,19 +270,13 @@ fn figures(
             .into_iter()
             .map(|w| {
                 let p = &pts[w.index];
-                let inside: Vec<&str> = scene
-                    .regions
-                    .iter()
-                    .filter(|r| r.aabb().contains(p.position))
-                    .map(|r| r.name.as_str())
-                    .collect();
                 let mut j = serde_json::json!({
                     "position": v3(p.position),
                     "normal": v3(p.normal),
                     "truth": v3(truth[w.index]),
                     "irradiance": v3(pred[w.index]),
                     "share": w.share,
-                    "regions": inside,
+                    "regions": scene.region_names_at(p.position),
                 });
                 if let Predictor::Cloud(c) = predictor {
                     // The blend weights (before any directional brightness)

@@ -677,6 +677,16 @@ impl Scene {
         self.bake.r#box.unwrap_or(self.bounds)
     }
 
+    /// The names of the `[[region]]`s whose box holds `p` (boxes may
+    /// overlap), in the scene file's order.
+    pub fn region_names_at(&self, p: Vec3) -> Vec<&str> {
+        self.regions
+            .iter()
+            .filter(|r| r.aabb().contains(p))
+            .map(|r| r.name.as_str())
+            .collect()
+    }
+
     /// Diffuse albedo (linear RGB) of `material` at texture coordinate `uv`.
     pub fn albedo(&self, material: u32, uv: Vec2) -> Vec3 {
         let Some(m) = self.materials.get(material as usize) else {

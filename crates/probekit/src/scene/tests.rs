@@ -695,3 +695,25 @@ fn aabb_overlap_matches_a_search_for_a_shared_point() {
         assert_eq!(o.overlaps(&unit), shared, "{o:?}");
     }
 }
+
+/// `region_names_at` names exactly the regions whose corners bound the
+/// point (compared coordinate by coordinate), in file order; a point outside
+/// every region gets none.
+#[test]
+fn region_names_at_match_the_region_boxes() {
+    let scene = Scene::builtin_demo();
+    assert!(scene.regions.len() >= 2);
+    for r in &scene.regions {
+        let c = (r.min + r.max) * 0.5;
+        let want: Vec<&str> = scene
+            .regions
+            .iter()
+            .filter(|q| (0..3).all(|a| q.min[a] <= c[a] && c[a] <= q.max[a]))
+            .map(|q| q.name.as_str())
+            .collect();
+        let got = scene.region_names_at(c);
+        assert!(got.contains(&r.name.as_str()), "{got:?}");
+        assert_eq!(got, want);
+    }
+    assert!(scene.region_names_at(Vec3::new(1e4, 1e4, 1e4)).is_empty());
+}
