@@ -808,7 +808,7 @@ impl<'s> Baker<'s> {
         // push it radially out past the surface, or flag it invalid.
         let mut in_light = false;
         for _ in 0..4 {
-            let Some(l) = self.inside_sphere_light(pos, v.offset_margin) else {
+            let Some(l) = self.scene.sphere_light_at(pos, v.offset_margin) else {
                 break;
             };
             if !v.virtual_offset {
@@ -821,21 +821,11 @@ impl<'s> Baker<'s> {
         }
         let (acc, st, se) = self.capture_at(pos, probe_index, s);
         let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
-        if in_light || self.inside_sphere_light(pos, 0.0).is_some() {
+        if in_light || self.scene.sphere_light_at(pos, 0.0).is_some() {
             validity.valid = false;
         }
         let se = se.map(|e| e.into_iter().map(|v| v.as_vec3()).collect());
         Ok((self.assemble(acc, s, pos, validity), se))
-    }
-
-    /// The first sphere light of the scene whose radius plus `margin`
-    /// contains `p`, if any.
-    fn inside_sphere_light(&self, p: Vec3, margin: f32) -> Option<&crate::scene::Light> {
-        self.scene.lights.iter().find(|l| {
-            l.kind == crate::scene::LightKind::Sphere
-                && l.radius > 0.0
-                && p.distance(l.position) < l.radius + margin
-        })
     }
 
     fn assemble(

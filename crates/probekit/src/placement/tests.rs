@@ -718,3 +718,31 @@ fn leaks_through_geometry_are_the_leaks_whose_blend_reaches_behind_a_wall() {
     // Cells between x = 3 and 5 straddle the wall: many points blend across.
     assert!(across > 40, "{across}");
 }
+
+/// No evaluation point lies inside the demo's sphere light or within 1 cm
+/// of its surface, checked by distance to its centre (an independent
+/// computation): in a 30 cm box around the lamp, a fifth of which the lamp's
+/// sphere and its 1 cm margin fill, a sampler without the test would put
+/// about 20 of 100 points there.
+#[test]
+fn evaluation_points_keep_clear_of_sphere_lights() {
+    use crate::scene::demo::{SPHERE_LIGHT_POSITION, SPHERE_LIGHT_RADIUS};
+    let scene = Scene::builtin_demo();
+    let tracer = Tracer::new(&scene);
+    let c = SPHERE_LIGHT_POSITION;
+    let b = Aabb::new(c - Vec3::splat(0.15), c + Vec3::splat(0.15));
+    let pts = sample_points(&tracer, &b, 100, 3);
+    assert_eq!(pts.len(), 100);
+    for p in &pts {
+        let d = p.position.distance(c);
+        assert!(
+            d >= SPHERE_LIGHT_RADIUS + SURFACE_CLEARANCE,
+            "{} is {d} m from the lamp's centre",
+            p.position
+        );
+    }
+    // The scene's test itself, against the same distances.
+    assert!(scene.sphere_light_at(c + Vec3::X * 0.105, 0.01).is_some());
+    assert!(scene.sphere_light_at(c + Vec3::X * 0.115, 0.01).is_none());
+    assert!(scene.sphere_light_at(c, 0.0).is_some());
+}

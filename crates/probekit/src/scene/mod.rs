@@ -677,6 +677,18 @@ impl Scene {
         self.bake.r#box.unwrap_or(self.bounds)
     }
 
+    /// The first sphere light whose radius plus `margin` (metres) holds `p`,
+    /// if any: the inside of a lamp's emitting sphere, which no ray hits
+    /// (sphere lights are not geometry) and where no probe may stand and no
+    /// evaluation point may fall.
+    pub fn sphere_light_at(&self, p: Vec3, margin: f32) -> Option<&Light> {
+        self.lights.iter().find(|l| {
+            l.kind == LightKind::Sphere
+                && l.radius > 0.0
+                && p.distance(l.position) < l.radius + margin
+        })
+    }
+
     /// The names of the `[[region]]`s whose box holds `p` (boxes may
     /// overlap), in the scene file's order.
     pub fn region_names_at(&self, p: Vec3) -> Vec<&str> {
