@@ -10,8 +10,20 @@
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
 //!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--directional G] [--normal-brightness A]]
-//!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION] [--analytic-lights]
+//!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION] [--analytic-lights] [--dump DIR]
+//!     [--near-lights N [--near-radius R] [--near-seed S]]
 //! ```
+//!
+//! `--near-lights N`: also N points in a ball of R metres (default 1) around
+//! each positional light, and a `stratified=` figure: the same population
+//! relative RMSE the uniform points estimate, with far less variance where
+//! a few points next to small lamps decide it (`common::NearLights`). The
+//! other figures stay those of the uniform points.
+//!
+//! `--dump DIR`: per cloud, `DIR/{grid|adaptive}_{probes}_s{seed}.csv` with
+//! each evaluation point's position, squared error `|Ê − E|²` and squared
+//! truth `|E|²` (the sums of `rel_rmse`), in the evaluation's order, for a
+//! paired bootstrap of two methods (`scripts/bootstrap_ratio.py`).
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
 //! seed, another placement of the same budget: its spread shows how much of a
@@ -96,7 +108,7 @@ use probekit_sh::ShRgb;
 use std::error::Error;
 
 mod common;
-use common::{arg, eval_seeds, EvalSet};
+use common::{arg, eval_seeds, EvalSet, NearLights};
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -119,6 +131,10 @@ fn main() -> Result<(), Box<dyn Error>> {
         .any(|a| a == "--leaks-in")
         .then(|| arg(&args, "--leaks-in", String::new()));
     let skip_grid = args.iter().any(|a| a == "--no-grid");
+    let dump = args
+        .iter()
+        .any(|a| a == "--dump")
+        .then(|| arg(&args, "--dump", String::new()));
     let floor = args.iter().any(|a| a == "--floor");
     let shells = match arg(&args, "--light-shells", "auto".to_string()).as_str() {
         "on" => LightShells::On,
@@ -179,6 +195,39 @@ fn main() -> Result<(), Box<dyn Error>> {
         npts,
         &arg(&args, "--seeds", "1".to_string()),
     )?;
+    // `--near-lights N`: N more points in a ball around each positional
+    // light, for the stratified estimate (`common::NearLights`).
+    let near_n: usize = arg(&args, "--near-lights", 0);
+    let strata = (near_n > 0)
+        .then(|| {
+            NearLights::sample(
+                &baker,
+                &scene,
+                &EvalSet {
+                    points: pts.clone(),
+                    truth: truth.clone(),
+                    mean,
+                },
+                near_n,
+                arg(&args, "--near-radius", 1.0),
+                arg(&args, "--near-seed", 1),
+            )
+        })
+        .transpose()?;
+    if let Some(nl) = &strata {
+        println!(
+            "near lights: {} points in {} balls of {} m, uniform weight {:.4} m3",
+            nl.set.points.len(),
+            nl.centres.len(),
+            nl.radius,
+            nl.uniform_weight
+        );
+    }
+    let all_pts: Vec<probekit::placement::eval::EvalPoint> = pts
+        .iter()
+        .chain(strata.iter().flat_map(|nl| nl.set.points.iter()))
+        .copied()
+        .collect();
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;
     // The capture seed, which also seeds placement (pool jitter, spawns).
@@ -296,7 +345,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             let mut ws = WalkState::new();
             // The blend, for the leak split and the diagnosis of the worst points.
             *diag.borrow_mut() = Some(cloud.clone());
-            pts.iter()
+            all_pts
+                .iter()
                 .map(|p| {
                     let mut e = match normal_brightness {
                         Some(a) => per_normal_blend(&cloud, p.position, p.normal, a, &mut ws),
@@ -317,9 +367,61 @@ fn main() -> Result<(), Box<dyn Error>> {
                 })
                 .collect()
         } else {
-            interpolate_cloud(&mesh, &sh, &pts)
+            interpolate_cloud(&mesh, &sh, &all_pts)
         };
+        // The uniform points' predictions; with `--near-lights`, the
+        // stratified estimate over both sets.
+        let (pred, pred_near) = pred.split_at(pts.len());
+        let pred = pred.to_vec();
+        let strat = strata.as_ref().map(|nl| {
+            let (mut se, mut st) = (0.0f64, 0.0f64);
+            for ((p, e), t) in pts.iter().zip(&pred).zip(&truth) {
+                let w = nl.uniform_weight_at(p.position) as f64;
+                se += w * (*e - *t).length_squared() as f64;
+                st += w * t.length_squared() as f64;
+            }
+            for ((w, e), t) in nl.weights.iter().zip(pred_near).zip(&nl.set.truth) {
+                se += *w as f64 * (*e - *t).length_squared() as f64;
+                st += *w as f64 * t.length_squared() as f64;
+            }
+            (se / st.max(1e-30)).sqrt()
+        });
         let m = metrics(&pred, &truth, mean);
+        if let Some(dir) = &dump {
+            // Per point: position, squared error and squared truth (the
+            // terms of `rel_rmse`), for a paired bootstrap across methods.
+            // With `--near-lights`, also each point's weight `w` and
+            // stratum `s` (0: uniform; j + 1: light j's ball) after them.
+            let mut csv = String::from("x,y,z,se,st,w,s\n");
+            let rows = pts.iter().zip(pred.iter().zip(&truth)).map(|(p, (e, t))| {
+                let w = strata
+                    .as_ref()
+                    .map_or(1.0, |nl| nl.uniform_weight_at(p.position));
+                (p, e, t, w, 0)
+            });
+            let near_rows = strata.iter().flat_map(|nl| {
+                nl.set
+                    .points
+                    .iter()
+                    .zip(pred_near.iter().zip(&nl.set.truth))
+                    .zip(nl.weights.iter().zip(&nl.stratum))
+                    .map(|((p, (e, t)), (w, s))| (p, e, t, *w, *s))
+            });
+            for (p, e, t, w, st) in rows.chain(near_rows) {
+                let q = p.position;
+                csv += &format!(
+                    "{},{},{},{},{},{w},{st}\n",
+                    q.x,
+                    q.y,
+                    q.z,
+                    (*e - *t).length_squared(),
+                    t.length_squared()
+                );
+            }
+            std::fs::create_dir_all(dir)?;
+            let file = format!("{dir}/{name}_{}_s{}.csv", pos.len(), s.seed);
+            std::fs::write(&file, csv)?;
+        }
         // Leaks whose blend reaches a probe behind geometry (`probekit eval`'s
         // `leaks_through_geometry`), overall and per region after a `+`.
         let hidden: Vec<bool> = match diag.borrow().as_ref() {
@@ -386,8 +488,9 @@ fn main() -> Result<(), Box<dyn Error>> {
                 }
             }
         }
+        let strat = strat.map_or(String::new(), |x| format!(" stratified={x:.3}"));
         println!(
-            "{name:>9} probes={:5} rel_rmse={:.3} p95={:.2} leaks={:3} through={} |{reg}",
+            "{name:>9} probes={:5} rel_rmse={:.3}{strat} p95={:.2} leaks={:3} through={} |{reg}",
             pos.len(),
             m.rel_rmse,
             m.p95_rel_error,
