@@ -203,11 +203,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             NearLights::sample(
                 &baker,
                 &scene,
-                &EvalSet {
-                    points: pts.clone(),
-                    truth: truth.clone(),
-                    mean,
-                },
+                pts.len(),
                 near_n,
                 arg(&args, "--near-radius", 1.0),
                 arg(&args, "--near-seed", 1),
@@ -228,6 +224,28 @@ fn main() -> Result<(), Box<dyn Error>> {
         .chain(strata.iter().flat_map(|nl| nl.set.points.iter()))
         .copied()
         .collect();
+    // Per point of `all_pts`: truth, the free volume it stands for (1 per
+    // uniform point without `--near-lights`) and its stratum (0: uniform;
+    // j + 1: light j's ball).
+    let all_truth: Vec<Vec3> = truth
+        .iter()
+        .chain(strata.iter().flat_map(|nl| nl.set.truth.iter()))
+        .copied()
+        .collect();
+    let (all_weight, all_stratum): (Vec<f32>, Vec<u32>) = pts
+        .iter()
+        .map(|p| {
+            let w = strata
+                .as_ref()
+                .map_or(1.0, |nl| nl.uniform_weight_at(p.position));
+            (w, 0)
+        })
+        .chain(
+            strata
+                .iter()
+                .flat_map(|nl| nl.weights.iter().copied().zip(nl.stratum.iter().copied())),
+        )
+        .unzip();
     let mut s = CaptureSettings::from_scene(&scene);
     s.samples = samples;
     // The capture seed, which also seeds placement (pool jitter, spawns).
@@ -369,59 +387,40 @@ fn main() -> Result<(), Box<dyn Error>> {
         } else {
             interpolate_cloud(&mesh, &sh, &all_pts)
         };
-        // The uniform points' predictions; with `--near-lights`, the
-        // stratified estimate over both sets.
-        let (pred, pred_near) = pred.split_at(pts.len());
-        let pred = pred.to_vec();
-        let strat = strata.as_ref().map(|nl| {
+        // With `--near-lights`, the stratified estimate over all points;
+        // the other figures are the uniform points'.
+        let strat = strata.as_ref().map(|_| {
             let (mut se, mut st) = (0.0f64, 0.0f64);
-            for ((p, e), t) in pts.iter().zip(&pred).zip(&truth) {
-                let w = nl.uniform_weight_at(p.position) as f64;
-                se += w * (*e - *t).length_squared() as f64;
-                st += w * t.length_squared() as f64;
-            }
-            for ((w, e), t) in nl.weights.iter().zip(pred_near).zip(&nl.set.truth) {
+            for ((e, t), w) in pred.iter().zip(&all_truth).zip(&all_weight) {
                 se += *w as f64 * (*e - *t).length_squared() as f64;
                 st += *w as f64 * t.length_squared() as f64;
             }
             (se / st.max(1e-30)).sqrt()
         });
-        let m = metrics(&pred, &truth, mean);
         if let Some(dir) = &dump {
             // Per point: position, squared error and squared truth (the
-            // terms of `rel_rmse`), for a paired bootstrap across methods.
-            // With `--near-lights`, also each point's weight `w` and
-            // stratum `s` (0: uniform; j + 1: light j's ball) after them.
+            // terms of `rel_rmse`), its weight and stratum, for a paired
+            // bootstrap across methods.
             let mut csv = String::from("x,y,z,se,st,w,s\n");
-            let rows = pts.iter().zip(pred.iter().zip(&truth)).map(|(p, (e, t))| {
-                let w = strata
-                    .as_ref()
-                    .map_or(1.0, |nl| nl.uniform_weight_at(p.position));
-                (p, e, t, w, 0)
-            });
-            let near_rows = strata.iter().flat_map(|nl| {
-                nl.set
-                    .points
-                    .iter()
-                    .zip(pred_near.iter().zip(&nl.set.truth))
-                    .zip(nl.weights.iter().zip(&nl.stratum))
-                    .map(|((p, (e, t)), (w, s))| (p, e, t, *w, *s))
-            });
-            for (p, e, t, w, st) in rows.chain(near_rows) {
-                let q = p.position;
+            for (i, p) in all_pts.iter().enumerate() {
+                let (q, e, t) = (p.position, pred[i], all_truth[i]);
                 csv += &format!(
-                    "{},{},{},{},{},{w},{st}\n",
+                    "{},{},{},{},{},{},{}\n",
                     q.x,
                     q.y,
                     q.z,
-                    (*e - *t).length_squared(),
-                    t.length_squared()
+                    (e - t).length_squared(),
+                    t.length_squared(),
+                    all_weight[i],
+                    all_stratum[i]
                 );
             }
             std::fs::create_dir_all(dir)?;
             let file = format!("{dir}/{name}_{}_s{}.csv", pos.len(), s.seed);
             std::fs::write(&file, csv)?;
         }
+        let pred = &pred[..pts.len()];
+        let m = metrics(pred, &truth, mean);
         // Leaks whose blend reaches a probe behind geometry (`probekit eval`'s
         // `leaks_through_geometry`), overall and per region after a `+`.
         let hidden: Vec<bool> = match diag.borrow().as_ref() {
@@ -429,16 +428,16 @@ fn main() -> Result<(), Box<dyn Error>> {
             None => vec![false; pts.len()],
         };
         let through =
-            region_leaks_through_geometry(&scene.regions, &pts, &pred, &truth, mean, &hidden);
+            region_leaks_through_geometry(&scene.regions, &pts, pred, &truth, mean, &hidden);
         let mut reg = String::new();
-        for ((r, mm), t) in region_metrics(&scene.regions, &pts, &pred, &truth, mean)
+        for ((r, mm), t) in region_metrics(&scene.regions, &pts, pred, &truth, mean)
             .into_iter()
             .zip(through)
         {
             reg += &format!(" {}:{:.2}/{}+{t}", r.name, mm.rel_rmse, mm.leaks);
         }
         if top {
-            for w in worst_points(&pred, &truth, 8) {
+            for w in worst_points(pred, &truth, 8) {
                 let i = w.index;
                 println!(
                     "   p={:.2?} truth={:.3?} pred={:.3?} share={:.3}",
@@ -495,7 +494,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             m.rel_rmse,
             m.p95_rel_error,
             m.leaks,
-            leaks_through_geometry(&pred, &truth, mean, &hidden)
+            leaks_through_geometry(pred, &truth, mean, &hidden)
         );
         Ok(())
     };

@@ -41,14 +41,24 @@ pub fn eval_set(
     seed: u64,
 ) -> Result<EvalSet, Box<dyn Error>> {
     let pts = sample_points(baker.tracer(), &scene.bake_box(), n, seed);
+    with_truth(baker, scene, pts)
+}
+
+/// `points` with their reference irradiance (cached in the temp folder,
+/// keyed by scene and points) and its mean luminance.
+pub fn with_truth(
+    baker: &Baker,
+    scene: &Scene,
+    points: Vec<EvalPoint>,
+) -> Result<EvalSet, Box<dyn Error>> {
     let truth = reference_cached(
         baker,
-        &pts,
-        &reference_cache_path(scene.content_hash(), &pts),
+        &points,
+        &reference_cache_path(scene.content_hash(), &points),
     )?;
     let mean = mean_luminance(&truth);
     Ok(EvalSet {
-        points: pts,
+        points,
         truth,
         mean,
     })
@@ -94,8 +104,8 @@ pub fn eval_seeds(
 ///
 /// Strata: each light's ball of `radius` (the part not in an earlier ball),
 /// and the rest of the bake box. A ball's points are uniform in it and pass
-/// `probekit eval`'s test (inside the box, 1 cm from surfaces, not inside
-/// geometry, not in or within 1 cm of a sphere light); each stands for
+/// `probekit eval`'s test (inside the box and
+/// `placement::eval::is_evaluation_point`); each stands for
 /// `V_ball / draws` of free space. A uniform
 /// point outside every ball stands for `V_box · f / n` (`f`: the box's free
 /// fraction, from `free_draws` draws of the same test; `n`: the uniform
@@ -120,27 +130,21 @@ pub struct NearLights {
 
 impl NearLights {
     /// `n` points per positional light (sphere or point, centre inside the
-    /// bake box) in balls of `radius`, for the uniform set `uniform`.
+    /// bake box) in balls of `radius`, beside a uniform set of
+    /// `uniform_points` points.
     pub fn sample(
         baker: &Baker,
         scene: &Scene,
-        uniform: &EvalSet,
+        uniform_points: usize,
         n: usize,
         radius: f32,
         seed: u64,
     ) -> Result<Self, Box<dyn Error>> {
         use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
-        use probekit::placement::eval::SURFACE_CLEARANCE;
-        use probekit::placement::{inside_geometry, is_open};
+        use probekit::placement::eval::is_evaluation_point;
         use probekit::scene::LightKind;
         let bbox = scene.bake_box();
-        let tracer = baker.tracer();
-        let free = |p: Vec3| {
-            bbox.contains(p)
-                && scene.sphere_light_at(p, SURFACE_CLEARANCE).is_none()
-                && is_open(tracer, p, SURFACE_CLEARANCE)
-                && !inside_geometry(tracer, p)
-        };
+        let free = |p: Vec3| bbox.contains(p) && is_evaluation_point(baker.tracer(), p);
         let centres: Vec<Vec3> = scene
             .lights
             .iter()
@@ -185,19 +189,9 @@ impl NearLights {
             })
             .count();
         let f = hits as f32 / free_draws as f32;
-        let uniform_weight = size.x * size.y * size.z * f / uniform.points.len().max(1) as f32;
-        let truth = reference_cached(
-            baker,
-            &points,
-            &reference_cache_path(scene.content_hash(), &points),
-        )?;
-        let mean = mean_luminance(&truth);
+        let uniform_weight = size.x * size.y * size.z * f / uniform_points.max(1) as f32;
         Ok(NearLights {
-            set: EvalSet {
-                points,
-                truth,
-                mean,
-            },
+            set: with_truth(baker, scene, points)?,
             weights,
             stratum,
             centres,

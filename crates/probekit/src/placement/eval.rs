@@ -37,7 +37,8 @@ pub struct EvalPoint {
     pub normal: Vec3,
 }
 
-/// `n` deterministic points (seeded) in free space of `b`: rejected when
+/// `n` deterministic points (seeded) in free space of `b`
+/// ([`is_evaluation_point`]): rejected when
 /// [`inside_geometry`] (seven rays, a majority of back faces), or when
 /// [`is_open`] fails (a surface within [`SURFACE_CLEARANCE`] along any of 26
 /// rays, or a quarter of them first hitting a back face: that catches points
@@ -58,13 +59,7 @@ pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<Eval
         tries += 1;
         let p = b.min + Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * size;
         let normal = sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32()));
-        if tracer
-            .scene()
-            .sphere_light_at(p, SURFACE_CLEARANCE)
-            .is_none()
-            && is_open(tracer, p, SURFACE_CLEARANCE)
-            && !inside_geometry(tracer, p)
-        {
+        if is_evaluation_point(tracer, p) {
             out.push(EvalPoint {
                 position: p,
                 normal,
@@ -72,6 +67,19 @@ pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<Eval
         }
     }
     out
+}
+
+/// Whether `p` may be an evaluation point (the test of [`sample_points`]):
+/// not within [`SURFACE_CLEARANCE`] of a sphere light or inside it, no
+/// surface within it along [`is_open`]'s rays, and not [`inside_geometry`].
+/// `p` may lie anywhere; the caller keeps it in its box.
+pub fn is_evaluation_point(tracer: &Tracer, p: Vec3) -> bool {
+    tracer
+        .scene()
+        .sphere_light_at(p, SURFACE_CLEARANCE)
+        .is_none()
+        && is_open(tracer, p, SURFACE_CLEARANCE)
+        && !inside_geometry(tracer, p)
 }
 
 /// Reference irradiance at each point (index = row number).
