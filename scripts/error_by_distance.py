@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Where a cloud's relative RMSE comes from: its squared error and squared
+truth by distance to the nearest positional light.
+
+Reads the per-point files of `placement_target --dump DIR` (`x,y,z,se,st[,w,s]`)
+and the scene file's `[[light]]` tables (sphere and point lights; directional
+ones have no position):
+
+    python3 scripts/error_by_distance.py SCENE.toml 'DIR/grid_421_s*.csv' \
+        'DIR/adaptive_105_s*.csv' [--bands 0,0.15,0.2,0.3,0.5,1,2] [--stratified] [--json]
+
+For each glob (files pooled: e.g. several placement seeds on the same
+points) and each band `[a, b)` of distance to the nearest light it prints the
+band's point count, its share of the pooled squared error `Σse / Σst` and its
+share of the squared truth `Σst_band / Σst` (both divided by the total
+squared truth, so a method's shares of error add up to its `rel_rmse²`).
+Uniform rows only, unweighted, unless `--stratified` (then every row with
+its weight `w`, as `bootstrap_ratio.py --stratified`).
+Standard library only (Python 3.11 for `tomllib`).
+"""
+
+import argparse
+import csv
+import glob
+import json
+import math
+import sys
+import tomllib
+
+
+def lights(scene):
+    """Positions of the scene file's sphere and point lights."""
+    try:
+        with open(scene, "rb") as f:
+            doc = tomllib.load(f)
+    except OSError as e:
+        sys.exit(f"{scene}: {e.strerror}")
+    except tomllib.TOMLDecodeError as e:
+        sys.exit(f"{scene}: not a TOML scene file: {e}")
+    out = []
+    for light in doc.get("light", []):
+        if light.get("kind", "point") != "directional" and "position" in light:
+            out.append(tuple(float(x) for x in light["position"]))
+    return out
+
+
+def bands_of(pattern, positions, bands, stratified):
+    """(count, Σw·se, Σw·st) per band, and the total Σw·st, over the files."""
+    files = sorted(glob.glob(pattern))
+    if not files:
+        sys.exit(f"{pattern}: no file matches")
+    n = len(bands)
+    count, se, st = [0] * n, [0.0] * n, [0.0] * n
+    for path in files:
+        with open(path) as f:
+            for row in csv.DictReader(f):
+                if stratified:
+                    w = float(row.get("w", 1.0))
+                elif row.get("s", "0") != "0":
+                    continue
+                else:
+                    w = 1.0
+                p = (float(row["x"]), float(row["y"]), float(row["z"]))
+                d = min((math.dist(p, q) for q in positions), default=math.inf)
+                k = max(i for i, a in enumerate(bands) if d >= a)
+                count[k] += 1
+                se[k] += w * float(row["se"])
+                st[k] += w * float(row["st"])
+    return count, se, st, sum(st)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scene")
+    ap.add_argument("globs", nargs="+")
+    ap.add_argument("--bands", default="0,0.15,0.2,0.3,0.5,1,2")
+    ap.add_argument("--stratified", action="store_true")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+    bands = [float(x) for x in a.bands.split(",")]
+    if bands[0] != 0 or bands != sorted(bands):
+        sys.exit("--bands: increasing distances starting at 0")
+    positions = lights(a.scene)
+    if not positions:
+        sys.exit(f"{a.scene}: no sphere or point light")
+    report = []
+    for pattern in a.globs:
+        count, se, st, total = bands_of(pattern, positions, bands, a.stratified)
+        rows = []
+        for i, lo in enumerate(bands):
+            hi = bands[i + 1] if i + 1 < len(bands) else math.inf
+            rows.append(
+                {
+                    "from": lo,
+                    "to": None if hi == math.inf else hi,
+                    "points": count[i],
+                    "error_share": se[i] / total,
+                    "truth_share": st[i] / total,
+                }
+            )
+        report.append(
+            {"files": pattern, "rel_rmse": math.sqrt(sum(se) / total), "bands": rows}
+        )
+    if a.json:
+        print(json.dumps(report))
+        return
+    for r in report:
+        print(f"{r['files']}: rel_rmse {r['rel_rmse']:.3f}")
+        print("   distance (m)   points  error/Σst  truth/Σst")
+        for b in r["bands"]:
+            span = f"{b['from']:.2f}+" if b["to"] is None else f"{b['from']:.2f}-{b['to']:.2f}"
+            print(
+                f"   {span:>12} {b['points']:8d}  {b['error_share']:9.3f}  {b['truth_share']:9.3f}"
+            )
+
+
+if __name__ == "__main__":
+    main()
