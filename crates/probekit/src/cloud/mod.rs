@@ -245,11 +245,12 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
     }
     bounds.push(0);
     bounds.reverse();
-    let mut keyed: Vec<(u64, u32)> = order.iter().map(|&i| (morton(i), i)).collect();
+    let mut sorted = Vec::with_capacity(order.len());
     for w in bounds.windows(2) {
-        keyed[w[0]..w[1]].sort_unstable();
+        let round: Vec<(u64, u32)> = order[w[0]..w[1]].iter().map(|&i| (morton(i), i)).collect();
+        sorted.extend(bucket_sort_by_key(round, 63).into_iter().map(|(_, i)| i));
     }
-    keyed.into_iter().map(|(_, i)| i).collect()
+    sorted
 }
 
 /// Sorts `(key, value)` pairs by key, then value, for keys below `2^bits`:
