@@ -642,8 +642,8 @@ impl<'a> Builder<'a> {
     /// the directed boundary edge `a → b` is stored at `link[a·nv + b]`. The
     /// boundary is a closed oriented surface, so the cell across the face
     /// `(a, b, p)` is the one stored at `link[b·nv + a]`, read in a second
-    /// pass. No hashing, no probing and no "seen before?" branch (which the
-    /// hash table took wrongly about half the time), and no clearing: every
+    /// pass. No hashing, no probing and no "seen before?" branch (whose
+    /// outcome the branch predictor cannot know), and no clearing: every
     /// entry read was written in this insertion.
     ///
     /// Returns the number of cavity cells not reused and the last new cell.
@@ -671,7 +671,8 @@ impl<'a> Builder<'a> {
             self.cells[nc as usize].n[3] = outside;
             self.cells[outside as usize].n[back as usize] = nc;
             // Number the face's vertices, branch-free: a vertex seen for the
-            // first time takes `count` (a branch on "fresh" mispredicts often).
+            // first time takes `count` (a branch on "fresh" would be hard to
+            // predict).
             let mut id = [0u32; 3];
             for k in 0..3 {
                 let slot = (f[k] as usize).min(inf_slot);
