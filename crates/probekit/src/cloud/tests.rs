@@ -103,6 +103,33 @@ fn cospherical_points_on_a_sphere() {
 }
 
 #[test]
+fn local_and_hashed_linking_agree() {
+    // `tetrahedralize` links small cavities through a dense table of local
+    // vertex numbers and large ones through the edge hash table; with the
+    // table disabled every cavity takes the hashed path: same output.
+    let mut sphere = Vec::new();
+    for x in -5i32..=5 {
+        for y in -5i32..=5 {
+            for z in -5i32..=5 {
+                if x * x + y * y + z * z == 25 {
+                    sphere.push(Vec3::new(x as f32, y as f32, z as f32));
+                }
+            }
+        }
+    }
+    for p in [
+        bench_points::uniform(3000, 7),
+        bench_points::grid(9),
+        sphere,
+    ] {
+        let local = tetrahedralize(&p).unwrap();
+        let hashed = tetrahedralize_with(&p, 0).unwrap();
+        hashed.sanity_check(&p).unwrap();
+        assert_eq!(local, hashed);
+    }
+}
+
+#[test]
 fn coplanar_and_collinear_subsets() {
     // A plane of grid points, a line of points, plus two apexes.
     let mut p = Vec::new();
