@@ -76,11 +76,24 @@ pub enum DelaunayError {
         /// Largest supported count.
         max: usize,
     },
+    /// The tetrahedralization needs more cells than 32-bit cell indices can
+    /// address (about 6.7 cells per point in general position, so some
+    /// 600 M points; far fewer in degenerate configurations, where the cell
+    /// count can grow quadratically).
+    #[error("too many tetrahedra: the probes need more than {max} cells")]
+    TooManyCells {
+        /// Largest supported number of cell slots.
+        max: usize,
+    },
 }
 
 /// Largest number of input points: indices are `u32`, with two values reserved
 /// as markers (point at infinity, free cell).
 pub const MAX_POINTS: usize = (u32::MAX - 2) as usize;
+
+/// Most cell slots the builder may hold: slot indices stay below the
+/// builder's `FREE` and `HULL` markers (`u32::MAX - 1`, `u32::MAX`).
+const MAX_CELLS: usize = (u32::MAX - 2) as usize;
 
 /// Neighbour marker for a face on the convex hull.
 pub const HULL: u32 = u32::MAX;
@@ -105,14 +118,16 @@ pub struct Tetrahedralization {
 /// coordinate, fewer than 4 distinct points, all points co-linear or co-planar,
 /// more than [`MAX_POINTS`] points.
 pub fn tetrahedralize(points: &[Vec3]) -> Result<Tetrahedralization, DelaunayError> {
-    tetrahedralize_with(points, LOCAL_LINK_MAX)
+    tetrahedralize_with(points, LOCAL_LINK_MAX, MAX_CELLS)
 }
 
 /// [`tetrahedralize`] with a given [`Builder::local_link_max`] (tests use 0 to
-/// check that the hashed linking gives the same output).
+/// check that the hashed linking gives the same output) and cell limit
+/// (tests lower it to reach [`DelaunayError::TooManyCells`]).
 fn tetrahedralize_with(
     points: &[Vec3],
     local_link_max: usize,
+    max_cells: usize,
 ) -> Result<Tetrahedralization, DelaunayError> {
     if points.len() > MAX_POINTS {
         return Err(DelaunayError::TooManyPoints {
@@ -144,10 +159,10 @@ fn tetrahedralize_with(
     // which stay the perturbation ranks.
     let order = brio_order(&pts, unique);
     let sorted: Vec<P3> = order.iter().map(|&i| pts[i as usize]).collect();
-    let mut builder = Builder::new(&sorted, &order, local_link_max);
+    let mut builder = Builder::new(&sorted, &order, local_link_max, max_cells);
     let rest = builder.init()?;
     for &v in &rest {
-        builder.insert(v);
+        builder.insert(v)?;
     }
     let (tets, neighbors) = builder.finish();
     Ok(Tetrahedralization {
@@ -325,6 +340,8 @@ struct Builder<'a> {
     /// Largest cavity boundary (vertices) linked by [`Builder::fill_local`];
     /// larger ones use the edge hash table ([`Builder::fill_hashed`]).
     local_link_max: usize,
+    /// Most cell slots ([`MAX_CELLS`]; tests lower it to reach the error).
+    max_cells: usize,
     /// Per point (and one slot for the point at infinity): its number on the
     /// current cavity boundary, or [`NO_ID`].
     local_id: Vec<u32>,
@@ -344,7 +361,7 @@ const NO_ID: u32 = u32::MAX;
 const LOCAL_LINK_MAX: usize = 64;
 
 impl<'a> Builder<'a> {
-    fn new(pts: &'a [P3], rank: &'a [u32], local_link_max: usize) -> Self {
+    fn new(pts: &'a [P3], rank: &'a [u32], local_link_max: usize, max_cells: usize) -> Self {
         let cap = pts.len() * 7 + 16;
         Builder {
             pts,
@@ -361,6 +378,7 @@ impl<'a> Builder<'a> {
             edge_table: vec![(EMPTY_EDGE, 0, 0); 256],
             edge_used: Vec::new(),
             local_link_max,
+            max_cells,
             local_id: vec![NO_ID; pts.len() + 1],
             boundary: vec![0; local_link_max + 1],
             link: Vec::new(),
@@ -546,7 +564,7 @@ impl<'a> Builder<'a> {
         }
     }
 
-    fn insert(&mut self, p: u32) {
+    fn insert(&mut self, p: u32) -> Result<(), DelaunayError> {
         let start = self.locate(p);
         if self.gen >= (u32::MAX >> 1) - 1 {
             self.cells.iter_mut().for_each(|c| c.stamp = 0);
@@ -554,10 +572,16 @@ impl<'a> Builder<'a> {
         }
         self.gen += 1;
         let (gin, gout) = (2 * self.gen, 2 * self.gen + 1);
-        self.cavity_and_fill(p, start, gin, gout);
+        self.cavity_and_fill(p, start, gin, gout)
     }
 
-    fn cavity_and_fill(&mut self, p: u32, start: u32, gin: u32, gout: u32) {
+    fn cavity_and_fill(
+        &mut self,
+        p: u32,
+        start: u32,
+        gin: u32,
+        gout: u32,
+    ) -> Result<(), DelaunayError> {
         let mut stack = std::mem::take(&mut self.stack);
         let mut cavity = std::mem::take(&mut self.cavity);
         // Boundary faces are copied out as found, before cavity slots are reused.
@@ -597,6 +621,14 @@ impl<'a> Builder<'a> {
             }
         }
 
+        // Cell slots are u32 below the FREE and HULL markers: refuse before
+        // an index would wrap (a bound, not an exact count: cavity slots and
+        // the free list are reused first).
+        if self.cells.len() + faces.len() > self.max_cells {
+            return Err(DelaunayError::TooManyCells {
+                max: self.max_cells,
+            });
+        }
         // The cavity's boundary is a triangulated sphere (the cavity is a
         // ball, star-shaped from p), so it has V = F/2 + 2 vertices.
         let boundary_vertices = faces.len() / 2 + 2;
@@ -614,6 +646,7 @@ impl<'a> Builder<'a> {
         self.stack = stack;
         self.cavity = cavity;
         self.faces = faces;
+        Ok(())
     }
 
     /// Slot for the next new cell: a cavity cell not yet reused, else one

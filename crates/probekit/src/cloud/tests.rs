@@ -123,10 +123,26 @@ fn local_and_hashed_linking_agree() {
         sphere,
     ] {
         let local = tetrahedralize(&p).unwrap();
-        let hashed = tetrahedralize_with(&p, 0).unwrap();
+        let hashed = tetrahedralize_with(&p, 0, MAX_CELLS).unwrap();
         hashed.sanity_check(&p).unwrap();
         assert_eq!(local, hashed);
     }
+}
+
+/// Past the cell limit the builder stops with an error instead of letting a
+/// 32-bit cell index wrap; at or above the count it needs, the output is the
+/// same as without a limit.
+#[test]
+fn too_many_cells_is_an_error() {
+    let p = bench_points::uniform(500, 3);
+    let full = tetrahedralize(&p).unwrap();
+    // Finite and infinite cells, and some slack for the free list.
+    let needed = (full.tets.len() + 2 * full.tets.len()).max(1);
+    assert_eq!(
+        tetrahedralize_with(&p, LOCAL_LINK_MAX, 100),
+        Err(DelaunayError::TooManyCells { max: 100 })
+    );
+    assert_eq!(tetrahedralize_with(&p, LOCAL_LINK_MAX, needed), Ok(full));
 }
 
 #[test]
