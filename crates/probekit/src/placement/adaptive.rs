@@ -381,6 +381,19 @@ const HELD_OUT_LIGHT_RADIUS: f32 = 1.0;
 /// (split evenly between the lights) when the scene has any.
 const HELD_OUT_LIGHT_SHARE: f32 = 0.5;
 
+/// Fewest held-out points [`held_out_errors`] draws (before those without
+/// clearance are dropped); above it, `2·budget`, up to [`HELD_OUT_MAX`].
+/// With 512 (the old floor) one duplex placement at ~500 scored its
+/// shell-less twin 0.71 against 0.86 with shells, and 4096 points scored
+/// them 0.80 against 0.80 and chose the shells, which were far better
+/// (0.67 against 0.93 on 13 000 evaluation points; BENCHMARKS.md, "Away
+/// from the lamps"): at 64 points per lamp the choice was noise. Costs
+/// about 3 600 more captures at small budgets.
+const HELD_OUT_MIN: usize = 4096;
+
+/// Most held-out points [`held_out_errors`] draws.
+const HELD_OUT_MAX: usize = 8192;
+
 /// About `n` held-out points in `bbox` with their volume weights (m³ each
 /// stands for), stratified: with positional lights in the scene, half of the
 /// points lie in balls of [`HELD_OUT_LIGHT_RADIUS`] around them and half
@@ -439,8 +452,8 @@ fn held_out_points(lights: &[Light], bbox: &Aabb, n: usize, seed: u64) -> Vec<(V
 
 /// The relative RMSE (`sqrt(Σ err / Σ mean-square irradiance)`, as
 /// [`Adaptive::rel_rmse`]) of the plain barycentric interpolation of each
-/// placement in `candidates` at held-out points: about `2·budget` (512 to
-/// 8192) points of [`held_out_points`] in free space of `bbox` (as the pool,
+/// placement in `candidates` at held-out points: about `2·budget`
+/// ([`HELD_OUT_MIN`] to [`HELD_OUT_MAX`]) points of [`held_out_points`] in free space of `bbox` (as the pool,
 /// with [`PROBE_CLEARANCE`]), each sum weighted by the volume its point
 /// stands for, captured with `st`'s settings and their own random numbers.
 /// A placement whose tetrahedra the runtime rejects scores infinity.
@@ -454,7 +467,7 @@ pub(super) fn held_out_errors(
     let pts: Vec<(Vec3, f32)> = held_out_points(
         &st.baker.scene().lights,
         bbox,
-        (2 * budget).clamp(512, 8192),
+        (2 * budget).clamp(HELD_OUT_MIN, HELD_OUT_MAX),
         st.settings.seed ^ HELD_OUT_SALT,
     )
     .into_par_iter()

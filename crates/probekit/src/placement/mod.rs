@@ -93,13 +93,14 @@ pub enum LightShells {
     On,
     /// Place both ways (when the box holds a positional light) and keep the
     /// placement whose plain barycentric interpolation has the lower
-    /// relative RMSE at held-out points: about `2·budget` (512 to 8192)
+    /// relative RMSE at held-out points: about `2·budget` (4096 to 8192)
     /// jittered points in free space of the box, half of them in 1 m balls
     /// around the positional lights and weighted by the volume each stands
     /// for (a stratified estimate of the same error with far less variance,
     /// `adaptive::held_out_points`), captured like the pool but with their
     /// own random numbers and never offered as candidates.
-    /// Costs about 2.5× the placement time of `Off`. The default.
+    /// Costs about 2.5× the placement time of `Off`, plus the held-out
+    /// captures (at least 4096). The default.
     #[default]
     Auto,
 }
