@@ -668,6 +668,28 @@ impl<'a> Builder<'a> {
         }
     }
 
+    /// The new cell on boundary face `f` with apex `p` (vertex 3), linked
+    /// both ways to `outside`, the cell across `f` (whose neighbour `back`
+    /// was the cavity); its three faces through `p` are left for the caller
+    /// to link. Shared by [`Builder::fill_local`] and
+    /// [`Builder::fill_hashed`].
+    #[inline(always)]
+    fn open_cell(
+        &mut self,
+        p: u32,
+        f: [u32; 3],
+        outside: u32,
+        back: u8,
+        reuse: &mut usize,
+        cavity: &[u32],
+    ) -> u32 {
+        let nc = self.new_cell(reuse, cavity);
+        self.cells[nc as usize].v = [f[0], f[1], f[2], p];
+        self.cells[nc as usize].n[3] = outside;
+        self.cells[outside as usize].n[back as usize] = nc;
+        nc
+    }
+
     /// Joins each boundary face to `p` as a new cell, links it to the cell
     /// outside the face, and links the new cells to each other by local
     /// vertex numbering: the `nv` boundary vertices get numbers `0..nv`
@@ -699,10 +721,7 @@ impl<'a> Builder<'a> {
         let mut reuse = cavity.len();
         let mut last = start;
         for &(f, outside, back) in faces {
-            let nc = self.new_cell(&mut reuse, cavity);
-            self.cells[nc as usize].v = [f[0], f[1], f[2], p];
-            self.cells[nc as usize].n[3] = outside;
-            self.cells[outside as usize].n[back as usize] = nc;
+            let nc = self.open_cell(p, f, outside, back, &mut reuse, cavity);
             // Number the face's vertices, branch-free: a vertex seen for the
             // first time takes `count` (a branch on "fresh" would be hard to
             // predict).
@@ -761,10 +780,7 @@ impl<'a> Builder<'a> {
         let mut reuse = cavity.len();
         let mut last = start;
         for &(f, outside, back) in faces {
-            let nc = self.new_cell(&mut reuse, cavity);
-            self.cells[nc as usize].v = [f[0], f[1], f[2], p];
-            self.cells[nc as usize].n[3] = outside;
-            self.cells[outside as usize].n[back as usize] = nc;
+            let nc = self.open_cell(p, f, outside, back, &mut reuse, cavity);
             // Faces containing p: the one opposite f[j] holds edge (f[j+1], f[j+2]).
             for j in 0..3 {
                 let (a, b) = (f[(j + 1) % 3], f[(j + 2) % 3]);
