@@ -84,9 +84,9 @@ fn shuffled_scaled_grid_with_duplicates() {
     assert_eq!(t.merged_duplicates, vec![(n, 7), (n + 1, 0), (n + 2, 7)]);
 }
 
-#[test]
-fn cospherical_points_on_a_sphere() {
-    // Points with integer coordinates on the sphere x²+y²+z² = 25 (all co-spherical).
+/// The points with integer coordinates on the sphere x²+y²+z² = 25: all
+/// co-spherical, so every insphere test among them is a tie.
+fn sphere_of_radius_5() -> Vec<Vec3> {
     let mut p = Vec::new();
     for x in -5i32..=5 {
         for y in -5i32..=5 {
@@ -97,6 +97,12 @@ fn cospherical_points_on_a_sphere() {
             }
         }
     }
+    p
+}
+
+#[test]
+fn cospherical_points_on_a_sphere() {
+    let p = sphere_of_radius_5();
     assert!(p.len() > 20);
     let t = check(&p);
     assert_eq!(euler(&t), 1);
@@ -107,16 +113,7 @@ fn local_and_hashed_linking_agree() {
     // `tetrahedralize` links small cavities through a dense table of local
     // vertex numbers and large ones through the edge hash table; with the
     // table disabled every cavity takes the hashed path: same output.
-    let mut sphere = Vec::new();
-    for x in -5i32..=5 {
-        for y in -5i32..=5 {
-            for z in -5i32..=5 {
-                if x * x + y * y + z * z == 25 {
-                    sphere.push(Vec3::new(x as f32, y as f32, z as f32));
-                }
-            }
-        }
-    }
+    let sphere = sphere_of_radius_5();
     for p in [
         bench_points::uniform(3000, 7),
         bench_points::grid(9),
