@@ -30,10 +30,10 @@ import random
 import sys
 
 
-def load(path, stratified):
-    """Weighted terms `w·se`, `w·st` and the stratum of each row: uniform
-    rows only, unweighted, unless `stratified` (then every row, weighted)."""
-    se, st, strata = [], [], []
+def rows(path, stratified):
+    """The rows of one `--dump` file as `((x, y, z), w·se, w·st, stratum)`:
+    uniform rows only, unweighted, unless `stratified` (then every row,
+    weighted). Also used by `error_by_distance.py`."""
     with open(path) as f:
         header = f.readline().strip().split(",")
         if header[3:5] != ["se", "st"]:
@@ -48,9 +48,17 @@ def load(path, stratified):
                 if s != 0:
                     continue
                 w = 1.0
-            se.append(w * float(cols[3]))
-            st.append(w * float(cols[4]))
-            strata.append(s)
+            p = (float(cols[0]), float(cols[1]), float(cols[2]))
+            yield p, w * float(cols[3]), w * float(cols[4]), s
+
+
+def load(path, stratified):
+    """Weighted terms `w·se`, `w·st` and the stratum of each row (`rows`)."""
+    se, st, strata = [], [], []
+    for _, e, t, s in rows(path, stratified):
+        se.append(e)
+        st.append(t)
+        strata.append(s)
     return se, st, strata
 
 

@@ -15,17 +15,18 @@ band's point count, its share of the pooled squared error `Σse / Σst` and its
 share of the squared truth `Σst_band / Σst` (both divided by the total
 squared truth, so a method's shares of error add up to its `rel_rmse²`).
 Uniform rows only, unweighted, unless `--stratified` (then every row with
-its weight `w`, as `bootstrap_ratio.py --stratified`).
-Standard library only (Python 3.11 for `tomllib`).
+its weight `w`; the files are read by `bootstrap_ratio.rows`, so both scripts
+take the same rows). Standard library only (Python 3.11 for `tomllib`).
 """
 
 import argparse
-import csv
 import glob
 import json
 import math
 import sys
 import tomllib
+
+from bootstrap_ratio import rows
 
 
 def lights(scene):
@@ -52,20 +53,12 @@ def bands_of(pattern, positions, bands, stratified):
     n = len(bands)
     count, se, st = [0] * n, [0.0] * n, [0.0] * n
     for path in files:
-        with open(path) as f:
-            for row in csv.DictReader(f):
-                if stratified:
-                    w = float(row.get("w", 1.0))
-                elif row.get("s", "0") != "0":
-                    continue
-                else:
-                    w = 1.0
-                p = (float(row["x"]), float(row["y"]), float(row["z"]))
-                d = min((math.dist(p, q) for q in positions), default=math.inf)
-                k = max(i for i, a in enumerate(bands) if d >= a)
-                count[k] += 1
-                se[k] += w * float(row["se"])
-                st[k] += w * float(row["st"])
+        for p, e, t, _ in rows(path, stratified):
+            d = min((math.dist(p, q) for q in positions), default=math.inf)
+            k = max(i for i, a in enumerate(bands) if d >= a)
+            count[k] += 1
+            se[k] += e
+            st[k] += t
     return count, se, st, sum(st)
 
 
