@@ -31,14 +31,17 @@ import sys
 
 
 def rows(path, stratified):
-    """The rows of one `--dump` file as `((x, y, z), w·se, w·st, stratum)`:
-    uniform rows only, unweighted, unless `stratified` (then every row,
-    weighted). Also used by `error_by_distance.py`."""
+    """The rows of one `--dump` file as `((x, y, z), w·se, w·st, stratum,
+    over)`: uniform rows only, unweighted, unless `stratified` (then every
+    row, weighted). `over` is whether the blend's mean irradiance over the
+    colour channels exceeds the truth's (columns `pe`, `te`), `None` in files
+    without them. Also used by `error_by_distance.py`."""
     with open(path) as f:
         header = f.readline().strip().split(",")
         if header[3:5] != ["se", "st"]:
             sys.exit(f"{path}: expected columns x,y,z,se,st[,w,s], found {header}")
         weighted = header[5:7] == ["w", "s"]
+        signed = weighted and header[7:9] == ["pe", "te"]
         if stratified and not weighted:
             sys.exit(f"{path}: --stratified needs the w and s columns (--near-lights)")
         for line in f:
@@ -49,13 +52,14 @@ def rows(path, stratified):
                     continue
                 w = 1.0
             p = (float(cols[0]), float(cols[1]), float(cols[2]))
-            yield p, w * float(cols[3]), w * float(cols[4]), s
+            over = float(cols[7]) > float(cols[8]) if signed else None
+            yield p, w * float(cols[3]), w * float(cols[4]), s, over
 
 
 def load(path, stratified):
     """Weighted terms `w·se`, `w·st` and the stratum of each row (`rows`)."""
     se, st, strata = [], [], []
-    for _, e, t, s in rows(path, stratified):
+    for _, e, t, s, _ in rows(path, stratified):
         se.append(e)
         st.append(t)
         strata.append(s)

@@ -2,7 +2,7 @@
 """Where a cloud's relative RMSE comes from: its squared error and squared
 truth by distance to the nearest positional light.
 
-Reads the per-point files of `placement_target --dump DIR` (`x,y,z,se,st[,w,s]`)
+Reads the per-point files of `placement_target --dump DIR` (`x,y,z,se,st[,w,s[,pe,te]]`)
 and the scene file's `[[light]]` tables (sphere and point lights; directional
 ones have no position):
 
@@ -13,7 +13,11 @@ For each glob (files pooled: e.g. several placement seeds on the same
 points) and each band `[a, b)` of distance to the nearest light it prints the
 band's point count, its share of the pooled squared error `Σse / Σst` and its
 share of the squared truth `Σst_band / Σst` (both divided by the total
-squared truth, so a method's shares of error add up to its `rel_rmse²`).
+squared truth, so a method's shares of error add up to its `rel_rmse²`),
+and, where the files have the `pe` and `te` columns, the part of the error
+share at points the blend over-lights (its mean irradiance above the
+truth's): light carried too far, from a probe next to a lamp, say, as against
+light missed.
 Uniform rows only, unweighted, unless `--stratified` (then every row with
 its weight `w`; the files are read by `bootstrap_ratio.rows`, so both scripts
 take the same rows). Standard library only (Python 3.11 for `tomllib`).
@@ -46,20 +50,26 @@ def lights(scene):
 
 
 def bands_of(pattern, positions, bands, stratified):
-    """(count, Σw·se, Σw·st) per band, and the total Σw·st, over the files."""
+    """(count, Σw·se, Σw·st, Σw·se where over-lit or None) per band, and
+    the total Σw·st, over the files."""
     files = sorted(glob.glob(pattern))
     if not files:
         sys.exit(f"{pattern}: no file matches")
     n = len(bands)
-    count, se, st = [0] * n, [0.0] * n, [0.0] * n
+    count, se, st, over = [0] * n, [0.0] * n, [0.0] * n, [0.0] * n
+    signed = True
     for path in files:
-        for p, e, t, _ in rows(path, stratified):
+        for p, e, t, _, o in rows(path, stratified):
             d = min((math.dist(p, q) for q in positions), default=math.inf)
             k = max(i for i, a in enumerate(bands) if d >= a)
             count[k] += 1
             se[k] += e
             st[k] += t
-    return count, se, st, sum(st)
+            if o is None:
+                signed = False
+            elif o:
+                over[k] += e
+    return count, se, st, over if signed else None, sum(st)
 
 
 def main():
@@ -78,7 +88,7 @@ def main():
         sys.exit(f"{a.scene}: no sphere or point light")
     report = []
     for pattern in a.globs:
-        count, se, st, total = bands_of(pattern, positions, bands, a.stratified)
+        count, se, st, over, total = bands_of(pattern, positions, bands, a.stratified)
         rows = []
         for i, lo in enumerate(bands):
             hi = bands[i + 1] if i + 1 < len(bands) else math.inf
@@ -89,6 +99,7 @@ def main():
                     "points": count[i],
                     "error_share": se[i] / total,
                     "truth_share": st[i] / total,
+                    "over_share": None if over is None else over[i] / total,
                 }
             )
         report.append(
@@ -99,11 +110,12 @@ def main():
         return
     for r in report:
         print(f"{r['files']}: rel_rmse {r['rel_rmse']:.3f}")
-        print("   distance (m)   points  error/Σst  truth/Σst")
+        print("   distance (m)   points  error/Σst  truth/Σst  over-lit")
         for b in r["bands"]:
             span = f"{b['from']:.2f}+" if b["to"] is None else f"{b['from']:.2f}-{b['to']:.2f}"
+            o = "" if b["over_share"] is None else f"  {b['over_share']:8.3f}"
             print(
-                f"   {span:>12} {b['points']:8d}  {b['error_share']:9.3f}  {b['truth_share']:9.3f}"
+                f"   {span:>12} {b['points']:8d}  {b['error_share']:9.3f}  {b['truth_share']:9.3f}{o}"
             )
 
 

@@ -22,8 +22,11 @@
 //!
 //! `--dump DIR`: per cloud, `DIR/{grid|adaptive}_{probes}_s{seed}.csv` with
 //! each evaluation point's position, squared error `|Ê − E|²` and squared
-//! truth `|E|²` (the sums of `rel_rmse`), in the evaluation's order, for a
-//! paired bootstrap of two methods (`scripts/bootstrap_ratio.py`).
+//! truth `|E|²` (the sums of `rel_rmse`), its weight and stratum, and the
+//! blended and true irradiance averaged over the colour channels (`pe`,
+//! `te`: which way the blend errs), in the evaluation's order, for a
+//! paired bootstrap of two methods (`scripts/bootstrap_ratio.py`) and the
+//! split by distance to the lamps (`scripts/error_by_distance.py`).
 //!
 //! `--seed`: the capture seed, which also seeds adaptive placement (another
 //! seed, another placement of the same budget: its spread shows how much of a
@@ -400,19 +403,22 @@ fn main() -> Result<(), Box<dyn Error>> {
         if let Some(dir) = &dump {
             // Per point: position, squared error and squared truth (the
             // terms of `rel_rmse`), its weight and stratum, for a paired
-            // bootstrap across methods.
-            let mut csv = String::from("x,y,z,se,st,w,s\n");
+            // bootstrap across methods; and the blended and true mean
+            // irradiance, for the sign of the error.
+            let mut csv = String::from("x,y,z,se,st,w,s,pe,te\n");
             for (i, p) in all_pts.iter().enumerate() {
                 let (q, e, t) = (p.position, pred[i], all_truth[i]);
                 csv += &format!(
-                    "{},{},{},{},{},{},{}\n",
+                    "{},{},{},{},{},{},{},{},{}\n",
                     q.x,
                     q.y,
                     q.z,
                     (e - t).length_squared(),
                     t.length_squared(),
                     all_weight[i],
-                    all_stratum[i]
+                    all_stratum[i],
+                    e.element_sum() / 3.0,
+                    t.element_sum() / 3.0
                 );
             }
             std::fs::create_dir_all(dir)?;
