@@ -92,7 +92,8 @@ pub enum LightShells {
     /// Shell candidates around every positional light in the bake box.
     On,
     /// Place both ways (when the box holds a positional light) and keep the
-    /// placement whose plain barycentric interpolation has the lower
+    /// placement whose interpolation (barycentric, each point blending only
+    /// the probes of its tetrahedron that it sees) has the lower
     /// relative RMSE at held-out points: about `2·budget` (4096 to 8192)
     /// jittered points in free space of the box, half of them in 1 m balls
     /// around the positional lights and weighted by the volume each stands
