@@ -457,9 +457,9 @@ fn held_out_points(lights: &[Light], bbox: &Aabb, n: usize, seed: u64) -> Vec<(V
 /// [`Adaptive::rel_rmse`]) of the interpolation of each placement in
 /// `candidates` (barycentric, or with the vertices hidden from the point
 /// dropped where they hold most of its weight: [`scoring_weights`]) at
-/// held-out points: about `2·budget`
-/// ([`HELD_OUT_MIN`] to [`HELD_OUT_MAX`]) points of [`held_out_points`] in free space of `bbox` (as the pool,
-/// with [`PROBE_CLEARANCE`]), each sum weighted by the volume its point
+/// held-out points: about `2·budget` ([`HELD_OUT_MIN`] to [`HELD_OUT_MAX`])
+/// points of [`held_out_points`] in free space of `bbox` (as the pool, with
+/// [`PROBE_CLEARANCE`]), each sum weighted by the volume its point
 /// stands for, captured with `st`'s settings and their own random numbers.
 /// A placement whose tetrahedra the runtime rejects scores infinity.
 pub(super) fn held_out_errors(
@@ -674,13 +674,18 @@ impl Adaptive<'_, '_, '_> {
                         // baked cloud's cell visibility is a lattice
                         // (or a plane) that can let part of such a probe's
                         // weight through next to the wall.
-                        let leak = hidden
-                            && leaks(
-                                &blend_sh(&self.st.sh, idx, wt, cap.order()),
-                                cap,
-                                &self.normals,
-                                self.floor,
-                            );
+                        // Where the scored weights are the plain ones,
+                        // `pred` is that blend already.
+                        let leak = hidden && {
+                            let plain;
+                            let blended = if vw == wt {
+                                &pred
+                            } else {
+                                plain = blend_sh(&self.st.sh, idx, wt, cap.order());
+                                &plain
+                            };
+                            leaks(blended, cap, &self.normals, self.floor)
+                        };
                         (sq_error(&self.w, &pred, cap), near, leak)
                     })
                     .collect()
@@ -982,9 +987,9 @@ const VISIBLE_MASS: f32 = 0.5;
 /// weight and over-lights the room several times; scored with the plain
 /// blend, placement never saw it. Elsewhere (the hidden vertices hold half
 /// the weight or less, or all of it, where the cloud falls back to the
-/// plain weights) it is `wt`: the baked lattice or plane can let part of a hidden probe's
-/// light through next to a wall, and always scoring the visible blend lost
-/// near the lamps of FZK-Haus.
+/// plain weights) it is `wt`: the baked lattice or plane can let part of a
+/// hidden probe's light through next to a wall, and always scoring the
+/// visible blend lost near the lamps of FZK-Haus.
 fn scoring_weights(
     tracer: &crate::trace::Tracer<'_>,
     positions: &[Vec3],
@@ -1730,8 +1735,19 @@ mod tests {
         );
         assert!(!hidden);
         assert_eq!(w, wt);
-        // A zero weight is never tested or changed; every weighted vertex
-        // hidden: the plain weights, flagged.
+        // A vertex of weight 0 is never tested: hidden (vertex 1) yet not
+        // flagged, the weights unchanged.
+        let wt0 = [0.5, 0.5, 0.0, 0.0];
+        let (w, hidden) = scoring_weights(
+            &tracer,
+            &positions,
+            Vec3::new(0.2, 0.4, 0.4),
+            [0, 2, 1, 0],
+            wt0,
+        );
+        assert!(!hidden);
+        assert_eq!(w, wt0);
+        // Every weighted vertex hidden: the plain weights, flagged.
         let (w, hidden) = scoring_weights(
             &tracer,
             &positions,

@@ -92,10 +92,11 @@ pub enum LightShells {
     /// Shell candidates around every positional light in the bake box.
     On,
     /// Place both ways (when the box holds a positional light) and keep the
-    /// placement whose interpolation (barycentric, each point blending only
-    /// the probes of its tetrahedron that it sees) has the lower
-    /// relative RMSE at held-out points: about `2·budget` (4096 to 8192)
-    /// jittered points in free space of the box, half of them in 1 m balls
+    /// placement whose interpolation (barycentric; where probes hidden from
+    /// a point hold most of its weight, only those it sees, as placement
+    /// scores its candidates) has the lower relative RMSE at held-out
+    /// points: about `2·budget` (4096 to 8192) jittered points in free
+    /// space of the box, half of them in 1 m balls
     /// around the positional lights and weighted by the volume each stands
     /// for (a stratified estimate of the same error with far less variance,
     /// `adaptive::held_out_points`), captured like the pool but with their
