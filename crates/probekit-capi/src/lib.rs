@@ -667,7 +667,9 @@ pub unsafe extern "C" fn pk_sh_many(
 /// tetrahedron or outer cell, times each probe's Chebyshev visibility when
 /// the file stores distance moments (`VISM`), its cell visibility (`CVSP`,
 /// refined by the occluder planes of `CPLN`) and its fitted weight
-/// (`PWGT`), renormalized. These are the weights the
+/// (`PWGT`), renormalized; where the cell visibility hides every probe of
+/// positive weight, the cell's darkest probe alone
+/// (`ProbeCloud::weights_at`). These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
 /// probes equals [`pk_sh`] — except for a file whose `PWGT` stores a
 /// directional brightness exponent (format 1.9): [`pk_sh`] then blends per

@@ -8,7 +8,7 @@
 //! ```text
 //! cargo run --release -p probekit --example placement_target -- [SCENE] \
 //!     [--budgets 125,500,2000] [--grid-factor 4] [--points 400] [--samples 512] [--top] [--floor]
-//!     [--light-shells off|on|auto] [--no-grid] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
+//!     [--light-shells off|on|auto] [--no-grid] [--no-adaptive] [--visibility [--cell-visibility auto|K] [--no-cell-planes] [--no-weights] [--fit-points N] [--fit-samples N]
 //!     [--fit-regularization R] [--fit-absolute-weight B] [--brightness auto|A] [--directional G] [--normal-brightness A]]
 //!     [--seeds 1,2,3] [--seed S] [--leaks-in REGION] [--analytic-lights] [--dump DIR]
 //!     [--near-lights N [--near-radius R] [--near-seed S]]
@@ -36,7 +36,8 @@
 //!
 //! `--light-shells`: adaptive's [`LightShells`] mode (default `auto`, as
 //! `probekit bake`);
-//! `--no-grid`: evaluate the adaptive clouds only.
+//! `--no-grid`: evaluate the adaptive clouds only; `--no-adaptive`: the
+//! grids only.
 //!
 //! `--floor`: first, the figures of a probe captured at every evaluation
 //! point (at `--samples` and at 16× as many): SH truncation and capture noise
@@ -134,6 +135,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         .any(|a| a == "--leaks-in")
         .then(|| arg(&args, "--leaks-in", String::new()));
     let skip_grid = args.iter().any(|a| a == "--no-grid");
+    let skip_adaptive = args.iter().any(|a| a == "--no-adaptive");
     let dump = args
         .iter()
         .any(|a| a == "--dump")
@@ -532,6 +534,9 @@ fn main() -> Result<(), Box<dyn Error>> {
             .collect();
         if !skip_grid {
             eval("grid", &g)?;
+        }
+        if skip_adaptive {
+            continue;
         }
         let t = std::time::Instant::now();
         // At most a 1/GF share of the grid's probes, whatever the grid

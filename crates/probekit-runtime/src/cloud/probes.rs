@@ -488,8 +488,16 @@ impl ProbeCloud {
     /// `s_i` ([`ProbeCloud::set_probe_weights`]) when present and on, and the
     /// brightness factor when [`ProbeCloud::set_brightness_weighting`] is
     /// on; renormalized:
-    /// `b_i·c_i·v_i·f_i / Σ_j b_j·c_j·v_j·f_j`. Where no probe of the cell
-    /// sees `p` (the sum is 0) it falls back to `b_i·v_i·f_i`, then
+    /// `b_i·c_i·v_i·f_i / Σ_j b_j·c_j·v_j·f_j`. Where cell visibility hides
+    /// every probe of positive barycentric weight from `p` (a pocket behind
+    /// a wall's end or a closet's corner), the plain weights would bring in
+    /// the light of the wall's far side, so the weight is 1 on the cell's
+    /// darkest probe (lowest `Ē_i` of its three or four, the first on a
+    /// tie) and 0 elsewhere: a dim pocket rather than a leak (probekit's
+    /// BENCHMARKS.md, "Hidden-cell fallback"; the cell's corners of weight
+    /// 0 that its bits call visible were tried first and measured worse,
+    /// the bits being too coarse there). Where the sum is 0 for another reason (Chebyshev
+    /// visibility or the factors) it falls back to `b_i·v_i·f_i`, then
     /// `b_i·f_i`, then `b_i`. Unused slots have weight 0. No allocation.
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
         let maps = self.visibility.as_ref().filter(|_| self.visibility_on);
@@ -503,7 +511,7 @@ impl ProbeCloud {
         {
             return self.mesh.weights_at(p, state);
         }
-        let (probes, bary, c) = match self.mesh.locate(p, state) {
+        let (probes, bary, c, used) = match self.mesh.locate(p, state) {
             Location::Inside { tet, weights } => {
                 let probes = self.mesh.tets()[tet as usize];
                 let c = match planes.and_then(|pl| pl.plane(tet)) {
@@ -513,7 +521,7 @@ impl ProbeCloud {
                     }
                     None => cells.map_or([1.0; 4], |c| c.tet(tet, &weights)),
                 };
-                (probes, weights, c)
+                (probes, weights, c, 4)
             }
             Location::Outside {
                 hull_face,
@@ -527,6 +535,7 @@ impl ProbeCloud {
                     let v = c.hull_face(hull_face, &weights);
                     [v[0], v[1], v[2], 1.0]
                 }),
+                3,
             ),
         };
         let mut v = [1.0f32; 4];
@@ -545,7 +554,21 @@ impl ProbeCloud {
         };
         let f = self.probe_factors(&probes, &bary);
         let bcv = core::array::from_fn(|k| bary[k] * c[k] * v[k] * f[k]);
+        // Cell visibility hides every probe of positive weight from `p` (a
+        // pocket behind a wall's end, a corner beyond the hull): the plain
+        // blend would carry the far side's light in. The cell's darkest
+        // probe alone instead.
+        let all_hidden = (cells.is_some() || planes.is_some())
+            && (0..used).all(|k| bary[k] == 0.0 || c[k] == 0.0);
+        let darkest = || {
+            let lum = |k: usize| self.luminance[probes[k] as usize];
+            let k = (0..used).min_by(|&a, &b| lum(a).total_cmp(&lum(b)).then(a.cmp(&b)))?;
+            let mut w = [0.0; 4];
+            w[k] = 1.0;
+            Some(w)
+        };
         let w = normalized(bcv)
+            .or_else(|| all_hidden.then(darkest).flatten())
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k] * f[k])))
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * f[k])))
             .unwrap_or(bary);

@@ -803,3 +803,89 @@ fn directional_brightness_damps_a_probe_bright_towards_one_side() {
     }
     assert!(checked > 50, "{checked}");
 }
+
+/// One tetrahedron (the unit corner), grey DC-only probes of radiance
+/// `dc`, and cell visibility at `k` = 1 in which probe `i` sees every
+/// lattice point of every cell when `sees(i)` and none otherwise.
+fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32) -> bool) -> ProbeCloud {
+    use super::cell_visibility::{lattice_len, record_bytes};
+    let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+    let tets = vec![[0, 1, 2, 3]];
+    let mesh = TetMesh::new(positions, tets.clone(), neighbours(&tets)).unwrap();
+    let record = |probes: &[u32]| {
+        let n = probes.len();
+        let len = lattice_len(n, 1);
+        let mut r = vec![0u8; record_bytes(n, 1)];
+        for (v, &i) in probes.iter().enumerate() {
+            if sees(i) {
+                for j in 0..len {
+                    r[(v * len + j) >> 3] |= 1 << ((v * len + j) & 7);
+                }
+            }
+        }
+        r
+    };
+    let faces = mesh.hull_face_count();
+    let mut data = record(&tets[0]);
+    for h in 0..faces as u32 {
+        data.extend(record(&mesh.hull_face_probes(h).unwrap()));
+    }
+    let cells = CellVisibility::new(1, 1, faces, data).unwrap();
+    let coeffs = dc.iter().map(|&c| Vec3::splat(c)).collect();
+    let mut cloud = ProbeCloud::new(mesh, 1, coeffs).unwrap();
+    cloud.set_cell_visibility_bits(Some(cells)).unwrap();
+    cloud
+}
+
+/// Where cell visibility hides every probe of positive weight, the blend
+/// does not fall back to the plain weights (the light from behind the
+/// wall) but to the cell's darkest probe alone: inside the tetrahedron
+/// where no probe sees the point (probe 1, by construction); beyond the
+/// hull where the closest point is on the edge of probes 0 and 1, both
+/// hidden, even though the face's third probe sees the point (its bits are
+/// too coarse to trust there); beyond the face of probes 1, 2 and 3, which
+/// does not hold the darker probe 0 (an outer cell's unused slot, which
+/// names probe 0, is never chosen). Where some probe of positive weight
+/// sees the point, the visible ones are renormalized in their barycentric
+/// proportions, as before.
+#[test]
+fn a_cell_that_hides_every_weighted_probe_falls_back_to_its_darkest_probe() {
+    let mut ws = WalkState::new();
+    let dark = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|_| false);
+    let mut g = Lcg(11);
+    for _ in 0..50 {
+        let a = g.v(0.02, 0.3);
+        let (idx, w) = dark.weights_at(a, &mut ws);
+        assert_eq!(idx, [0, 1, 2, 3]);
+        assert_eq!(w, [0.0, 1.0, 0.0, 0.0], "{a}");
+    }
+    let far = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|i| i >= 2);
+    let p = Vec3::new(0.5, -1.0, -1.0);
+    let (_, bary) = far.mesh().weights_at(p, &mut ws);
+    let (idx, w) = far.weights_at(p, &mut ws);
+    for k in 0..4 {
+        if k < 3 && idx[k] < 2 {
+            assert!((bary[k] - 0.5).abs() < 1e-5, "{idx:?} {bary:?}");
+        }
+        let expect = if k < 3 && idx[k] == 1 { 1.0 } else { 0.0 };
+        assert_eq!(w[k], expect, "{idx:?} {w:?}");
+    }
+    // Probes 2 and 3 see an interior point: their barycentric shares.
+    let q = Vec3::new(0.1, 0.2, 0.3);
+    let (_, w) = far.weights_at(q, &mut ws);
+    assert!(w[0] == 0.0 && w[1] == 0.0, "{w:?}");
+    assert!(
+        (w[2] - 0.4).abs() < 1e-5 && (w[3] - 0.6).abs() < 1e-5,
+        "{w:?}"
+    );
+    // Beyond the slanted face (probes 1, 2, 3): probe 2 is its darkest.
+    let slant = one_tet_with_visibility([0.5, 3.0, 2.0, 4.0], &|_| false);
+    let (idx, w) = slant.weights_at(Vec3::splat(1.0), &mut ws);
+    let mut face = [idx[0], idx[1], idx[2]];
+    face.sort_unstable();
+    assert_eq!(face, [1, 2, 3]);
+    for k in 0..4 {
+        let expect = if k < 3 && idx[k] == 2 { 1.0 } else { 0.0 };
+        assert_eq!(w[k], expect, "{idx:?} {w:?}");
+    }
+}

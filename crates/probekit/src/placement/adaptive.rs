@@ -986,10 +986,14 @@ const VISIBLE_MASS: f32 = 0.5;
 /// ones and looks right, while the baked cloud gives that probe the whole
 /// weight and over-lights the room several times; scored with the plain
 /// blend, placement never saw it. Elsewhere (the hidden vertices hold half
-/// the weight or less, or all of it, where the cloud falls back to the
-/// plain weights) it is `wt`: the baked lattice or plane can let part of a
-/// hidden probe's light through next to a wall, and always scoring the
-/// visible blend lost near the lamps of FZK-Haus.
+/// the weight or less, or all of it) it is `wt`: the baked lattice or plane
+/// can let part of a hidden probe's light through next to a wall, and
+/// always scoring the visible blend lost near the lamps of FZK-Haus. Where
+/// all of it is hidden the baked cloud gives the whole weight to the
+/// cell's darkest probe (`ProbeCloud::weights_at`); scoring that fallback
+/// (with the cell's visible corners of weight 0 first) here instead of `wt`
+/// was measured and lost on the duplex and FZK-Haus at ~500 (BENCHMARKS.md,
+/// "Hidden-cell fallback").
 fn scoring_weights(
     tracer: &crate::trace::Tracer<'_>,
     positions: &[Vec3],
@@ -1695,8 +1699,8 @@ mod tests {
     /// Where the vertices behind a wall hold more than half of the weight,
     /// the scoring blend drops exactly those and renormalizes the rest in
     /// their barycentric proportions; at half or less, and where the wall
-    /// hides every vertex (the baked cloud's fallback), it keeps the plain
-    /// weights; a hidden vertex is flagged either way. Wall x = 0.50…0.52
+    /// hides every vertex, it keeps the plain weights; a hidden vertex is
+    /// flagged either way. Wall x = 0.50…0.52
     /// across the section; which side a vertex is on decides, independently
     /// of the tracer.
     #[test]
