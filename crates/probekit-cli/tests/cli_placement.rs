@@ -220,10 +220,13 @@ fn eval_compare_and_sweep_plot() {
         "{v}"
     );
     assert_eq!(g["points"], v["points"]);
-    // Leaks through geometry are some of the leaks, overall and per region.
+    // Leaks through geometry are some of the leaks, overall and per region;
+    // so are the leaks at unlit points, some of those points.
     for f in [&v, g] {
         let (t, l) = (f["leaks_through_geometry"].as_u64(), f["leaks"].as_u64());
         assert!(t.unwrap() <= l.unwrap(), "{v}");
+        let (u, ul) = (f["unlit_points"].as_u64(), f["leaks_unlit"].as_u64());
+        assert!(ul.unwrap() <= u.unwrap().min(l.unwrap()), "{v}");
         for (_, r) in f["regions"].as_object().unwrap() {
             assert!(
                 r["leaks_through_geometry"].as_u64() <= r["leaks"].as_u64(),

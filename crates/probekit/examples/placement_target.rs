@@ -86,7 +86,8 @@
 //! temporary directory, keyed by scene hash and the points. Prints one line
 //! per cloud with `rel_rmse`, `p95_rel_error`, leaks, `through=K` (with
 //! `--visibility`: leaks through geometry, `probekit eval`'s
-//! `leaks_through_geometry`) and per-region `rel_rmse/leaks+through` (the
+//! `leaks_through_geometry`), `unlit=K` (leaks at points of zero truth,
+//! sealed voids: `leaks_unlit`) and per-region `rel_rmse/leaks+through` (the
 //! `probekit eval` figures).
 
 use glam::Vec3;
@@ -101,7 +102,7 @@ use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
     blends_hidden_probes, interpolate_cloud, leaks_through_geometry, metrics,
-    region_leaks_through_geometry, region_metrics, worst_points,
+    region_leaks_through_geometry, region_metrics, unlit_points, worst_points,
 };
 use probekit::placement::{
     grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
@@ -496,8 +497,9 @@ fn main() -> Result<(), Box<dyn Error>> {
             }
         }
         let strat = strat.map_or(String::new(), |x| format!(" stratified={x:.3}"));
+        let (_, unlit) = unlit_points(pred, &truth, mean);
         println!(
-            "{name:>9} probes={:5} rel_rmse={:.3}{strat} p95={:.2} leaks={:3} through={} |{reg}",
+            "{name:>9} probes={:5} rel_rmse={:.3}{strat} p95={:.2} leaks={:3} through={} unlit={unlit} |{reg}",
             pos.len(),
             m.rel_rmse,
             m.p95_rel_error,

@@ -24,7 +24,7 @@ use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
     leaks_through_geometry, mean_luminance, metrics, reference, region_leaks_through_geometry,
-    region_metrics, sample_points, worst_points, EvalPoint, Metrics, Predictor,
+    region_metrics, sample_points, unlit_points, worst_points, EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
@@ -228,7 +228,8 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-/// Overall figures, `"probes"` and per-region figures of a prediction;
+/// Overall figures, `"probes"`, `"unlit_points"` and `"leaks_unlit"`
+/// ([`unlit_points`]) and per-region figures of a prediction;
 /// with `hidden` (a cloud's [`Predictor::blends_hidden_probes`]), also
 /// `"leaks_through_geometry"`, overall and per region; with `worst` > 0,
 /// the `worst` points of [`worst_points`] under `"worst"`, for a cloud with
@@ -247,6 +248,9 @@ fn figures(
     let mean = mean_luminance(truth);
     let mut out = to_json(&metrics(pred, truth, mean));
     out["probes"] = probes.into();
+    let (unlit, unlit_leaks) = unlit_points(pred, truth, mean);
+    out["unlit_points"] = unlit.into();
+    out["leaks_unlit"] = unlit_leaks.into();
     if let Some(h) = hidden {
         out["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, h).into();
     }

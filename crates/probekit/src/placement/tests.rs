@@ -654,6 +654,32 @@ fn is_open_rejects_points_in_walls_under_the_ceiling() {
     assert!(!is_open(&tracer, Vec3::new(3.964, 2.94, 2.711), 0.01));
 }
 
+/// `unlit_points` counts the points of exactly zero truth in every channel
+/// (not a dim one, not one dark in a single channel) and the leaks among
+/// them: with a mean true luminance of 1, any prediction above 0.01 there
+/// (hand-computed).
+#[test]
+fn unlit_points_are_the_zero_truth_points_and_their_leaks() {
+    let truth = [
+        Vec3::ZERO,
+        Vec3::ZERO,
+        Vec3::ZERO,
+        Vec3::splat(1e-6),
+        Vec3::new(0.0, 0.0, 2.0),
+    ];
+    let pred = [
+        Vec3::ZERO,
+        Vec3::splat(0.005),
+        Vec3::splat(0.02),
+        Vec3::splat(1.0),
+        Vec3::splat(1.0),
+    ];
+    // 0 and 0.005 stay under 4·0 + 0.01; 0.02 leaks.
+    assert_eq!(unlit_points(&pred, &truth, 1.0), (3, 1));
+    assert_eq!(unlit_points(&pred[..2], &truth[..2], 1.0), (2, 0));
+    assert_eq!(unlit_points(&[], &[], 1.0), (0, 0));
+}
+
 /// `leaks_through_geometry` counts exactly the leaks at flagged points
 /// (hand-computed), and `blends_hidden_probes` flags a point of room A
 /// exactly when its plain blend reaches a probe beyond the dividing wall
