@@ -164,7 +164,9 @@ PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
  * and their weights (sum 1, unused slots 0) into out_weights[4]; barycentric
  * times each probe's visibility (VISM, CVSP refined by CPLN) and fitted weight
  * (PWGT) when the file stores them, renormalized; where the cell visibility
- * hides every probe of positive weight, the cell's darkest probe alone. The
+ * hides every probe of positive weight, the cell's darkest probe alone, and
+ * where it leaves less than a tenth of the weight in sight, a blend towards
+ * that probe. The
  * weights the shaders' pk_blend_l1 / pk_blend_l2 take; a file whose PWGT
  * stores a directional brightness exponent (format 1.9) blends per direction
  * in pk_sh, which a 4-probe blend with these weights does not reproduce: use

@@ -668,7 +668,8 @@ pub unsafe extern "C" fn pk_sh_many(
 /// the file stores distance moments (`VISM`), its cell visibility (`CVSP`,
 /// refined by the occluder planes of `CPLN`) and its fitted weight
 /// (`PWGT`), renormalized; where the cell visibility hides every probe of
-/// positive weight, the cell's darkest probe alone
+/// positive weight, the cell's darkest probe alone, and where it leaves
+/// less than a tenth of the weight in sight, a blend towards that probe
 /// (`ProbeCloud::weights_at`). These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
 /// probes equals [`pk_sh`] — except for a file whose `PWGT` stores a

@@ -51,7 +51,9 @@ pub mod directional;
 pub mod probes;
 pub mod visibility;
 pub use cell_visibility::{CellPlanes, CellVisibility};
-pub use probes::{ProbeCloud, ProbeCloudError, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE};
+pub use probes::{
+    ProbeCloud, ProbeCloudError, HIDDEN_MASS_FLOOR, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE,
+};
 pub use visibility::VisibilityMaps;
 
 /// Neighbour marker for a face on the convex hull, as in the baker's output.

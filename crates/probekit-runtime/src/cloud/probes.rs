@@ -130,6 +130,14 @@ pub const PROBE_WEIGHT_RANGE: core::ops::RangeInclusive<f32> = 1e-6..=1e6;
 /// accepts.
 pub const MAX_BRIGHTNESS_EXPONENT: f32 = 4.0;
 
+/// The share of a point's barycentric weight that cell visibility must
+/// leave in sight (`Σ_i b_i·c_i`) for [`ProbeCloud::weights_at`] to
+/// renormalize over the visible probes alone; below it the blend moves
+/// linearly towards the cell's darkest probe, which it reaches at 0.
+/// Measured at 0.1 and 0.25 on the demo and at 0.1 on the duplex apartment
+/// and FZK-Haus (probekit's BENCHMARKS.md, "Hidden-cell fallback").
+pub const HIDDEN_MASS_FLOOR: f32 = 0.1;
+
 impl ProbeCloud {
     /// Builds a cloud from a loaded file: its positions, its `TETS` vertices
     /// and neighbours (via [`TetMesh::new`], which validates them) and its
@@ -496,7 +504,13 @@ impl ProbeCloud {
     /// tie) and 0 elsewhere: a dim pocket rather than a leak (probekit's
     /// BENCHMARKS.md, "Hidden-cell fallback"; the cell's corners of weight
     /// 0 that its bits call visible were tried first and measured worse,
-    /// the bits being too coarse there). Where the sum is 0 for another reason (Chebyshev
+    /// the bits being too coarse there). Where some of it is in sight but
+    /// less than [`HIDDEN_MASS_FLOOR`] (`m = Σ_i b_i·c_i` below it), the
+    /// renormalized weights `r` would hand the whole weight to the few
+    /// probes the bits let through, often partly hidden ones next to the
+    /// wall; the weights are then `t·r + (1 − t)·d` with `t = m / floor` and
+    /// `d` the darkest probe's, so they reach the fallback continuously as
+    /// `m` goes to 0. Where the sum is 0 for another reason (Chebyshev
     /// visibility or the factors) it falls back to `b_i·v_i·f_i`, then
     /// `b_i·f_i`, then `b_i`. Unused slots have weight 0. No allocation.
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
@@ -567,6 +581,20 @@ impl ProbeCloud {
             w[k] = 1.0;
             Some(w)
         };
+        // Little of the weight in sight: renormalizing would hand it all to
+        // the few (often partly hidden) probes the bits let through; blend
+        // towards the darkest probe instead, reaching it continuously as the
+        // visible mass goes to 0.
+        let mass: f32 = (0..used).map(|k| bary[k] * c[k]).sum();
+        if (cells.is_some() || planes.is_some()) && mass > 0.0 && mass < HIDDEN_MASS_FLOOR {
+            if let (Some(r), Some(d)) = (normalized(bcv), darkest()) {
+                let t = mass / HIDDEN_MASS_FLOOR;
+                return (
+                    probes,
+                    core::array::from_fn(|k| t * r[k] + (1.0 - t) * d[k]),
+                );
+            }
+        }
         let w = normalized(bcv)
             .or_else(|| all_hidden.then(darkest).flatten())
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k] * f[k])))

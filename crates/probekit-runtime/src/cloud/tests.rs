@@ -805,10 +805,11 @@ fn directional_brightness_damps_a_probe_bright_towards_one_side() {
 }
 
 /// One tetrahedron (the unit corner), grey DC-only probes of radiance
-/// `dc`, and cell visibility at `k` = 1 in which probe `i` sees every
-/// lattice point of every cell when `sees(i)` and none otherwise.
-fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32) -> bool) -> ProbeCloud {
-    use super::cell_visibility::{lattice_len, record_bytes};
+/// `dc`, and cell visibility at `k` = 1 in which probe `i` sees the
+/// lattice point of numerators `n` (1 at the cell's corner it stands on)
+/// when `sees(i, n)`.
+fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32, [u32; 4]) -> bool) -> ProbeCloud {
+    use super::cell_visibility::{lattice_len, lattice_numerators, record_bytes};
     let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
     let tets = vec![[0, 1, 2, 3]];
     let mesh = TetMesh::new(positions, tets.clone(), neighbours(&tets)).unwrap();
@@ -817,8 +818,8 @@ fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32) -> bool) -> ProbeClo
         let len = lattice_len(n, 1);
         let mut r = vec![0u8; record_bytes(n, 1)];
         for (v, &i) in probes.iter().enumerate() {
-            if sees(i) {
-                for j in 0..len {
+            for (j, num) in lattice_numerators(n, 1).into_iter().enumerate().take(len) {
+                if sees(i, num) {
                     r[(v * len + j) >> 3] |= 1 << ((v * len + j) & 7);
                 }
             }
@@ -851,7 +852,7 @@ fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32) -> bool) -> ProbeClo
 #[test]
 fn a_cell_that_hides_every_weighted_probe_falls_back_to_its_darkest_probe() {
     let mut ws = WalkState::new();
-    let dark = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|_| false);
+    let dark = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|_, _| false);
     let mut g = Lcg(11);
     for _ in 0..50 {
         let a = g.v(0.02, 0.3);
@@ -859,7 +860,7 @@ fn a_cell_that_hides_every_weighted_probe_falls_back_to_its_darkest_probe() {
         assert_eq!(idx, [0, 1, 2, 3]);
         assert_eq!(w, [0.0, 1.0, 0.0, 0.0], "{a}");
     }
-    let far = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|i| i >= 2);
+    let far = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|i, _| i >= 2);
     let p = Vec3::new(0.5, -1.0, -1.0);
     let (_, bary) = far.mesh().weights_at(p, &mut ws);
     let (idx, w) = far.weights_at(p, &mut ws);
@@ -879,7 +880,7 @@ fn a_cell_that_hides_every_weighted_probe_falls_back_to_its_darkest_probe() {
         "{w:?}"
     );
     // Beyond the slanted face (probes 1, 2, 3): probe 2 is its darkest.
-    let slant = one_tet_with_visibility([0.5, 3.0, 2.0, 4.0], &|_| false);
+    let slant = one_tet_with_visibility([0.5, 3.0, 2.0, 4.0], &|_, _| false);
     let (idx, w) = slant.weights_at(Vec3::splat(1.0), &mut ws);
     let mut face = [idx[0], idx[1], idx[2]];
     face.sort_unstable();
@@ -887,5 +888,37 @@ fn a_cell_that_hides_every_weighted_probe_falls_back_to_its_darkest_probe() {
     for k in 0..4 {
         let expect = if k < 3 && idx[k] == 2 { 1.0 } else { 0.0 };
         assert_eq!(w[k], expect, "{idx:?} {w:?}");
+    }
+}
+
+/// Below [`HIDDEN_MASS_FLOOR`] of visible barycentric weight the blend moves
+/// linearly from the renormalized visible probes to the darkest probe. Here
+/// probe 3 sees only the lattice point at its own corner, so its cell
+/// visibility at `k` = 1 is its barycentric weight `b₃` (= z in the unit
+/// corner tetrahedron) and the visible mass `b₃²`; the others see nothing.
+/// Against the closed form: `t = b₃² / floor` on probe 3 and `1 − t` on the
+/// darkest, probe 1, below the floor, all on probe 3 above it — continuous
+/// across the floor and into the fallback at z = 0.
+#[test]
+fn little_visible_weight_blends_towards_the_darkest_probe() {
+    let cloud = one_tet_with_visibility([3.0, 1.0, 4.0, 2.0], &|i, n| i == 3 && n[3] == 1);
+    let mut ws = WalkState::new();
+    let mut last = None;
+    for s in 1..=80 {
+        let z = s as f32 * 0.008;
+        let (idx, w) = cloud.weights_at(Vec3::new(0.1, 0.1, z), &mut ws);
+        assert_eq!(idx, [0, 1, 2, 3]);
+        let t = (z * z / HIDDEN_MASS_FLOOR).min(1.0);
+        let expect = [0.0, 1.0 - t, 0.0, t];
+        for k in 0..4 {
+            assert!(
+                (w[k] - expect[k]).abs() < 1e-4,
+                "z {z}: {w:?} vs {expect:?}"
+            );
+        }
+        // Steps of 0.008 in z move the weights by at most 2·0.64·0.008/0.1.
+        if let Some(prev) = last.replace(w[3]) {
+            assert!((w[3] - prev).abs() <= 0.11, "z {z}: jump {prev} → {}", w[3]);
+        }
     }
 }
