@@ -568,12 +568,13 @@ impl ProbeCloud {
         };
         let f = self.probe_factors(&probes, &bary);
         let bcv = core::array::from_fn(|k| bary[k] * c[k] * v[k] * f[k]);
-        // Cell visibility hides every probe of positive weight from `p` (a
-        // pocket behind a wall's end, a corner beyond the hull): the plain
-        // blend would carry the far side's light in. The cell's darkest
-        // probe alone instead.
-        let all_hidden = (cells.is_some() || planes.is_some())
-            && (0..used).all(|k| bary[k] == 0.0 || c[k] == 0.0);
+        // The barycentric weight cell visibility leaves in sight. At 0 it
+        // hides every probe of positive weight from `p` (a pocket behind a
+        // wall's end, a corner beyond the hull): the plain blend would carry
+        // the far side's light in, so the cell's darkest probe alone instead.
+        let has_cells = cells.is_some() || planes.is_some();
+        let mass: f32 = (0..used).map(|k| bary[k] * c[k]).sum();
+        let all_hidden = has_cells && mass == 0.0;
         let darkest = || {
             let lum = |k: usize| self.luminance[probes[k] as usize];
             let k = (0..used).min_by(|&a, &b| lum(a).total_cmp(&lum(b)).then(a.cmp(&b)))?;
@@ -585,8 +586,7 @@ impl ProbeCloud {
         // the few (often partly hidden) probes the bits let through; blend
         // towards the darkest probe instead, reaching it continuously as the
         // visible mass goes to 0.
-        let mass: f32 = (0..used).map(|k| bary[k] * c[k]).sum();
-        if (cells.is_some() || planes.is_some()) && mass > 0.0 && mass < HIDDEN_MASS_FLOOR {
+        if has_cells && mass > 0.0 && mass < HIDDEN_MASS_FLOOR {
             if let (Some(r), Some(d)) = (normalized(bcv), darkest()) {
                 let t = mass / HIDDEN_MASS_FLOOR;
                 return (

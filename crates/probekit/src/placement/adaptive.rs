@@ -1713,10 +1713,12 @@ mod tests {
             Vec3::new(0.3, 0.8, 0.2),
             Vec3::new(1.4, 0.5, 0.8),
         ];
+        let weigh =
+            |p: Vec3, idx: [u32; 4], wt: [f32; 4]| scoring_weights(&tracer, &positions, p, idx, wt);
         let idx = [0, 1, 2, 3];
         let p = Vec3::new(0.8, 0.5, 0.5);
         // Vertices 0 and 2 hidden with 0.7 of the weight: dropped.
-        let (w, hidden) = scoring_weights(&tracer, &positions, p, idx, [0.3, 0.1, 0.4, 0.2]);
+        let (w, hidden) = weigh(p, idx, [0.3, 0.1, 0.4, 0.2]);
         assert!(hidden);
         let expect = [0.0, 0.1 / 0.3, 0.0, 0.2 / 0.3];
         for k in 0..4 {
@@ -1724,43 +1726,26 @@ mod tests {
         }
         // With 0.4, or exactly half: the plain weights, flagged.
         for wt in [[0.1, 0.2, 0.3, 0.4], [0.25; 4]] {
-            let (w, hidden) = scoring_weights(&tracer, &positions, p, idx, wt);
+            let (w, hidden) = weigh(p, idx, wt);
             assert!(hidden);
             assert_eq!(w, wt);
         }
         let wt = [0.1, 0.2, 0.3, 0.4];
+        let left = Vec3::new(0.2, 0.4, 0.4);
         // All in sight: unchanged.
-        let (w, hidden) = scoring_weights(
-            &tracer,
-            &positions,
-            Vec3::new(0.2, 0.4, 0.4),
-            [0, 2, 0, 2],
-            wt,
-        );
+        let (w, hidden) = weigh(left, [0, 2, 0, 2], wt);
         assert!(!hidden);
         assert_eq!(w, wt);
         // A vertex of weight 0 is never tested: hidden (vertex 1) yet not
         // flagged, the weights unchanged.
         let wt0 = [0.5, 0.5, 0.0, 0.0];
-        let (w, hidden) = scoring_weights(
-            &tracer,
-            &positions,
-            Vec3::new(0.2, 0.4, 0.4),
-            [0, 2, 1, 0],
-            wt0,
-        );
+        let (w, hidden) = weigh(left, [0, 2, 1, 0], wt0);
         assert!(!hidden);
         assert_eq!(w, wt0);
         // Every weighted vertex hidden: the plain weights, flagged.
-        let (w, hidden) = scoring_weights(
-            &tracer,
-            &positions,
-            Vec3::new(0.3, 0.5, 0.5),
-            [1, 3, 0, 1],
-            [0.5, 0.5, 0.0, 0.0],
-        );
+        let (w, hidden) = weigh(Vec3::new(0.3, 0.5, 0.5), [1, 3, 0, 1], wt0);
         assert!(hidden);
-        assert_eq!(w, [0.5, 0.5, 0.0, 0.0]);
+        assert_eq!(w, wt0);
     }
 
     /// The Cornell box's case: the box layer ([`BOUNDARY_SNAP`] under the
