@@ -586,8 +586,9 @@ impl ProbeCloud {
         // the few (often partly hidden) probes the bits let through; blend
         // towards the darkest probe instead, reaching it continuously as the
         // visible mass goes to 0.
+        let r = normalized(bcv);
         if has_cells && mass > 0.0 && mass < HIDDEN_MASS_FLOOR {
-            if let (Some(r), Some(d)) = (normalized(bcv), darkest()) {
+            if let (Some(r), Some(d)) = (r, darkest()) {
                 let t = mass / HIDDEN_MASS_FLOOR;
                 return (
                     probes,
@@ -595,7 +596,7 @@ impl ProbeCloud {
                 );
             }
         }
-        let w = normalized(bcv)
+        let w = r
             .or_else(|| all_hidden.then(darkest).flatten())
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k] * f[k])))
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * f[k])))

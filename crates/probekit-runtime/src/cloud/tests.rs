@@ -818,7 +818,7 @@ fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32, [u32; 4]) -> bool) -
         let len = lattice_len(n, 1);
         let mut r = vec![0u8; record_bytes(n, 1)];
         for (v, &i) in probes.iter().enumerate() {
-            for (j, num) in lattice_numerators(n, 1).into_iter().enumerate().take(len) {
+            for (j, num) in lattice_numerators(n, 1).into_iter().enumerate() {
                 if sees(i, num) {
                     r[(v * len + j) >> 3] |= 1 << ((v * len + j) & 7);
                 }
