@@ -139,21 +139,16 @@ fn visibility(c: &mut Criterion) {
     let k = cell_visibility::DEFAULT_CELL_SUBDIVISION;
     let mut bits: Vec<u8> = Vec::new();
     for vertices in (0..tets).map(|_| 4).chain((0..faces).map(|_| 3)) {
-        let used = vertices * cell_visibility::lattice_len(vertices, k);
-        let mut rec = vec![0u8; cell_visibility::record_bytes(vertices, k)];
         s = s
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         let clear = (s >> 60) % 4 != 0;
-        for bit in 0..used {
+        bits.extend(cell_visibility::record_from(vertices, k, |_, _| {
             s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
-            if clear || (s >> 62) != 0 {
-                rec[bit >> 3] |= 1 << (bit & 7);
-            }
-        }
-        bits.extend(rec);
+            clear || (s >> 62) != 0
+        }));
     }
     cloud
         .set_cell_visibility_bits(Some(CellVisibility::new(k, tets, faces, bits).unwrap()))

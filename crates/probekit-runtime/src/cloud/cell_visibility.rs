@@ -82,6 +82,37 @@ pub const fn record_bytes(vertices: usize, k: u32) -> usize {
     (vertices * lattice_len(vertices, k)).div_ceil(8)
 }
 
+/// Bit of corner `v` at lattice point `l` in a record with `vertices`
+/// corners at subdivision `k`: `v · lattice_len + l` (least significant bit
+/// of each byte first).
+pub const fn record_bit_index(vertices: usize, k: u32, v: usize, l: usize) -> usize {
+    v * lattice_len(vertices, k) + l
+}
+
+/// One cell's record with the bit of corner `v` at lattice point `l` set
+/// where `sees(v, l)` (padding bits clear): what the baker writes and what
+/// [`CellVisibility::new`] takes per cell. `sees` is called in bit order,
+/// corner-major, so a seeded generator inside it gives the same record on
+/// every run.
+pub fn record_from(vertices: usize, k: u32, mut sees: impl FnMut(usize, usize) -> bool) -> Vec<u8> {
+    let len = lattice_len(vertices, k);
+    let mut out = vec![0u8; record_bytes(vertices, k)];
+    for v in 0..vertices {
+        for l in 0..len {
+            if sees(v, l) {
+                set_bit(&mut out, v * len + l);
+            }
+        }
+    }
+    out
+}
+
+/// Whether corner `v` sees lattice point `l` in a record with `vertices`
+/// corners at `k` (the bit [`record_from`] sets).
+pub fn record_sees(record: &[u8], vertices: usize, k: u32, v: usize, l: usize) -> bool {
+    bit(record, record_bit_index(vertices, k, v, l))
+}
+
 const fn tri(m: u32) -> usize {
     (m as usize) * (m as usize + 1) / 2
 }
@@ -224,6 +255,11 @@ fn bit(bytes: &[u8], i: usize) -> bool {
     bytes[i >> 3] >> (i & 7) & 1 != 0
 }
 
+/// Sets bit `i` of `bytes` (the order of [`bit`]).
+fn set_bit(bytes: &mut [u8], i: usize) {
+    bytes[i >> 3] |= 1 << (i & 7);
+}
+
 /// Whether every used bit of a record with `vertices` corners at `k` is set.
 fn record_is_clear(record: &[u8], vertices: usize, k: u32) -> bool {
     let used = vertices * lattice_len(vertices, k);
@@ -280,7 +316,7 @@ impl CellVisibility {
             .chain(h.chunks_exact(rb3).map(|r| (r, 3)));
         for (i, (r, vertices)) in all.enumerate() {
             if !record_is_clear(r, vertices, k) {
-                mask[i >> 3] |= 1 << (i & 7);
+                set_bit(&mut mask, i);
                 records.extend_from_slice(r);
             }
         }
@@ -364,13 +400,7 @@ impl CellVisibility {
     /// The dense records of [`CellVisibility::new`], clear cells included.
     pub fn to_dense(&self) -> Vec<u8> {
         // A clear record per corner count: every used bit set.
-        let clear = |vertices: usize| {
-            let mut r = vec![0u8; record_bytes(vertices, self.k)];
-            for i in 0..vertices * lattice_len(vertices, self.k) {
-                r[i >> 3] |= 1 << (i & 7);
-            }
-            r
-        };
+        let clear = |vertices: usize| record_from(vertices, self.k, |_, _| true);
         let (clear4, clear3) = (clear(4), clear(3));
         let mut out = Vec::new();
         for i in 0..self.tets + self.hull_faces {
@@ -706,18 +736,11 @@ mod tests {
     fn interpolation_reads_each_vertex_bits() {
         // k = 1: the lattice is the corners. Vertex v sees corner j iff v ≤ j.
         let k = 1;
-        let len = lattice_len(4, k);
         let pts = lattice_numerators(4, k);
-        let mut rec = vec![0u8; record_bytes(4, k)];
-        for v in 0..4 {
-            for (i, n) in pts.iter().enumerate() {
-                let corner = n.iter().position(|&x| x == 1).unwrap();
-                if v <= corner {
-                    let bit = v * len + i;
-                    rec[bit >> 3] |= 1 << (bit & 7);
-                }
-            }
-        }
+        let rec = record_from(4, k, |v, i| {
+            let corner = pts[i].iter().position(|&x| x == 1).unwrap();
+            v <= corner
+        });
         let cv = CellVisibility::new(k, 1, 0, rec).unwrap();
         let b = [0.1, 0.2, 0.3, 0.4];
         let c = cv.tet(0, &b);
@@ -734,12 +757,8 @@ mod tests {
     /// Reads corner `v`'s interpolated bit straight from a dense record.
     fn dense_value(record: &[u8], vertices: usize, k: u32, bary: &[f32], v: usize) -> f32 {
         let (idx, w) = kuhn_weights(bary, k);
-        let len = lattice_len(vertices, k);
         (0..vertices)
-            .filter(|&j| {
-                let bit = v * len + idx[j];
-                w[j] > 0.0 && record[bit >> 3] >> (bit & 7) & 1 != 0
-            })
+            .filter(|&j| w[j] > 0.0 && record_sees(record, vertices, k, v, idx[j]))
             .map(|j| w[j])
             .sum()
     }
@@ -766,17 +785,10 @@ mod tests {
             let mut dense = Vec::new();
             let mut clear = 0;
             for (n, count) in [(4usize, tets), (3, hull)] {
-                let used = n * lattice_len(n, k);
                 for _ in 0..count {
-                    let mut rec = vec![0u8; record_bytes(n, k)];
                     let all = next() % 2 == 0;
                     clear += usize::from(all);
-                    for bit in 0..used {
-                        if all || next() % 4 != 0 {
-                            rec[bit >> 3] |= 1 << (bit & 7);
-                        }
-                    }
-                    dense.extend(rec);
+                    dense.extend(record_from(n, k, |_, _| all || next() % 4 != 0));
                 }
             }
             let cv = CellVisibility::new(k, tets, hull, dense.clone()).unwrap();

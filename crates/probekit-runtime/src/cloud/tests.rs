@@ -809,22 +809,13 @@ fn directional_brightness_damps_a_probe_bright_towards_one_side() {
 /// lattice point of numerators `n` (1 at the cell's corner it stands on)
 /// when `sees(i, n)`.
 fn one_tet_with_visibility(dc: [f32; 4], sees: &dyn Fn(u32, [u32; 4]) -> bool) -> ProbeCloud {
-    use super::cell_visibility::{lattice_len, lattice_numerators, record_bytes};
+    use super::cell_visibility::{lattice_numerators, record_from};
     let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
     let tets = vec![[0, 1, 2, 3]];
     let mesh = TetMesh::new(positions, tets.clone(), neighbours(&tets)).unwrap();
     let record = |probes: &[u32]| {
-        let n = probes.len();
-        let len = lattice_len(n, 1);
-        let mut r = vec![0u8; record_bytes(n, 1)];
-        for (v, &i) in probes.iter().enumerate() {
-            for (j, num) in lattice_numerators(n, 1).into_iter().enumerate() {
-                if sees(i, num) {
-                    r[(v * len + j) >> 3] |= 1 << ((v * len + j) & 7);
-                }
-            }
-        }
-        r
+        let lattice = lattice_numerators(probes.len(), 1);
+        record_from(probes.len(), 1, |v, j| sees(probes[v], lattice[j]))
     };
     let faces = mesh.hull_face_count();
     let mut data = record(&tets[0]);

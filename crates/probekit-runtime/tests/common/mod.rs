@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
+use probekit_runtime::cloud::cell_visibility;
 use probekit_runtime::format::layout::{self, entry, header, ENTRY_LEN, HEADER_LEN, NONE};
 use probekit_runtime::format::*;
 
@@ -862,15 +863,11 @@ pub fn dense_records(tets: usize) -> Vec<u8> {
     let mut data = Vec::new();
     let mut cell = 0;
     for (n, count) in [(4usize, tets), (3, HULL)] {
-        let used = n * probekit_runtime::cloud::cell_visibility::lattice_len(n, K);
         for r in 0..count {
-            let mut rec = vec![0u8; probekit_runtime::cloud::cell_visibility::record_bytes(n, K)];
-            for bit in 0..used {
-                if cell % 3 == 0 || (bit * 7 + r * 3) % 5 < 3 {
-                    rec[bit >> 3] |= 1 << (bit & 7);
-                }
-            }
-            data.extend(rec);
+            data.extend(cell_visibility::record_from(n, K, |v, l| {
+                let bit = cell_visibility::record_bit_index(n, K, v, l);
+                cell % 3 == 0 || (bit * 7 + r * 3) % 5 < 3
+            }));
             cell += 1;
         }
     }

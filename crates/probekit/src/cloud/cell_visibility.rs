@@ -18,7 +18,7 @@ use crate::bake::sampling::SampleRng;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::{
-    lattice_numerators, lattice_position, record_bytes, CellVisibility, DEFAULT_CELL_SUBDIVISION,
+    lattice_numerators, lattice_position, record_from, CellVisibility, DEFAULT_CELL_SUBDIVISION,
     MAX_CELL_SUBDIVISION,
 };
 use probekit_runtime::cloud::{CellPlanes, ProbeCloud, TetMesh};
@@ -168,9 +168,9 @@ impl CellLattice {
     }
 }
 
-/// One cell's record: corner `v`'s bit for lattice point `l` at bit
-/// `v·lattice_len + l`, least significant bit first. `lattice` is
-/// [`lattice_numerators`] for the cell's corner count.
+/// One cell's record ([`record_from`]): corner `v`'s bit for lattice point
+/// `l` set where the segment from its probe to the point is clear. `lattice`
+/// is [`lattice_numerators`] for the cell's corner count.
 fn record(
     tracer: &Tracer<'_>,
     probes: &[u32],
@@ -178,20 +178,14 @@ fn record(
     lattice: &[[u32; 4]],
     k: u32,
 ) -> Vec<u8> {
-    let vertices = probes.len();
-    let mut out = vec![0u8; record_bytes(vertices, k)];
-    for (l, n) in lattice.iter().enumerate() {
-        let q = lattice_position(probes, positions, n, k);
-        for (v, &probe) in probes.iter().enumerate() {
-            // The probe itself (numerator k) sees its own position.
-            let clear = n[v] == k || segment_clear(tracer, positions[probe as usize], q);
-            if clear {
-                let bit = v * lattice.len() + l;
-                out[bit >> 3] |= 1 << (bit & 7);
-            }
-        }
-    }
-    out
+    let points: Vec<Vec3> = lattice
+        .iter()
+        .map(|n| lattice_position(probes, positions, n, k))
+        .collect();
+    record_from(probes.len(), k, |v, l| {
+        // The probe itself (numerator k) sees its own position.
+        lattice[l][v] == k || segment_clear(tracer, positions[probes[v] as usize], points[l])
+    })
 }
 
 /// Bakes the cell visibility of `mesh` at subdivision `k` (`1..=8`; see
@@ -454,7 +448,7 @@ pub fn bake_file_cell_planes(
 mod tests {
     use super::*;
     use crate::scene::Scene;
-    use probekit_runtime::cloud::cell_visibility::lattice_len;
+    use probekit_runtime::cloud::cell_visibility::{record_bytes, record_sees};
     use probekit_runtime::cloud::{ProbeCloud, WalkState};
 
     fn scene(boxes: &[(Vec3, Vec3)]) -> Scene {
@@ -630,7 +624,6 @@ mod tests {
             let mut offset = 0;
             for probes in cells {
                 let n = probes.len();
-                let len = lattice_len(n, k);
                 let rec = &dense[offset..offset + if n == 4 { rb4 } else { rb3 }];
                 offset += rec.len();
                 for (l, num) in lattice_numerators(n, k).iter().enumerate() {
@@ -641,8 +634,7 @@ mod tests {
                         .map(|(&p, &c)| pos[p as usize].as_dvec3() * (c as f64 / k as f64))
                         .sum();
                     for (v, &p) in probes.iter().enumerate() {
-                        let bit = v * len + l;
-                        let got = rec[bit >> 3] >> (bit & 7) & 1 == 1;
+                        let got = record_sees(rec, n, k, v, l);
                         let want = !crosses_wall(pos[p as usize], q.as_vec3());
                         assert_eq!(got, want, "k {k} cell {probes:?} point {num:?} vertex {v}");
                         hidden += usize::from(!want);
