@@ -263,3 +263,69 @@ fn json_shapes_and_bad_input() {
     fails_one_line(d, &["query", "c.probes", "--points", "nan.csv"], "nan.csv");
     fails_one_line(d, &["bake", "--shard", "3/3", "--samples", "8"], "--shard");
 }
+
+/// Issue 5's bad probe sets through `--positions` (all in free space of
+/// `builtin:demo`, away from its sphere light, so no probe is moved):
+/// fewer than 4 distinct positions and co-planar ones fail with one line
+/// naming the output and the cause, and write nothing; a repeated position
+/// bakes, with a warning that names the merged probe, and `inspect` counts
+/// it.
+#[test]
+fn manual_probe_sets_degenerate_and_duplicate() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let bake = |csv: &str, out: &str| {
+        [
+            "bake",
+            "--positions",
+            csv,
+            "--samples",
+            "8",
+            "--bounces",
+            "1",
+            "-o",
+            out,
+        ]
+        .map(str::to_owned)
+    };
+    let rows = |r: &[[f32; 3]]| {
+        r.iter()
+            .map(|p| format!("{},{},{}\n", p[0], p[1], p[2]))
+            .collect::<String>()
+    };
+    let a = [2.0, 0.5, 2.0];
+    let b = [3.0, 0.5, 2.0];
+    let c = [2.0, 0.5, 3.0];
+    let e = [3.0, 0.5, 3.0];
+    let up = [3.0, 1.5, 3.0];
+    std::fs::write(d.join("three.csv"), rows(&[a, b, c, a])).unwrap();
+    std::fs::write(d.join("flat.csv"), rows(&[a, b, c, e, [2.5, 0.5, 2.5]])).unwrap();
+    std::fs::write(d.join("dup.csv"), rows(&[a, b, c, up, b])).unwrap();
+    let args = bake("three.csv", "three.probes");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    fails_one_line(d, &args, "three.probes: tetrahedralizing the probes: need at least 4 distinct probe positions, got 3");
+    let args = bake("flat.csv", "flat.probes");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    fails_one_line(
+        d,
+        &args,
+        "flat.probes: tetrahedralizing the probes: all probe positions are co-planar",
+    );
+    assert!(!d.join("three.probes").exists() && !d.join("flat.probes").exists());
+
+    let args = bake("dup.csv", "dup.probes");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let o = run(d, &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(
+        err.contains("warning: dup.probes: 1 probe(s) share a position with another")
+            && err.contains("probe 4 at 3, 0.5, 2"),
+        "{err}"
+    );
+    let i = json(d, &["inspect", "dup.probes", "--json"]);
+    assert_eq!(i["probes"], 5);
+    assert_eq!(i["unused_probes"], 1);
+    // Four distinct, non-co-planar positions: one tetrahedron.
+    assert_eq!(i["tetrahedra"], 1);
+}

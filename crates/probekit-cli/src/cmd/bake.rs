@@ -488,6 +488,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     }
     file.validate().with_context(|| outname.clone())?;
     write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
+    warn_unused_probes(&outname, &file);
     let default_demo = a.scene == probekit::scene::BUILTIN_DEMO
         && a.output == std::path::Path::new("demo.probes")
         && a.shard.is_none();
@@ -525,6 +526,27 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Tells on stderr which probes share a position with an earlier one: the
+/// tetrahedralization merged them ([`probekit::cloud::unused_probes`]), so
+/// they are stored but no query reaches them.
+fn warn_unused_probes(outname: &str, file: &ProbeFile) {
+    let Some(t) = &file.tetrahedra else {
+        return;
+    };
+    let unused = probekit::cloud::unused_probes(file.positions.len(), &t.vertices);
+    if let Some(&first) = unused.first() {
+        let p = file.positions[first as usize];
+        eprintln!(
+            "warning: {outname}: {} probe(s) share a position with another and take no part in \
+             the tetrahedra (first: probe {first} at {}, {}, {})",
+            unused.len(),
+            p.x,
+            p.y,
+            p.z
+        );
+    }
 }
 
 /// A shard's part file (see the module docs).

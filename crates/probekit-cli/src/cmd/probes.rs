@@ -242,10 +242,12 @@ pub struct InspectArgs {
 }
 
 /// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra","hull_slivers",
-/// "basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","probe_weights",
+/// "unused_probes","basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","probe_weights",
 /// "placement","scene_hash"}`
 /// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
-/// up to rounding, which light points outside the hull from far probes)
+/// up to rounding, which light points outside the hull from far probes;
+/// `unused_probes`: [`probekit::cloud::unused_probes`], probes at the
+/// position of another that no tetrahedron uses)
 /// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
 /// `cell_visibility`: `{"subdivision","cells","stored_cells","planes"}` of
 /// the `CVSP` / `CVIS` section — cells in all, those not clear, which have a
@@ -278,6 +280,9 @@ pub fn inspect(a: &InspectArgs) -> Result<()> {
             "tetrahedra": file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
             "hull_slivers": file.tetrahedra.as_ref().map_or(0, |t| {
                 probekit::cloud::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
+            }),
+            "unused_probes": file.tetrahedra.as_ref().map_or(0, |t| {
+                probekit::cloud::unused_probes(file.positions.len(), &t.vertices).len()
             }),
             "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
             "invalid": invalid,

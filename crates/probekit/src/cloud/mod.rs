@@ -917,6 +917,25 @@ pub fn hull_slivers(positions: &[Vec3], tets: &[[u32; 4]], neighbours: &[[u32; 4
         .count()
 }
 
+/// Probes (indices below `probe_count`) that no tetrahedron of `tets`
+/// uses, in increasing order. In a Delaunay tetrahedralization every
+/// distinct position is a vertex, so for [`tetrahedralize`]'s output these
+/// are exactly the duplicates it merged
+/// ([`Tetrahedralization::merged_duplicates`]): a query never reaches them.
+/// `probekit bake` warns about them and `probekit inspect` counts them.
+/// Indices out of range are skipped.
+pub fn unused_probes(probe_count: usize, tets: &[[u32; 4]]) -> Vec<u32> {
+    let mut used = vec![false; probe_count];
+    for &i in tets.iter().flatten() {
+        if let Some(u) = used.get_mut(i as usize) {
+            *u = true;
+        }
+    }
+    (0..probe_count as u32)
+        .filter(|&i| !used[i as usize])
+        .collect()
+}
+
 impl Tetrahedralization {
     /// Builds the runtime query structure for these tetrahedra over `points`
     /// (the same slice given to [`tetrahedralize`]).

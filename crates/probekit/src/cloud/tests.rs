@@ -262,6 +262,16 @@ proptest! {
             Ok(t) => {
                 prop_assert_eq!(t.sanity_check(&p), Ok(()));
                 prop_assert_eq!(euler(&t), 1);
+                // Every distinct position is a vertex: the probes no
+                // tetrahedron uses are the repeats of an earlier position
+                // (brute force), which are the merged ones.
+                let repeats: Vec<u32> = (0..p.len())
+                    .filter(|&i| p[..i].contains(&p[i]))
+                    .map(|i| i as u32)
+                    .collect();
+                let dropped: Vec<u32> = t.merged_duplicates.iter().map(|d| d.0).collect();
+                prop_assert_eq!(&unused_probes(p.len(), &t.tets), &repeats);
+                prop_assert_eq!(&dropped, &repeats);
             }
             Err(DelaunayError::TooFewPoints { .. } | DelaunayError::Collinear | DelaunayError::Coplanar) => {}
             Err(e) => prop_assert!(false, "{e}"),
