@@ -266,8 +266,8 @@ fn json_shapes_and_bad_input() {
 
 /// Issue 5's bad probe sets through `--positions` (all in free space of
 /// `builtin:demo`, away from its sphere light, so no probe is moved):
-/// fewer than 4 distinct positions and co-planar ones fail with one line
-/// naming the output and the cause, and write nothing; a repeated position
+/// fewer than 4 distinct positions and co-planar ones fail, before any
+/// capture, with one line naming the CSV and the cause, and write nothing; a repeated position
 /// bakes, with a warning that names the merged probe, and `inspect` counts
 /// it.
 #[test]
@@ -303,13 +303,17 @@ fn manual_probe_sets_degenerate_and_duplicate() {
     std::fs::write(d.join("dup.csv"), rows(&[a, b, c, up, b])).unwrap();
     let args = bake("three.csv", "three.probes");
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    fails_one_line(d, &args, "three.probes: tetrahedralizing the probes: need at least 4 distinct probe positions, got 3");
+    fails_one_line(
+        d,
+        &args,
+        "three.csv: the probe positions cannot be tetrahedralized: need at least 4 distinct probe positions, got 3",
+    );
     let args = bake("flat.csv", "flat.probes");
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     fails_one_line(
         d,
         &args,
-        "flat.probes: tetrahedralizing the probes: all probe positions are co-planar",
+        "flat.csv: the probe positions cannot be tetrahedralized: all probe positions are co-planar",
     );
     assert!(!d.join("three.probes").exists() && !d.join("flat.probes").exists());
 

@@ -356,6 +356,13 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;
         let pts: Vec<Vec3> = rows.iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect();
+        // Refuse a set that spans no volume before capturing it, not after.
+        probekit::cloud::tetrahedralize(&pts).with_context(|| {
+            format!(
+                "{}: the probe positions cannot be tetrahedralized",
+                p.display()
+            )
+        })?;
         let n = pts.len();
         (pts, serde_json::json!({ "count": n }))
     } else {
