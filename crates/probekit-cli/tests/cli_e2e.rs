@@ -274,7 +274,7 @@ fn json_shapes_and_bad_input() {
 fn manual_probe_sets_degenerate_and_duplicate() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let bake = |csv: &str, out: &str| {
+    let bake = |csv: &'static str, out: &'static str| {
         [
             "bake",
             "--positions",
@@ -286,7 +286,6 @@ fn manual_probe_sets_degenerate_and_duplicate() {
             "-o",
             out,
         ]
-        .map(str::to_owned)
     };
     let rows = |r: &[[f32; 3]]| {
         r.iter()
@@ -301,25 +300,19 @@ fn manual_probe_sets_degenerate_and_duplicate() {
     std::fs::write(d.join("three.csv"), rows(&[a, b, c, a])).unwrap();
     std::fs::write(d.join("flat.csv"), rows(&[a, b, c, e, [2.5, 0.5, 2.5]])).unwrap();
     std::fs::write(d.join("dup.csv"), rows(&[a, b, c, up, b])).unwrap();
-    let args = bake("three.csv", "three.probes");
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     fails_one_line(
         d,
-        &args,
+        &bake("three.csv", "three.probes"),
         "three.csv: the probe positions cannot be tetrahedralized: need at least 4 distinct probe positions, got 3",
     );
-    let args = bake("flat.csv", "flat.probes");
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     fails_one_line(
         d,
-        &args,
+        &bake("flat.csv", "flat.probes"),
         "flat.csv: the probe positions cannot be tetrahedralized: all probe positions are co-planar",
     );
     assert!(!d.join("three.probes").exists() && !d.join("flat.probes").exists());
 
-    let args = bake("dup.csv", "dup.probes");
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = run(d, &args);
+    let o = run(d, &bake("dup.csv", "dup.probes"));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8(o.stderr).unwrap();
     assert!(

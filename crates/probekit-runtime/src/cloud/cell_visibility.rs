@@ -95,12 +95,11 @@ pub const fn record_bit_index(vertices: usize, k: u32, v: usize, l: usize) -> us
 /// corner-major, so a seeded generator inside it gives the same record on
 /// every run.
 pub fn record_from(vertices: usize, k: u32, mut sees: impl FnMut(usize, usize) -> bool) -> Vec<u8> {
-    let len = lattice_len(vertices, k);
     let mut out = vec![0u8; record_bytes(vertices, k)];
     for v in 0..vertices {
-        for l in 0..len {
+        for l in 0..lattice_len(vertices, k) {
             if sees(v, l) {
-                set_bit(&mut out, v * len + l);
+                set_bit(&mut out, record_bit_index(vertices, k, v, l));
             }
         }
     }
