@@ -7,7 +7,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit_capi::*;
-use probekit_runtime::cloud::{face_neighbors, TetMesh, WalkState};
+use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh, WalkState};
 use probekit_runtime::format::{Coefficients, ProbeFile, ProbeFileKind, TetSection, VolumeGrid};
 use probekit_runtime::{Interp, ProbeCloud, Volume};
 use std::hint::black_box;
@@ -33,30 +33,7 @@ fn grid() -> (Vec<Vec3>, Vec<Vec3>) {
 
 fn cloud_bytes() -> Vec<u8> {
     let (pos, coeffs) = grid();
-    let id = |x: u32, y: u32, z: u32| (z * K + y) * K + x;
-    let mut tets = Vec::new();
-    for z in 0..K - 1 {
-        for y in 0..K - 1 {
-            for x in 0..K - 1 {
-                for s in [
-                    [0, 1, 2],
-                    [0, 2, 1],
-                    [1, 0, 2],
-                    [1, 2, 0],
-                    [2, 0, 1],
-                    [2, 1, 0],
-                ] {
-                    let mut c = [x, y, z];
-                    let mut t = [id(x, y, z); 4];
-                    for (j, &axis) in s.iter().enumerate() {
-                        c[axis] += 1;
-                        t[j + 1] = id(c[0], c[1], c[2]);
-                    }
-                    tets.push(t);
-                }
-            }
-        }
-    }
+    let tets = lattice_tets([K; 3]);
     let neighbours = face_neighbors(&tets).unwrap();
     let mesh = TetMesh::new(pos.clone(), tets.clone(), neighbours.clone()).unwrap();
     let barycentric = (0..tets.len() as u32)

@@ -12,13 +12,12 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit_runtime::cloud::{
-    cell_visibility, face_neighbors, CellPlanes, CellVisibility, ProbeCloud, TetMesh,
+    cell_visibility, face_neighbors, lattice_tets, CellPlanes, CellVisibility, ProbeCloud, TetMesh,
     VisibilityMaps, WalkState,
 };
 use std::hint::black_box;
 
 fn kuhn_grid(k: u32) -> TetMesh {
-    let id = |x: u32, y: u32, z: u32| (z * k + y) * k + x;
     let mut pos = Vec::new();
     for z in 0..k {
         for y in 0..k {
@@ -27,29 +26,7 @@ fn kuhn_grid(k: u32) -> TetMesh {
             }
         }
     }
-    let mut tets = Vec::new();
-    for z in 0..k - 1 {
-        for y in 0..k - 1 {
-            for x in 0..k - 1 {
-                for s in [
-                    [0, 1, 2],
-                    [0, 2, 1],
-                    [1, 0, 2],
-                    [1, 2, 0],
-                    [2, 0, 1],
-                    [2, 1, 0],
-                ] {
-                    let mut c = [x, y, z];
-                    let mut t = [id(x, y, z); 4];
-                    for (j, &axis) in s.iter().enumerate() {
-                        c[axis] += 1;
-                        t[j + 1] = id(c[0], c[1], c[2]);
-                    }
-                    tets.push(t);
-                }
-            }
-        }
-    }
+    let tets = lattice_tets([k; 3]);
     let n = face_neighbors(&tets).unwrap();
     TetMesh::new(pos, tets, n).unwrap()
 }

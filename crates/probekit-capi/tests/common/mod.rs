@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use probekit_runtime::cloud::{face_neighbors, TetMesh};
+use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh};
 use probekit_runtime::format::{
     AxisModel, Coefficients, Gradients, ProbeFile, ProbeFileKind, Rig, RigModel, TetSection,
     VolumeGrid,
@@ -57,31 +57,7 @@ pub fn coeffs(positions: &[Vec3]) -> Vec<Vec3> {
 /// neighbours and barycentric matrices, plus one rig.
 pub fn cloud_file() -> ProbeFile {
     let pos = grid_positions();
-    let idx = |i: usize, j: usize, k: usize| (i + 3 * (j + 3 * k)) as u32;
-    let mut tets = Vec::new();
-    for k in 0..2 {
-        for j in 0..2 {
-            for i in 0..2 {
-                let c = [i, j, k];
-                for perm in [
-                    [0, 1, 2],
-                    [0, 2, 1],
-                    [1, 0, 2],
-                    [1, 2, 0],
-                    [2, 0, 1],
-                    [2, 1, 0],
-                ] {
-                    let mut v = c;
-                    let mut t = [idx(v[0], v[1], v[2]); 4];
-                    for (s, &a) in perm.iter().enumerate() {
-                        v[a] += 1;
-                        t[s + 1] = idx(v[0], v[1], v[2]);
-                    }
-                    tets.push(t);
-                }
-            }
-        }
-    }
+    let tets = lattice_tets([3; 3]);
     let neighbours = face_neighbors(&tets).unwrap();
     let mesh = TetMesh::new(pos.clone(), tets.clone(), neighbours.clone()).unwrap();
     let barycentric = (0..tets.len() as u32)

@@ -14,6 +14,61 @@ fn face_neighbors_rejects_a_face_shared_three_times() {
     ));
 }
 
+/// [`lattice_tets`] against a brute-force check on a 3 × 4 × 2 lattice of
+/// unit spacing: each tetrahedron has exactly a sixth of a cube's volume
+/// (so their count fills the box), every random point of the box lies in
+/// exactly one of them, and the faces match across
+/// cubes (each boundary square gives two hull faces, no face is shared by
+/// three).
+#[test]
+fn lattice_tets_tile_the_box_once() {
+    let dims = [3u32, 4, 2];
+    let tets = lattice_tets(dims);
+    assert_eq!(tets.len(), 6 * 2 * 3);
+    let coord = |i: u32| {
+        let (x, y, z) = (
+            i % dims[0],
+            (i / dims[0]) % dims[1],
+            i / (dims[0] * dims[1]),
+        );
+        [x as f64, y as f64, z as f64]
+    };
+    // Six times the signed volume (exact here: small integers in f64).
+    let det = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+        let e = |q: [f64; 3]| [q[0] - a[0], q[1] - a[1], q[2] - a[2]];
+        let (u, v, w) = (e(b), e(c), e(d));
+        u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+            + u[2] * (v[0] * w[1] - v[1] * w[0])
+    };
+    let corners: Vec<[[f64; 3]; 4]> = tets.iter().map(|t| t.map(coord)).collect();
+    assert!(corners
+        .iter()
+        .all(|v| det(v[0], v[1], v[2], v[3]).abs() == 1.0));
+    let mut rng = Lcg(7);
+    for _ in 0..2000 {
+        let p = [2.0, 3.0, 1.0].map(|s| s * rng.f() as f64);
+        let inside = corners
+            .iter()
+            .filter(|v| {
+                let full = det(v[0], v[1], v[2], v[3]);
+                [
+                    det(p, v[1], v[2], v[3]),
+                    det(v[0], p, v[2], v[3]),
+                    det(v[0], v[1], p, v[3]),
+                    det(v[0], v[1], v[2], p),
+                ]
+                .iter()
+                .all(|&s| s / full > 0.0)
+            })
+            .count();
+        assert_eq!(inside, 1, "{p:?}");
+    }
+    let n = face_neighbors(&tets).unwrap();
+    let hull = n.iter().flatten().filter(|&&t| t == HULL).count();
+    assert_eq!(hull, 2 * 2 * (2 * 3 + 2 + 3));
+    assert!(lattice_tets([1, 4, 4]).is_empty());
+}
+
 /// Kuhn triangulation of a `k³` lattice (spacing `h`, origin `o`, optional
 /// per-point jitter function): 6 tetrahedra per cube, one per axis order.
 pub(crate) fn kuhn(
@@ -31,30 +86,7 @@ pub(crate) fn kuhn(
             }
         }
     }
-    let perms = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    let mut tets = Vec::new();
-    for z in 0..k - 1 {
-        for y in 0..k - 1 {
-            for x in 0..k - 1 {
-                for s in perms {
-                    let mut c = [x, y, z];
-                    let mut t = [id(x, y, z); 4];
-                    for (j, &axis) in s.iter().enumerate() {
-                        c[axis] += 1;
-                        t[j + 1] = id(c[0], c[1], c[2]);
-                    }
-                    tets.push(t);
-                }
-            }
-        }
-    }
+    let tets = lattice_tets([k; 3]);
     let nbrs = neighbours(&tets);
     (pos, tets, nbrs)
 }
