@@ -327,10 +327,11 @@ pub fn face_neighbors(tets: &[[u32; 4]]) -> Result<Vec<[u32; 4]>, CloudError> {
 /// same way, so the faces match across cubes and the result is a
 /// conforming mesh of the lattice's box (6·∏(dims − 1) tetrahedra, each of
 /// a sixth of a cube's volume, in either orientation, which [`TetMesh::new`]
-/// accepts). It is not the Delaunay tetrahedralization the baker builds
-/// (on a lattice that one is not unique: every cube's corners are
-/// co-spherical) but a valid one: an engine with a uniform grid of probes
-/// can query it as a cloud. Empty when a dimension is below 2.
+/// accepts). Each tetrahedron's circumsphere is its cube's, which holds no
+/// other lattice point, so this is one of the lattice's many Delaunay
+/// tetrahedralizations (every cube's corners are co-spherical; the baker's
+/// symbolic perturbation may choose another): an engine with a uniform grid
+/// of probes can query it as a cloud. Empty when a dimension is below 2.
 pub fn lattice_tets(dims: [u32; 3]) -> Vec<[u32; 4]> {
     let [nx, ny, nz] = dims;
     if nx < 2 || ny < 2 || nz < 2 {
