@@ -17,7 +17,8 @@ fn face_neighbors_rejects_a_face_shared_three_times() {
 /// [`lattice_tets`] against a brute-force check on a 3 × 4 × 2 lattice of
 /// unit spacing: each tetrahedron has exactly a sixth of a cube's volume
 /// (so their count fills the box), every random point of the box lies in
-/// exactly one of them, and the faces match across
+/// exactly one of them, no lattice point lies inside a circumsphere
+/// (Delaunay), and the faces match across
 /// cubes (each boundary square gives two hull faces, no face is shared by
 /// three).
 #[test]
@@ -62,6 +63,30 @@ fn lattice_tets_tile_the_box_once() {
             })
             .count();
         assert_eq!(inside, 1, "{p:?}");
+    }
+    // Delaunay: no lattice point strictly inside a circumsphere (centre by
+    // Cramer's rule on 2(v_k − v_0)·c = |v_k|² − |v_0|²).
+    let all: Vec<[f64; 3]> = (0..dims.iter().product::<u32>()).map(coord).collect();
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for v in &corners {
+        let rows: [[f64; 3]; 3] =
+            core::array::from_fn(|k| core::array::from_fn(|i| 2.0 * (v[k + 1][i] - v[0][i])));
+        let rhs: [f64; 3] = core::array::from_fn(|k| dot(v[k + 1], v[k + 1]) - dot(v[0], v[0]));
+        let cols = |r: [[f64; 3]; 3]| -> [[f64; 3]; 3] {
+            core::array::from_fn(|i| core::array::from_fn(|k| r[k][i]))
+        };
+        let d3 = |c: [[f64; 3]; 3]| det([0.0; 3], c[0], c[1], c[2]);
+        let a = cols(rows);
+        let centre: [f64; 3] = core::array::from_fn(|i| {
+            let mut m = a;
+            m[i] = rhs;
+            d3(m) / d3(a)
+        });
+        let d2 = |q: [f64; 3]| dot(q, q) - 2.0 * dot(q, centre) + dot(centre, centre);
+        // The cube's centre: the middle of its main diagonal, v_0 to v_3.
+        assert!((0..3).all(|i| (centre[i] - 0.5 * (v[0][i] + v[3][i])).abs() < 1e-12));
+        let r2 = d2(v[0]);
+        assert!(all.iter().all(|&q| d2(q) >= r2 - 1e-9), "{v:?}");
     }
     let n = face_neighbors(&tets).unwrap();
     let hull = n.iter().flatten().filter(|&&t| t == HULL).count();
