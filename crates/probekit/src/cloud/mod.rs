@@ -962,7 +962,8 @@ impl Tetrahedralization {
     ///   is not strictly inside the circumsphere (exact insphere; co-spherical
     ///   allowed) — with the above this implies the global empty-sphere property;
     /// * the hull (faces without neighbour) is closed: each directed hull edge
-    ///   appears once and its reverse once;
+    ///   appears once and its reverse once; and convex at every edge (exact
+    ///   orient3d), so a cavity left inside the mesh is caught;
     /// * the tetrahedra's volumes sum to the volume enclosed by the hull
     ///   (divergence theorem over hull faces; relative tolerance 1e-9 in `f64`).
     ///
@@ -974,13 +975,9 @@ impl Tetrahedralization {
         if self.tets.len() != self.neighbors.len() {
             return Err("tets and neighbors differ in length".into());
         }
-        let mut used = vec![false; n];
         for (t, v) in self.tets.iter().enumerate() {
-            for &x in v {
-                if x as usize >= n {
-                    return Err(format!("tet {t} has vertex {x} out of range"));
-                }
-                used[x as usize] = true;
+            if let Some(&x) = v.iter().find(|&&x| x as usize >= n) {
+                return Err(format!("tet {t} has vertex {x} out of range"));
             }
             let q = v.map(|x| &pts[x as usize]);
             if predicates::orient3d(q[0], q[1], q[2], q[3]) != Orientation::Positive {
@@ -989,10 +986,14 @@ impl Tetrahedralization {
         }
         let dropped: std::collections::HashSet<u32> =
             self.merged_duplicates.iter().map(|&(d, _)| d).collect();
-        for (i, &u) in used.iter().enumerate() {
-            if u == dropped.contains(&(i as u32)) {
-                return Err(format!("point {i}: used = {u}, merged duplicate = {}", !u));
-            }
+        let unused: std::collections::HashSet<u32> =
+            unused_probes(n, &self.tets).into_iter().collect();
+        if let Some(&i) = unused.symmetric_difference(&dropped).min() {
+            return Err(if unused.contains(&i) {
+                format!("point {i} is in no tetrahedron and not a merged duplicate")
+            } else {
+                format!("point {i} is a merged duplicate but a tetrahedron uses it")
+            });
         }
         for &(d, k) in &self.merged_duplicates {
             if pts[d as usize] != pts[k as usize] || k >= d {
@@ -1014,8 +1015,8 @@ impl Tetrahedralization {
                 if u == HULL {
                     // Outward face orientation is (f1, f0, f2).
                     let (a, b, c) = (f[1], f[0], f[2]);
-                    for e in [(a, b), (b, c), (c, a)] {
-                        if hull_edges.insert(e, t).is_some() {
+                    for (e, opposite) in [((a, b), c), ((b, c), a), ((c, a), b)] {
+                        if hull_edges.insert(e, opposite).is_some() {
                             return Err(format!("hull edge {e:?} used twice in one direction"));
                         }
                     }
@@ -1047,9 +1048,17 @@ impl Tetrahedralization {
                 }
             }
         }
-        for &(a, b) in hull_edges.keys() {
-            if !hull_edges.contains_key(&(b, a)) {
+        for (&(a, b), &c) in &hull_edges {
+            let Some(&d) = hull_edges.get(&(b, a)) else {
                 return Err(format!("hull is open at edge ({a}, {b})"));
+            };
+            // Convex at every hull edge: the other face's far vertex is not
+            // strictly outside this face (outward-wound faces have the
+            // tetrahedra on their negative side). A closed, locally convex
+            // surface is convex; a cavity inside the mesh is not.
+            let q = [a, b, c, d].map(|x| &pts[x as usize]);
+            if predicates::orient3d(q[0], q[1], q[2], q[3]) == Orientation::Positive {
+                return Err(format!("hull is not convex at edge ({a}, {b})"));
             }
         }
         if (volume6 - hull_volume6).abs() > 1e-9 * scale.max(f64::MIN_POSITIVE) {

@@ -381,3 +381,100 @@ fn output_tetrahedra_follow_the_morton_curve_of_their_centroids() {
         );
     }
 }
+
+/// `sanity_check` is what the proptests lean on, so it must reject each kind
+/// of broken output: every corruption of a valid tetrahedralization below
+/// is caught, with the violation it names.
+#[test]
+fn sanity_check_rejects_each_corruption() {
+    let p = bench_points::uniform(60, 3);
+    let good = check(&p);
+    let t0 = good.tets[0];
+    let mut cases: Vec<(&str, Tetrahedralization, Vec<Vec3>)> = vec![
+        (
+            "out of range",
+            {
+                let mut t = good.clone();
+                t.tets[0][2] = p.len() as u32;
+                t
+            },
+            p.clone(),
+        ),
+        (
+            "not positively oriented",
+            {
+                let mut t = good.clone();
+                t.tets[0].swap(0, 1);
+                t
+            },
+            p.clone(),
+        ),
+        (
+            "in no tetrahedron and not a merged duplicate",
+            good.clone(),
+            {
+                let mut q = p.clone();
+                q.push(Vec3::splat(100.0));
+                q
+            },
+        ),
+        (
+            "is a merged duplicate but a tetrahedron uses it",
+            {
+                let mut t = good.clone();
+                t.merged_duplicates.push((t0[0], t0[1]));
+                t
+            },
+            p.clone(),
+        ),
+        (
+            "is not symmetric",
+            {
+                let mut t = good.clone();
+                let u = *t.neighbors[0].iter().find(|&&u| u != HULL).unwrap();
+                let back = (0..4).find(|&j| t.neighbors[u as usize][j] == 0).unwrap();
+                t.neighbors[u as usize][back] = HULL;
+                t
+            },
+            p.clone(),
+        ),
+        (
+            "hull is not convex",
+            {
+                let mut t = good.clone();
+                t.tets.pop();
+                t.neighbors.pop();
+                let last = t.tets.len() as u32;
+                for n in t.neighbors.iter_mut().flatten() {
+                    if *n == last {
+                        *n = HULL;
+                    }
+                }
+                t
+            },
+            p.clone(),
+        ),
+    ];
+    // Two flat tetrahedra on either side of one triangle: valid in every
+    // other respect, but each apex is inside the other's circumsphere (the
+    // Delaunay mesh of these five points has three tetrahedra around the
+    // apex–apex edge).
+    let flat = vec![
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(0.3, 0.3, 0.05),
+        Vec3::new(0.3, 0.3, -0.05),
+    ];
+    let two = Tetrahedralization {
+        tets: vec![[0, 1, 2, 3], [1, 0, 2, 4]],
+        neighbors: vec![[HULL, HULL, HULL, 1], [HULL, HULL, HULL, 0]],
+        merged_duplicates: Vec::new(),
+    };
+    cases.push(("inside its circumsphere", two, flat.clone()));
+    assert_eq!(check(&flat).tets.len(), 3);
+    for (want, t, q) in cases {
+        let err = t.sanity_check(&q).expect_err(want);
+        assert!(err.contains(want), "{want}: {err}");
+    }
+}
