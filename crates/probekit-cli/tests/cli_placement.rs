@@ -227,13 +227,27 @@ fn eval_compare_and_sweep_plot() {
         assert!(t.unwrap() <= l.unwrap(), "{v}");
         let (u, ul) = (f["unlit_points"].as_u64(), f["leaks_unlit"].as_u64());
         assert!(ul.unwrap() <= u.unwrap().min(l.unwrap()), "{v}");
+        // Points beyond the probes' hull, and their leaks, are some of each.
+        let (o, ol) = (
+            f["points_outside_hull"].as_u64(),
+            f["leaks_outside_hull"].as_u64(),
+        );
+        assert!(o.unwrap() <= f["points"].as_u64().unwrap(), "{v}");
+        assert!(ol.unwrap() <= o.unwrap().min(l.unwrap()), "{v}");
         for (_, r) in f["regions"].as_object().unwrap() {
             assert!(
                 r["leaks_through_geometry"].as_u64() <= r["leaks"].as_u64(),
                 "{r}"
             );
+            assert!(
+                r["leaks_outside_hull"].as_u64() <= r["leaks"].as_u64(),
+                "{r}"
+            );
         }
     }
+    // A 20-probe grid's probes stand at cell centres, half a cell (about
+    // 0.8 m) in from the box's faces: most of the box is beyond their hull.
+    assert!(v["points_outside_hull"].as_u64().unwrap() > 0, "{v}");
     // `--worst K`: the points with the most squared error, worst first;
     // asked for more than there are, every point with an error, and their
     // shares add up to the whole (the file's and the grid's).

@@ -101,8 +101,8 @@ use probekit::cloud::cell_visibility::{
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
-    blends_hidden_probes, interpolate_cloud, leaks_through_geometry, metrics,
-    region_leaks_through_geometry, region_metrics, unlit_points, worst_points,
+    blends_hidden_probes, interpolate_cloud, leaks_at, metrics, region_leaks_at, region_metrics,
+    unlit_points, worst_points,
 };
 use probekit::placement::{
     grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
@@ -436,8 +436,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             Some(c) => blends_hidden_probes(c, baker.tracer(), &pts),
             None => vec![false; pts.len()],
         };
-        let through =
-            region_leaks_through_geometry(&scene.regions, &pts, pred, &truth, mean, &hidden);
+        let through = region_leaks_at(&scene.regions, &pts, pred, &truth, mean, &hidden);
         let mut reg = String::new();
         for ((r, mm), t) in region_metrics(&scene.regions, &pts, pred, &truth, mean)
             .into_iter()
@@ -504,7 +503,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             m.rel_rmse,
             m.p95_rel_error,
             m.leaks,
-            leaks_through_geometry(pred, &truth, mean, &hidden)
+            leaks_at(pred, &truth, mean, &hidden)
         );
         Ok(())
     };

@@ -23,8 +23,8 @@ use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
-    leaks_through_geometry, mean_luminance, metrics, reference, region_leaks_through_geometry,
-    region_metrics, sample_points, unlit_points, worst_points, EvalPoint, Metrics, Predictor,
+    leaks_at, mean_luminance, metrics, reference, region_leaks_at, region_metrics, sample_points,
+    unlit_points, worst_points, EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
@@ -231,7 +231,9 @@ pub fn run(a: &EvalArgs) -> Result<()> {
 /// Overall figures, `"probes"`, `"unlit_points"` and `"leaks_unlit"`
 /// ([`unlit_points`]) and per-region figures of a prediction;
 /// with `hidden` (a cloud's [`Predictor::blends_hidden_probes`]), also
-/// `"leaks_through_geometry"`, overall and per region; with `worst` > 0,
+/// `"leaks_through_geometry"`, overall and per region; for a cloud,
+/// `"points_outside_hull"` and `"leaks_outside_hull"`
+/// ([`Predictor::outside_hull`]), overall and per region; with `worst` > 0,
 /// the `worst` points of [`worst_points`] under `"worst"`, for a cloud with
 /// the probes of each point's blend.
 #[allow(clippy::too_many_arguments)]
@@ -252,10 +254,17 @@ fn figures(
     out["unlit_points"] = unlit.into();
     out["leaks_unlit"] = unlit_leaks.into();
     if let Some(h) = hidden {
-        out["leaks_through_geometry"] = leaks_through_geometry(pred, truth, mean, h).into();
+        out["leaks_through_geometry"] = leaks_at(pred, truth, mean, h).into();
     }
-    let through =
-        hidden.map(|h| region_leaks_through_geometry(&scene.regions, pts, pred, truth, mean, h));
+    let outside = predictor.outside_hull(pts);
+    if let Some(o) = &outside {
+        out["points_outside_hull"] = o.iter().filter(|&&f| f).count().into();
+        out["leaks_outside_hull"] = leaks_at(pred, truth, mean, o).into();
+    }
+    let per_region =
+        |flags: &[bool]| region_leaks_at(&scene.regions, pts, pred, truth, mean, flags);
+    let through = hidden.map(per_region);
+    let beyond = outside.as_deref().map(per_region);
     let mut regions = serde_json::Map::new();
     for (i, (r, m)) in region_metrics(&scene.regions, pts, pred, truth, mean)
         .into_iter()
@@ -264,6 +273,9 @@ fn figures(
         let mut j = to_json(&m);
         if let Some(t) = &through {
             j["leaks_through_geometry"] = t[i].into();
+        }
+        if let Some(b) = &beyond {
+            j["leaks_outside_hull"] = b[i].into();
         }
         regions.insert(r.name.clone(), j);
     }

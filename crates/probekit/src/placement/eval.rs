@@ -13,6 +13,9 @@
 //!   to a probe that geometry hides from the point
 //!   ([`blends_hidden_probes`]) — light from behind a wall, as
 //!   against an error of interpolating light in sight;
+//! * `points_outside_hull` and `leaks_outside_hull` (clouds,
+//!   [`outside_hull`]): the points outside the probes' convex hull, lit
+//!   from its outer cells, and the leaks among them;
 //! * `unlit_points` and `leaks_unlit` ([`unlit_points`]): the points whose
 //!   true irradiance is exactly 0 — sealed voids inside walls and between
 //!   floor slabs, which the free-space test cannot tell from rooms — and
@@ -271,21 +274,39 @@ pub fn worst_points(pred: &[Vec3], truth: &[Vec3], k: usize) -> Vec<WorstPoint> 
         .collect()
 }
 
-/// Leaks ([`is_leak`]) at the points flagged in `hidden` (their blend gives
-/// weight to a probe that geometry hides from them:
-/// [`blends_hidden_probes`]): light that comes through a wall, as
-/// against an error of interpolating light in sight.
-pub fn leaks_through_geometry(
-    pred: &[Vec3],
-    truth: &[Vec3],
-    mean_truth_lum: f32,
-    hidden: &[bool],
-) -> usize {
+/// Leaks ([`is_leak`]) at the points flagged in `flags`: with the flags of
+/// [`blends_hidden_probes`] (the blend gives weight to a probe that
+/// geometry hides from the point) the leaks through geometry, light that
+/// comes through a wall, as against an error of interpolating light in
+/// sight; with those of [`outside_hull`] the leaks of points lit from the
+/// hull's outer cells.
+pub fn leaks_at(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32, flags: &[bool]) -> usize {
     pred.iter()
         .zip(truth)
-        .zip(hidden)
-        .filter(|((&p, &t), &h)| h && is_leak(p, t, mean_truth_lum))
+        .zip(flags)
+        .filter(|((&p, &t), &f)| f && is_leak(p, t, mean_truth_lum))
         .count()
+}
+
+/// Whether each point lies outside the convex hull of `cloud`'s probes, in
+/// order: it is lit from the outer cell of the closest hull face
+/// ([`probekit_runtime::cloud::Location::Outside`]). Probes keep a
+/// clearance from surfaces, so the band between a room's walls, floor or
+/// ceiling and its outermost probes is such a region; a hull face there
+/// can reach past an inner wall (a closet's floor corner lit from a face
+/// between probes in the rooms around it: BENCHMARKS.md, "Leaks in sight
+/// given a share").
+pub fn outside_hull(cloud: &ProbeCloud, points: &[EvalPoint]) -> Vec<bool> {
+    let mut st = WalkState::new();
+    points
+        .iter()
+        .map(|p| {
+            matches!(
+                cloud.mesh().locate(p.position, &mut st),
+                probekit_runtime::cloud::Location::Outside { .. }
+            )
+        })
+        .collect()
 }
 
 /// `(points, leaks)`: how many evaluation points have a true irradiance of
@@ -340,15 +361,15 @@ pub fn blends_hidden_probes(
         .collect()
 }
 
-/// [`leaks_through_geometry`] of the points inside each region, in the
-/// regions' order (as [`region_metrics`]; `hidden` flags all points).
-pub fn region_leaks_through_geometry(
+/// [`leaks_at`] the flagged points inside each region, in the regions'
+/// order (as [`region_metrics`]; `flags` covers all points).
+pub fn region_leaks_at(
     regions: &[Region],
     points: &[EvalPoint],
     pred: &[Vec3],
     truth: &[Vec3],
     mean_truth_lum: f32,
-    hidden: &[bool],
+    flags: &[bool],
 ) -> Vec<usize> {
     regions
         .iter()
@@ -356,10 +377,10 @@ pub fn region_leaks_through_geometry(
             let bb = r.aabb();
             let inside: Vec<bool> = points
                 .iter()
-                .zip(hidden)
-                .map(|(p, &h)| h && bb.contains(p.position))
+                .zip(flags)
+                .map(|(p, &f)| f && bb.contains(p.position))
                 .collect();
-            leaks_through_geometry(pred, truth, mean_truth_lum, &inside)
+            leaks_at(pred, truth, mean_truth_lum, &inside)
         })
         .collect()
 }
@@ -504,6 +525,14 @@ impl Predictor {
     pub fn blends_hidden_probes(&self, tracer: &Tracer, points: &[EvalPoint]) -> Option<Vec<bool>> {
         match self {
             Predictor::Cloud(c) => Some(blends_hidden_probes(c, tracer, points)),
+            Predictor::Volume(..) => None,
+        }
+    }
+
+    /// [`outside_hull`] for a probe cloud; `None` for a volume.
+    pub fn outside_hull(&self, points: &[EvalPoint]) -> Option<Vec<bool>> {
+        match self {
+            Predictor::Cloud(c) => Some(outside_hull(c, points)),
             Predictor::Volume(..) => None,
         }
     }

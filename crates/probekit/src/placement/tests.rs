@@ -680,7 +680,7 @@ fn unlit_points_are_the_zero_truth_points_and_their_leaks() {
     assert_eq!(unlit_points(&[], &[], 1.0), (0, 0));
 }
 
-/// `leaks_through_geometry` counts exactly the leaks at flagged points
+/// `leaks_at` counts exactly the leaks at flagged points
 /// (hand-computed), and `blends_hidden_probes` flags a point of room A
 /// exactly when its plain blend reaches a probe beyond the dividing wall
 /// (x 3.85..4.15, solid for z < 2.8; nothing else stands between these
@@ -699,7 +699,7 @@ fn leaks_through_geometry_are_the_leaks_whose_blend_reaches_behind_a_wall() {
     let hidden = [true, false, true, true];
     // Leaks at 0, 1 and 3; flagged among them: 0 and 3.
     assert_eq!(metrics(&pred, &truth, mean).leaks, 3);
-    assert_eq!(leaks_through_geometry(&pred, &truth, mean, &hidden), 2);
+    assert_eq!(leaks_at(&pred, &truth, mean, &hidden), 2);
 
     let scene = Scene::builtin_demo();
     let tracer = Tracer::new(&scene);
@@ -743,6 +743,59 @@ fn leaks_through_geometry_are_the_leaks_whose_blend_reaches_behind_a_wall() {
     }
     // Cells between x = 3 and 5 straddle the wall: many points blend across.
     assert!(across > 40, "{across}");
+}
+
+/// `outside_hull` flags exactly the points outside the probes' box when the
+/// probes are a lattice (its convex hull is its bounding box: an
+/// independent test), and `leaks_at` with those flags counts the leaks
+/// among them.
+#[test]
+fn outside_hull_flags_the_points_beyond_a_lattice_of_probes() {
+    let mut probes = Vec::new();
+    for x in [0.0f32, 1.0, 2.0] {
+        for y in [0.0f32, 0.5] {
+            for z in [0.0f32, 1.5, 3.0] {
+                probes.push(Vec3::new(x, y, z));
+            }
+        }
+    }
+    let hull = Aabb::new(Vec3::ZERO, Vec3::new(2.0, 0.5, 3.0));
+    let mesh = tetrahedralize(&probes)
+        .unwrap()
+        .to_tet_mesh(&probes)
+        .unwrap();
+    let cloud = probekit_runtime::ProbeCloud::new(mesh, 1, vec![Vec3::ONE; probes.len()]).unwrap();
+    let mut rng = crate::bake::sampling::SampleRng::new(5, 0x4855, 0);
+    let pts: Vec<EvalPoint> = (0..600)
+        .map(|_| EvalPoint {
+            position: Vec3::new(
+                -0.5 + 3.0 * rng.next_f32(),
+                -0.5 + 1.5 * rng.next_f32(),
+                -0.5 + 4.0 * rng.next_f32(),
+            ),
+            normal: Vec3::Y,
+        })
+        // Not within a hair of the hull, where rounding may go either way.
+        .filter(|p| {
+            let d = (p.position - hull.min)
+                .min(hull.max - p.position)
+                .abs()
+                .min_element();
+            d > 1e-4
+        })
+        .collect();
+    let flags = Predictor::Cloud(cloud).outside_hull(&pts).unwrap();
+    let mut outside = 0;
+    for (p, &f) in pts.iter().zip(&flags) {
+        assert_eq!(f, !hull.contains(p.position), "{:?}", p.position);
+        outside += usize::from(f);
+    }
+    assert!(outside > 100 && outside < pts.len() - 50, "{outside}");
+    // Every point leaks against a truth of 0.1 (blend 1): the flagged ones.
+    let truth = vec![Vec3::splat(0.1); pts.len()];
+    let pred = vec![Vec3::ONE; pts.len()];
+    let mean = mean_luminance(&truth);
+    assert_eq!(leaks_at(&pred, &truth, mean, &flags), outside);
 }
 
 /// No evaluation point lies inside the demo's sphere light or within 1 cm
