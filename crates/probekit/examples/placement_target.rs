@@ -86,7 +86,8 @@
 //! temporary directory, keyed by scene hash and the points. Prints one line
 //! per cloud with `rel_rmse`, `p95_rel_error`, leaks, `through=K` (with
 //! `--visibility`: leaks through geometry, `probekit eval`'s
-//! `leaks_through_geometry`), `unlit=K` (leaks at points of zero truth,
+//! `leaks_through_geometry`), `outside=K` (with `--visibility`: leaks
+//! beyond the probes' hull, `leaks_outside_hull`), `unlit=K` (leaks at points of zero truth,
 //! sealed voids: `leaks_unlit`) and per-region `rel_rmse/leaks+through` (the
 //! `probekit eval` figures).
 
@@ -101,8 +102,8 @@ use probekit::cloud::cell_visibility::{
 use probekit::cloud::tetrahedralize;
 use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::placement::eval::{
-    blends_hidden_probes, interpolate_cloud, leaks_at, metrics, region_leaks_at, region_metrics,
-    unlit_points, worst_points,
+    blends_hidden_probes, interpolate_cloud, leaks_at, metrics, outside_hull, region_leaks_at,
+    region_metrics, unlit_points, worst_points,
 };
 use probekit::placement::{
     grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
@@ -436,6 +437,12 @@ fn main() -> Result<(), Box<dyn Error>> {
             Some(c) => blends_hidden_probes(c, baker.tracer(), &pts),
             None => vec![false; pts.len()],
         };
+        // Leaks at points beyond the probes' hull, lit from its outer cells
+        // (`probekit eval`'s `leaks_outside_hull`).
+        let outside: Vec<bool> = match diag.borrow().as_ref() {
+            Some(c) => outside_hull(c, &pts),
+            None => vec![false; pts.len()],
+        };
         let through = region_leaks_at(&scene.regions, &pts, pred, &truth, mean, &hidden);
         let mut reg = String::new();
         for ((r, mm), t) in region_metrics(&scene.regions, &pts, pred, &truth, mean)
@@ -498,12 +505,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         let strat = strat.map_or(String::new(), |x| format!(" stratified={x:.3}"));
         let (_, unlit) = unlit_points(pred, &truth, mean);
         println!(
-            "{name:>9} probes={:5} rel_rmse={:.3}{strat} p95={:.2} leaks={:3} through={} unlit={unlit} |{reg}",
+            "{name:>9} probes={:5} rel_rmse={:.3}{strat} p95={:.2} leaks={:3} through={} outside={} unlit={unlit} |{reg}",
             pos.len(),
             m.rel_rmse,
             m.p95_rel_error,
             m.leaks,
-            leaks_at(pred, &truth, mean, &hidden)
+            leaks_at(pred, &truth, mean, &hidden),
+            leaks_at(pred, &truth, mean, &outside)
         );
         Ok(())
     };
