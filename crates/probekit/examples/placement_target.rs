@@ -432,16 +432,15 @@ fn main() -> Result<(), Box<dyn Error>> {
         let pred = &pred[..pts.len()];
         let m = metrics(pred, &truth, mean);
         // Leaks whose blend reaches a probe behind geometry (`probekit eval`'s
-        // `leaks_through_geometry`), overall and per region after a `+`.
-        let hidden: Vec<bool> = match diag.borrow().as_ref() {
-            Some(c) => blends_hidden_probes(c, baker.tracer(), &pts),
-            None => vec![false; pts.len()],
-        };
-        // Leaks at points beyond the probes' hull, lit from its outer cells
-        // (`probekit eval`'s `leaks_outside_hull`).
-        let outside: Vec<bool> = match diag.borrow().as_ref() {
-            Some(c) => outside_hull(c, &pts),
-            None => vec![false; pts.len()],
+        // `leaks_through_geometry`), overall and per region after a `+`, and
+        // at points beyond the probes' hull, lit from its outer cells
+        // (`leaks_outside_hull`).
+        let (hidden, outside) = match diag.borrow().as_ref() {
+            Some(c) => (
+                blends_hidden_probes(c, baker.tracer(), &pts),
+                outside_hull(c, &pts),
+            ),
+            None => (vec![false; pts.len()], vec![false; pts.len()]),
         };
         let through = region_leaks_at(&scene.regions, &pts, pred, &truth, mean, &hidden);
         let mut reg = String::new();

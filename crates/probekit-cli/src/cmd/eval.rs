@@ -31,6 +31,7 @@ use probekit::placement::sweep::{
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
+use probekit::trace::Tracer;
 use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;
 
@@ -125,13 +126,12 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     };
     let truth = reference(&baker, &pts, &rs).with_context(|| a.scene.display().to_string())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
-    let hidden = predictor.blends_hidden_probes(baker.tracer(), &pts);
     let mut out = figures(
         &scene,
         &pts,
         &pred,
         &truth,
-        hidden.as_deref(),
+        baker.tracer(),
         file.positions.len(),
         a.worst,
         &predictor,
@@ -165,13 +165,12 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
-            let gh = gpred.blends_hidden_probes(baker.tracer(), &pts);
             let gf = figures(
                 &scene,
                 &pts,
                 &gp,
                 &truth,
-                gh.as_deref(),
+                baker.tracer(),
                 g.positions.len(),
                 a.worst,
                 &gpred,
@@ -230,8 +229,8 @@ pub fn run(a: &EvalArgs) -> Result<()> {
 
 /// Overall figures, `"probes"`, `"unlit_points"` and `"leaks_unlit"`
 /// ([`unlit_points`]) and per-region figures of a prediction;
-/// with `hidden` (a cloud's [`Predictor::blends_hidden_probes`]), also
-/// `"leaks_through_geometry"`, overall and per region; for a cloud,
+/// for a cloud, also `"leaks_through_geometry"`
+/// ([`Predictor::blends_hidden_probes`], segment tests with `tracer`),
 /// `"points_outside_hull"` and `"leaks_outside_hull"`
 /// ([`Predictor::outside_hull`]), overall and per region; with `worst` > 0,
 /// the `worst` points of [`worst_points`] under `"worst"`, for a cloud with
@@ -242,7 +241,7 @@ fn figures(
     pts: &[EvalPoint],
     pred: &[Vec3],
     truth: &[Vec3],
-    hidden: Option<&[bool]>,
+    tracer: &Tracer,
     probes: usize,
     worst: usize,
     predictor: &Predictor,
@@ -253,7 +252,8 @@ fn figures(
     let (unlit, unlit_leaks) = unlit_points(pred, truth, mean);
     out["unlit_points"] = unlit.into();
     out["leaks_unlit"] = unlit_leaks.into();
-    if let Some(h) = hidden {
+    let hidden = predictor.blends_hidden_probes(tracer, pts);
+    if let Some(h) = &hidden {
         out["leaks_through_geometry"] = leaks_at(pred, truth, mean, h).into();
     }
     let outside = predictor.outside_hull(pts);
@@ -263,7 +263,7 @@ fn figures(
     }
     let per_region =
         |flags: &[bool]| region_leaks_at(&scene.regions, pts, pred, truth, mean, flags);
-    let through = hidden.map(per_region);
+    let through = hidden.as_deref().map(per_region);
     let beyond = outside.as_deref().map(per_region);
     let mut regions = serde_json::Map::new();
     for (i, (r, m)) in region_metrics(&scene.regions, pts, pred, truth, mean)
