@@ -27,27 +27,17 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
         .flat_map(|p| (0..3 * n).map(move |c| field(*p * 0.5, c) * 0.1))
         .collect();
     ProbeFile {
-        kind: ProbeFileKind::Volume,
         positions,
-        coefficients: Coefficients::from_f32(3, &coeffs).unwrap(),
-        validity: None,
-        tetrahedra: None,
-        outer: None,
         octree,
         grid,
         gradients: Some(Gradients {
             order: 3,
             data: grads,
         }),
-        rigs: Vec::new(),
-        groups: Vec::new(),
-        visibility: None,
-        cell_visibility: None,
-        probe_weights: None,
-        brightness_exponent: 0.0,
-        directional_exponent: 0.0,
-        cell_planes: None,
-        metadata: String::new(),
+        ..ProbeFile::new(
+            ProbeFileKind::Volume,
+            Coefficients::from_f32(3, &coeffs).unwrap(),
+        )
     }
 }
 

@@ -855,27 +855,16 @@ fn finish(
         })
         .collect();
     let mut file = ProbeFile {
-        kind: ProbeFileKind::Volume,
         positions: points,
-        coefficients: Coefficients::from_f32(order as u32, &coeffs)?,
         validity: Some(validity),
-        tetrahedra: None,
-        outer: None,
-        octree: None,
-        grid: None,
         gradients: gradients.map(|data| Gradients {
             order: order as u32,
             data,
         }),
-        rigs: Vec::new(),
-        groups: Vec::new(),
-        visibility: None,
-        cell_visibility: None,
-        probe_weights: None,
-        brightness_exponent: 0.0,
-        directional_exponent: 0.0,
-        cell_planes: None,
-        metadata: String::new(),
+        ..ProbeFile::new(
+            ProbeFileKind::Volume,
+            Coefficients::from_f32(order as u32, &coeffs)?,
+        )
     };
     structure(&mut file);
     file.validate()?;
