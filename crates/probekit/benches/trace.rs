@@ -7,6 +7,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
+use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
 use probekit::scene::{demo::box_triangles, Material, Scene};
 use probekit::trace::{Ray, Tracer};
 use rayon::prelude::*;
@@ -14,26 +15,25 @@ use rayon::prelude::*;
 const BOXES: usize = 83_334;
 const RAYS: usize = 20_000;
 
-/// SplitMix64.
-struct Rng(u64);
-impl Rng {
+/// Test draws from the bake's generator ([`SampleRng`], SplitMix64).
+trait Draws {
+    /// Uniform in `[0, 1)`.
+    fn f32(&mut self) -> f32;
+    /// A uniform unit direction.
+    fn dir(&mut self) -> Vec3;
+}
+
+impl Draws for SampleRng {
     fn f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        self.next_f32()
     }
     fn dir(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f32();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f32::consts::TAU * self.f32();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        sample_uniform_sphere(self.next_2d())
     }
 }
 
 fn scene() -> Scene {
-    let mut rng = Rng(42);
+    let mut rng = SampleRng::from_state(42);
     let mut tris = Vec::with_capacity(BOXES * 12);
     for _ in 0..BOXES {
         let c = 100.0 * Vec3::new(rng.f32(), rng.f32(), rng.f32());
@@ -50,7 +50,7 @@ fn scene() -> Scene {
 }
 
 fn rays() -> Vec<Ray> {
-    let mut rng = Rng(7);
+    let mut rng = SampleRng::from_state(7);
     (0..RAYS)
         .map(|_| {
             Ray::new(

@@ -54,6 +54,14 @@ impl SampleRng {
         }
     }
 
+    /// The plain SplitMix64 generator started at `state` (no key hashing):
+    /// its first number is `mix64(state + 0x9e37_79b9_7f4a_7c15)`. For the
+    /// places that need one fixed stream (the tetrahedralization's shuffle
+    /// and walks, a rig's surface samples).
+    pub fn from_state(state: u64) -> Self {
+        Self { state }
+    }
+
     /// The next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
@@ -65,6 +73,12 @@ impl SampleRng {
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+
+    /// A uniform double in `[0, 1)` (53 random mantissa bits).
+    #[inline]
+    pub fn next_f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// Two uniform floats in `[0, 1)²`.

@@ -40,6 +40,7 @@ pub mod predicates;
 pub mod visibility;
 pub mod visibility_bake;
 
+use crate::bake::sampling::SampleRng;
 use glam::Vec3;
 use predicates::{InSphere, Kernel, Orientation, P3};
 use thiserror::Error;
@@ -197,19 +198,6 @@ fn merge_duplicates(pts: &[P3]) -> (Vec<u32>, Vec<(u32, u32)>) {
     (unique, merged)
 }
 
-/// SplitMix64: a tiny deterministic generator for the BRIO shuffle and walks.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-}
-
 /// Spreads the low 21 bits of `v` so that two zero bits follow each bit.
 fn spread3(v: u64) -> u64 {
     let mut x = v & 0x1f_ffff;
@@ -245,9 +233,9 @@ fn brio_order(pts: &[P3], mut order: Vec<u32>) -> Vec<u32> {
         let q = |k: usize| ((p[k] - lo[k]) * scale[k]) as u64;
         spread3(q(0)) | (spread3(q(1)) << 1) | (spread3(q(2)) << 2)
     };
-    let mut rng = SplitMix(0x005E_ED0F_B810);
+    let mut rng = SampleRng::from_state(0x005E_ED0F_B810);
     for i in (1..order.len()).rev() {
-        let j = (rng.next() % (i as u64 + 1)) as usize;
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
         order.swap(i, j);
     }
     // Round boundaries from the end: the last round holds half the points.
@@ -330,7 +318,7 @@ struct Builder<'a> {
     gen: u32,
     free: Vec<u32>,
     hint: u32,
-    rng: SplitMix,
+    rng: SampleRng,
     // Scratch reused across insertions (no allocation per point in steady state).
     stack: Vec<u32>,
     cavity: Vec<u32>,
@@ -371,7 +359,7 @@ impl<'a> Builder<'a> {
             gen: 0,
             free: Vec::new(),
             hint: 0,
-            rng: SplitMix(0xD1CE),
+            rng: SampleRng::from_state(0xD1CE),
             stack: Vec::new(),
             cavity: Vec::new(),
             faces: Vec::new(),
@@ -503,7 +491,7 @@ impl<'a> Builder<'a> {
             for n in nb {
                 self.prefetch_cell(n);
             }
-            let start = (self.rng.next() & 3) as usize;
+            let start = (self.rng.next_u64() & 3) as usize;
             // p is on the positive side of the face we came through (the one
             // with neighbour prev, at index `back`): visit the others in
             // the order start, start + 1, … (mod 4), skipping `back` by
@@ -1073,13 +1061,13 @@ impl Tetrahedralization {
 /// Deterministic point sets shared by the benchmark, the Qhull peer script's
 /// point writer (`examples/delaunay_points.rs`) and the tests.
 pub mod bench_points {
-    use super::SplitMix;
+    use crate::bake::sampling::SampleRng;
     use glam::Vec3;
 
     /// `n` points uniform in the unit cube `[0, 1)³` from `seed`.
     pub fn uniform(n: usize, seed: u64) -> Vec<Vec3> {
-        let mut rng = SplitMix(seed);
-        let mut u = || (rng.next() >> 40) as f32 / (1u64 << 24) as f32;
+        let mut rng = SampleRng::from_state(seed);
+        let mut u = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
         (0..n).map(|_| Vec3::new(u(), u(), u())).collect()
     }
 

@@ -10,6 +10,7 @@
 //! so the result does not depend on the thread count.
 
 use super::mesh::Mesh;
+use crate::bake::sampling::SampleRng;
 use glam::Vec3;
 
 /// Candidates drawn per requested sample.
@@ -26,37 +27,9 @@ pub struct SurfaceSample {
     pub normal: Vec3,
 }
 
-/// SplitMix64 (Steele, Lea & Flood, *Fast splittable pseudorandom number
-/// generators*, OOPSLA 2014): small, seedable, good enough for sampling.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A generator from `seed`.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`, 53 bits.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// `count` area-weighted uniform random points on the mesh (triangle by
 /// area, then `(1 − √u, √u(1 − v), √u v)` barycentrics).
-pub fn random_surface_points(
-    mesh: &Mesh,
-    count: usize,
-    rng: &mut SplitMix64,
-) -> Vec<SurfaceSample> {
+pub fn random_surface_points(mesh: &Mesh, count: usize, rng: &mut SampleRng) -> Vec<SurfaceSample> {
     let mut cdf = Vec::with_capacity(mesh.indices.len());
     let mut acc = 0.0f64;
     for t in 0..mesh.indices.len() {
@@ -96,7 +69,7 @@ pub fn random_surface_points(
 /// seed → same samples.
 pub fn distribute_samples(mesh: &Mesh, count: usize, seed: u64) -> Vec<SurfaceSample> {
     let count = count.max(1);
-    let mut rng = SplitMix64::new(seed);
+    let mut rng = SampleRng::from_state(seed);
     let cand = random_surface_points(mesh, count * CANDIDATES_PER_SAMPLE, &mut rng);
     // Farthest-point selection.
     let mut chosen = Vec::with_capacity(count);
@@ -175,7 +148,7 @@ mod tests {
             }
             best
         };
-        let mut rng = SplitMix64::new(7);
+        let mut rng = SampleRng::from_state(7);
         let r = random_surface_points(&m, 128, &mut rng);
         assert!(
             min_nn(&s) > 3.0 * min_nn(&r),

@@ -1,28 +1,25 @@
 use super::*;
+use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
 use crate::scene::{
     demo, AlphaMode, LightKind, Material, Parts, Scene, SceneExtras, Texture, Triangle as STriangle,
 };
 use glam::{DVec3, Vec4};
 use std::path::Path;
 
-/// Small deterministic generator (SplitMix64) so tests need no RNG crate.
-struct Rng(u64);
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e3779b97f4a7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
-        z ^ (z >> 31)
-    }
+/// Test draws from the bake's generator ([`SampleRng`], SplitMix64).
+trait Draws {
+    /// Uniform in `[0, 1)`.
+    fn f32(&mut self) -> f32;
+    /// A uniform unit direction.
+    fn dir(&mut self) -> Vec3;
+}
+
+impl Draws for SampleRng {
     fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+        self.next_f32()
     }
     fn dir(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f32();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = std::f32::consts::TAU * self.f32();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+        sample_uniform_sphere(self.next_2d())
     }
 }
 
@@ -83,7 +80,7 @@ fn box_hits_match_analytic_distances_and_normals() {
         vec![],
     );
     let tr = Tracer::new(&s);
-    let mut rng = Rng(1);
+    let mut rng = SampleRng::from_state(1);
     for _ in 0..2000 {
         let o = Vec3::new(rng.f32() - 0.5, rng.f32() - 0.5, rng.f32() - 0.5);
         let d = rng.dir();
@@ -144,7 +141,7 @@ fn box_hits_match_analytic_distances_and_normals() {
 fn bvh_closest_hit_matches_brute_force_on_the_demo_scene() {
     let s = Scene::builtin_demo();
     let tr = Tracer::new(&s);
-    let mut rng = Rng(7);
+    let mut rng = SampleRng::from_state(7);
     let mut hits = 0;
     for _ in 0..3000 {
         let o = Vec3::new(
@@ -186,7 +183,7 @@ fn seg_dist(p: DVec3, a: DVec3, b: DVec3) -> f64 {
 }
 
 /// A tessellated, jittered plane y = 0 over [0, n]² with shared vertices, shifted by `offset`.
-fn jittered_plane(n: usize, offset: Vec3, rng: &mut Rng) -> (Vec<STriangle>, Vec<Vec3>) {
+fn jittered_plane(n: usize, offset: Vec3, rng: &mut SampleRng) -> (Vec<STriangle>, Vec<Vec3>) {
     let mut verts = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
@@ -226,7 +223,7 @@ fn jittered_plane(n: usize, offset: Vec3, rng: &mut Rng) -> (Vec<STriangle>, Vec
 #[test]
 fn rays_through_shared_edges_and_vertices_never_slip_through() {
     for (seed, offset) in [(3u64, Vec3::ZERO), (4, Vec3::new(1000.0, 3.0, -2000.0))] {
-        let mut rng = Rng(seed);
+        let mut rng = SampleRng::from_state(seed);
         let n = 12;
         let (tris, verts) = jittered_plane(n, offset, &mut rng);
         let edges: Vec<(Vec3, Vec3)> = tris
@@ -386,7 +383,7 @@ fn transparency_blend_mask_and_transmittance() {
 
 #[test]
 fn offset_origins_do_not_self_intersect_far_from_the_origin() {
-    let mut rng = Rng(11);
+    let mut rng = SampleRng::from_state(11);
     for scale in [1.0f32, 1e3, 1e5] {
         let mut tris = Vec::new();
         for _ in 0..200 {
@@ -447,7 +444,7 @@ fn closet_points() -> Vec<Vec3> {
 fn demo_closet_gets_no_direct_light() {
     let s = Scene::builtin_demo();
     let tr = Tracer::new(&s);
-    let mut rng = Rng(5);
+    let mut rng = SampleRng::from_state(5);
     let lamp = s
         .lights
         .iter()
@@ -517,7 +514,7 @@ fn cornell_box_gltf_and_obj_agree() {
     );
     // Same rays see the same distances.
     let (to, tg) = (Tracer::new(&obj), Tracer::new(&glb));
-    let mut rng = Rng(9);
+    let mut rng = SampleRng::from_state(9);
     for _ in 0..500 {
         let o = Vec3::new(
             rng.f32() * 1.6 - 0.8,
@@ -543,7 +540,7 @@ fn tracer_is_usable_from_many_threads() {
     let s = Scene::builtin_demo();
     let tr = Tracer::new(&s);
     let rays: Vec<Ray> = {
-        let mut rng = Rng(2);
+        let mut rng = SampleRng::from_state(2);
         (0..4000)
             .map(|_| Ray::new(Vec3::new(4.0 + rng.f32(), 1.5, 2.0), rng.dir()))
             .collect()
