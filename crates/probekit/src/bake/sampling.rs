@@ -307,6 +307,34 @@ mod tests {
         assert!(chi2 < limit, "chi2 {chi2} >= {limit} (df {df})");
     }
 
+    /// `from_state` is plain SplitMix64: the first outputs of Vigna's
+    /// reference `splitmix64.c` seeded with 1234567 (the published test
+    /// vector), and `next_f64`/`next_f32` take their top 53/24 bits.
+    #[test]
+    fn from_state_is_reference_splitmix64() {
+        let mut rng = SampleRng::from_state(1_234_567);
+        let expected = [
+            6_457_827_717_110_365_317u64,
+            3_203_168_211_198_807_973,
+            9_817_491_932_198_370_423,
+            4_593_380_528_125_082_431,
+            16_408_922_859_458_223_821,
+        ];
+        for e in expected {
+            assert_eq!(rng.next_u64(), e);
+        }
+        let mut a = SampleRng::from_state(1_234_567);
+        assert_eq!(
+            a.next_f64(),
+            (expected[0] >> 11) as f64 / 9_007_199_254_740_992.0
+        );
+        assert_eq!(a.next_f32(), (expected[1] >> 40) as f32 / 16_777_216.0);
+        // The keyed constructor starts from the hash of its key.
+        let mut k = SampleRng::new(1, 2, 3);
+        let mut s = SampleRng::from_state(hash3(1, 2, 3));
+        assert_eq!(k.next_u64(), s.next_u64());
+    }
+
     #[test]
     fn uniform_sphere_chi_square() {
         assert_chi2(chi_square_dir(
