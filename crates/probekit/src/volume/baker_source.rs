@@ -66,10 +66,7 @@ pub fn position_key(p: Vec3) -> u64 {
     for v in p.to_array() {
         // +0.0 folds −0.0 into +0.0: the same point, the same key.
         h ^= (v + 0.0).to_bits() as u64;
-        h = h.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        h ^= h >> 31;
+        h = crate::bake::sampling::mix64(h.wrapping_add(0x9e37_79b9_7f4a_7c15));
     }
     h
 }
