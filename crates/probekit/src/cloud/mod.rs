@@ -1059,7 +1059,7 @@ impl Tetrahedralization {
 }
 
 /// Deterministic point sets shared by the benchmark, the Qhull peer script's
-/// point writer (`examples/delaunay_points.rs`) and the tests.
+/// point writer (`examples/delaunay_peer.rs`) and the tests.
 pub mod bench_points {
     use crate::bake::sampling::SampleRng;
     use glam::Vec3;
@@ -1067,7 +1067,7 @@ pub mod bench_points {
     /// `n` points uniform in the unit cube `[0, 1)³` from `seed`.
     pub fn uniform(n: usize, seed: u64) -> Vec<Vec3> {
         let mut rng = SampleRng::from_state(seed);
-        let mut u = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
+        let mut u = || rng.next_f32();
         (0..n).map(|_| Vec3::new(u(), u(), u())).collect()
     }
 
