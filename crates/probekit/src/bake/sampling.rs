@@ -29,10 +29,14 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// SplitMix64's state increment (the odd integer nearest 2⁶⁴/φ): each step
+/// adds it to the state and returns [`mix64`] of the sum.
+pub const SPLITMIX_GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
+
 /// Hashes a key of three integers to 64 well-mixed bits.
 #[inline]
 pub fn hash3(a: u64, b: u64, c: u64) -> u64 {
-    let h = mix64(a ^ 0x9e37_79b9_7f4a_7c15);
+    let h = mix64(a ^ SPLITMIX_GAMMA);
     let h = mix64(h ^ b.wrapping_mul(0xd6e8_feb8_6659_fd93));
     mix64(h ^ c.wrapping_mul(0xa076_1d64_78bd_642f))
 }
@@ -55,7 +59,7 @@ impl SampleRng {
     }
 
     /// The plain SplitMix64 generator started at `state` (no key hashing):
-    /// its first number is `mix64(state + 0x9e37_79b9_7f4a_7c15)`. For the
+    /// its first number is `mix64(state + SPLITMIX_GAMMA)`. For the
     /// places that need one fixed stream (the tetrahedralization's shuffle
     /// and walks, a rig's surface samples).
     pub fn from_state(state: u64) -> Self {
@@ -65,7 +69,7 @@ impl SampleRng {
     /// The next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.state = self.state.wrapping_add(SPLITMIX_GAMMA);
         mix64(self.state)
     }
 

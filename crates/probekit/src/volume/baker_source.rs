@@ -62,11 +62,12 @@ pub struct BakerSource<'s> {
 /// A 64-bit key of a position's bits (SplitMix64 finaliser over x, y, z):
 /// the probe index the baker keys its random numbers with.
 pub fn position_key(p: Vec3) -> u64 {
-    let mut h = 0x9e37_79b9_7f4a_7c15u64;
+    use crate::bake::sampling::{mix64, SPLITMIX_GAMMA};
+    let mut h = SPLITMIX_GAMMA;
     for v in p.to_array() {
         // +0.0 folds −0.0 into +0.0: the same point, the same key.
         h ^= (v + 0.0).to_bits() as u64;
-        h = crate::bake::sampling::mix64(h.wrapping_add(0x9e37_79b9_7f4a_7c15));
+        h = mix64(h.wrapping_add(SPLITMIX_GAMMA));
     }
     h
 }
