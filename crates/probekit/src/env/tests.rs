@@ -309,13 +309,8 @@ fn sampler_pdf_is_consistent_and_unbiased() {
         .sum();
     let k = 64 * 1024;
     let mut est = DVec3::ZERO;
-    let mut state = 0x9E3779B97F4A7C15u64;
-    let mut rnd = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = crate::bake::sampling::SampleRng::from_state(0x9E3779B97F4A7C15u64);
+    let mut rnd = || rng.next_f32();
     for _ in 0..k {
         let (d, l, pdf) = s.sample(Vec2::new(rnd(), rnd()));
         assert!((d.length() - 1.0).abs() < 1e-4);
@@ -582,13 +577,8 @@ fn sampler_chi_square() {
     }
     let n = 40_000;
     let mut counts = vec![0.0f64; bins_x * bins_y];
-    let mut state = 0x2545F4914F6CDD1Du64;
-    let mut rnd = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = crate::bake::sampling::SampleRng::from_state(0x2545F4914F6CDD1Du64);
+    let mut rnd = || rng.next_f32();
     for _ in 0..n {
         let (d, _, _) = s.sample(Vec2::new(rnd(), rnd()));
         let (x, y) = map.texel_of(d);

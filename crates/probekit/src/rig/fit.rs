@@ -162,13 +162,12 @@ pub fn rig_file(rigs: &[FittedRig]) -> ProbeFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake::sampling::SampleRng;
     use crate::rig::mesh;
 
-    fn lcg(seed: &mut u64) -> f32 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 40) as f32 / (1u64 << 24) as f32) - 0.5
+    /// A uniform draw in `[-0.5, 0.5)` from the baking library's generator.
+    fn centred(rng: &mut SampleRng) -> f32 {
+        rng.next_f32() - 0.5
     }
 
     /// A lighting field that lies exactly in the model space is recovered
@@ -181,9 +180,9 @@ mod tests {
             let spec: RigSpec = spec.parse().unwrap();
             let f = FittedRig::fit(&car, spec, 3, 96, 1, "car").unwrap();
             let k = f.rig.model.parameter_count().unwrap() as usize;
-            let mut seed = 42u64;
+            let mut rng = SampleRng::from_state(42);
             let truth: Vec<Vec3> = (0..k * 9)
-                .map(|_| Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed)))
+                .map(|_| Vec3::new(centred(&mut rng), centred(&mut rng), centred(&mut rng)))
                 .collect();
             // Build the sample SH by evaluating the true model independently
             // (a state whose parameters are the truth).
@@ -221,8 +220,8 @@ mod tests {
         let spec: RigSpec = "mixed:l3,g,g".parse().unwrap();
         let f = FittedRig::fit(&car, spec, 1, 200, 3, "car").unwrap();
         let m = design_matrix(f.rig.model, f.rig.bbox_min, f.rig.bbox_max, &f.rig.samples);
-        let mut seed = 9u64;
-        let y = nalgebra::DVector::from_fn(m.nrows(), |_, _| lcg(&mut seed) as f64);
+        let mut rng = SampleRng::from_state(9);
+        let y = nalgebra::DVector::from_fn(m.nrows(), |_, _| centred(&mut rng) as f64);
         let mtm = m.transpose() * &m;
         let direct = mtm.cholesky().unwrap().solve(&(m.transpose() * &y));
         let (pinv, _) = pseudo_inverse(&m);
