@@ -1,4 +1,5 @@
 use super::*;
+use crate::bake::sampling::SampleRng;
 use crate::sh::compare::spherical_fibonacci;
 use glam::{DVec3, Vec2};
 use probekit_sh::convolve::eval_sh;
@@ -309,10 +310,9 @@ fn sampler_pdf_is_consistent_and_unbiased() {
         .sum();
     let k = 64 * 1024;
     let mut est = DVec3::ZERO;
-    let mut rng = crate::bake::sampling::SampleRng::from_state(0x9E3779B97F4A7C15u64);
-    let mut rnd = || rng.next_f32();
+    let mut rng = SampleRng::from_state(0x9E3779B97F4A7C15u64);
     for _ in 0..k {
-        let (d, l, pdf) = s.sample(Vec2::new(rnd(), rnd()));
+        let (d, l, pdf) = s.sample(Vec2::new(rng.next_f32(), rng.next_f32()));
         assert!((d.length() - 1.0).abs() < 1e-4);
         let p2 = s.pdf(d);
         assert!((p2 - pdf).abs() <= 1e-3 * pdf, "pdf {pdf} vs {p2}");
@@ -577,10 +577,9 @@ fn sampler_chi_square() {
     }
     let n = 40_000;
     let mut counts = vec![0.0f64; bins_x * bins_y];
-    let mut rng = crate::bake::sampling::SampleRng::from_state(0x2545F4914F6CDD1Du64);
-    let mut rnd = || rng.next_f32();
+    let mut rng = SampleRng::from_state(0x2545F4914F6CDD1Du64);
     for _ in 0..n {
-        let (d, _, _) = s.sample(Vec2::new(rnd(), rnd()));
+        let (d, _, _) = s.sample(Vec2::new(rng.next_f32(), rng.next_f32()));
         let (x, y) = map.texel_of(d);
         counts[y * bins_x + x / 4] += 1.0;
     }
