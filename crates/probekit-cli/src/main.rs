@@ -22,7 +22,8 @@ struct Cli {
 /// The subcommands; each lives in `src/cmd/<name>.rs`.
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Bake a probe cloud (grid or given positions; `--shard I/N` for one part).
+    /// Bake a probe cloud: adaptive placement (default), a grid, given positions or seed 003's
+    /// methods; `--shard I/N` for one part.
     Bake(cmd::bake::BakeArgs),
     /// Join shard parts into the file a single-machine bake writes.
     Merge(cmd::bake::MergeArgs),

@@ -401,3 +401,65 @@ fn bake_light_shells_auto_records_its_choice() {
     assert_eq!(i["placement"]["parameters"]["light_shells_mode"], "on");
     assert!(i["placement"]["parameters"]["held_out_error"].is_null());
 }
+
+/// `--placement grid --budget N` is the grid `--grid N` gives, and flags
+/// the chosen method would ignore are refused before any capture.
+#[test]
+fn bake_flags_fit_the_placement_or_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    let bake = |extra: &[&str], name: &str| {
+        let out = dir.path().join(name);
+        let mut args = vec!["bake", &scene, "--samples", "16", "--bounces", "1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--no-visibility", "--no-probe-weights", "-o"]);
+        let o = out.to_str().unwrap().to_string();
+        let mut args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        args.push(o);
+        args.push("--json".into());
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        (probekit(&refs), out)
+    };
+    let (by_budget, a) = bake(&["--placement", "grid", "--budget", "20"], "a.probes");
+    let (by_grid, b) = bake(&["--grid", "20"], "b.probes");
+    let (ja, jb) = (json(&by_budget), json(&by_grid));
+    assert_eq!(ja["probes"], jb["probes"]);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    // The default grid has about 256 probes: far more than 20.
+    assert!(ja["probes"].as_u64().unwrap() < 60, "{ja}");
+
+    let positions = dir.path().join("p.csv");
+    std::fs::write(&positions, "0,1,0\n1,1,0\n0,2,0\n0,1,1\n").unwrap();
+    let p = positions.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--grid", "20", "--cell", "0.5"], "--grid and --cell"),
+        (
+            vec!["--placement", "grid", "--budget", "20", "--grid", "20"],
+            "--budget and --grid",
+        ),
+        (
+            vec!["--budget", "20", "--cell", "0.5"],
+            "--budget and --cell",
+        ),
+        (
+            vec!["--placement", "adaptive", "--grid", "20"],
+            "--placement adaptive",
+        ),
+        (
+            vec!["--placement", "spawn-merge", "--cell", "0.5"],
+            "--placement spawn-merge",
+        ),
+        (vec!["--positions", p, "--budget", "20"], "do not apply"),
+        (
+            vec!["--placement", "grid", "--positions", p],
+            "exclude each other",
+        ),
+    ] {
+        let (o, out) = bake(&args, "refused.probes");
+        assert!(!o.status.success(), "{args:?} was accepted");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

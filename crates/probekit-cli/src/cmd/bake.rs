@@ -1,4 +1,4 @@
-//! `probekit bake [SCENE] [--positions FILE.csv | --grid N | --cell SIZE]
+//! `probekit bake [SCENE] [--placement M] [--budget N] [--positions FILE.csv | --grid N | --cell SIZE]
 //! [-o OUT.probes] [--samples N] [--bounces B] [--order N] [--seed S]
 //! [--codec C] [--indirect-only] [--groups] [--shard I/N] [--json]` and
 //! `probekit merge PART... -o OUT.probes`.
@@ -43,6 +43,8 @@ use std::path::PathBuf;
 pub const DEFAULT_SAMPLES: u32 = 1024;
 /// Default approximate probe count of the grid placement.
 pub const DEFAULT_GRID: usize = 256;
+/// Default `--budget` of the adaptive and seed-003 placements.
+pub const DEFAULT_BUDGET: usize = 256;
 
 /// The capture settings the flags ask for: the scene's, with `samples`
 /// (else the scene's `[bake] samples`, else [`DEFAULT_SAMPLES`]), `bounces`
@@ -75,10 +77,12 @@ pub struct BakeArgs {
     /// `spawn-merge` or `gradient-ascent` (seed 003; `--budget` and the flags below).
     #[arg(long)]
     pub placement: Option<String>,
-    /// Adaptive placement: probe budget, a hard cap (the final leak and
-    /// orphan-pocket probes included).
-    #[arg(long, default_value_t = 256)]
-    pub budget: usize,
+    /// Probe budget (default 256). Adaptive placement: a hard cap (the
+    /// final leak and orphan-pocket probes included); spawn-merge and
+    /// gradient-ascent: their size; grid placement: the grid's approximate
+    /// probe count, like `--grid`.
+    #[arg(long)]
+    pub budget: Option<usize>,
     /// Adaptive placement: stop when the relative RMSE estimated on the
     /// placement's own captured pool is below this.
     #[arg(long, default_value_t = 0.02)]
@@ -282,29 +286,67 @@ fn stored_groups(out: &BakeOutput, indirect_only: bool) -> Vec<(String, Vec<ShRg
     }
 }
 
+/// The placement method `a` asks for: `--placement` if given, else
+/// `manual` with `--positions`, `grid` with `--grid` or `--cell`, else
+/// `adaptive`. Flags that the method would ignore are errors, so that a
+/// user never gets a bake other than the one asked for (`--grid` beside
+/// `--cell`, `--budget` beside either, or any of them with `--positions`;
+/// `--grid` or `--cell` with a method other than `grid`).
+fn placement_method(a: &BakeArgs) -> Result<&'static str> {
+    let sized_grid = a.grid.is_some() || a.cell.is_some();
+    let method = match (a.placement.as_deref(), &a.positions) {
+        (Some("manual") | None, Some(_)) => "manual",
+        (Some("manual"), None) => bail!("--placement manual needs --positions FILE.csv"),
+        (None, None) if !sized_grid => "adaptive",
+        (Some("grid") | None, None) => "grid",
+        (Some(m @ ("grid" | "adaptive" | "spawn-merge" | "gradient-ascent")), Some(_)) => {
+            bail!("--placement {m} and --positions exclude each other")
+        }
+        (Some("adaptive"), None) => "adaptive",
+        (Some("spawn-merge"), None) => "spawn-merge",
+        (Some("gradient-ascent"), None) => "gradient-ascent",
+        (Some(o), _) => bail!(
+            "--placement {o}: expected grid, manual, adaptive, spawn-merge or gradient-ascent"
+        ),
+    };
+    match method {
+        "grid" => {
+            if a.grid.is_some() && a.cell.is_some() {
+                bail!("--grid and --cell exclude each other (a probe count or a cell size)");
+            }
+            if a.budget.is_some() && sized_grid {
+                bail!(
+                    "--budget and --{} exclude each other: a grid placement takes one size",
+                    if a.grid.is_some() { "grid" } else { "cell" }
+                );
+            }
+        }
+        "manual" => {
+            if a.budget.is_some() || sized_grid {
+                bail!(
+                    "--positions places the probes given: --budget, --grid and --cell do not apply"
+                );
+            }
+        }
+        m => {
+            if sized_grid {
+                bail!(
+                    "--{} sizes a grid placement, not --placement {m} (which takes --budget)",
+                    if a.grid.is_some() { "grid" } else { "cell" }
+                );
+            }
+        }
+    }
+    Ok(method)
+}
+
 /// Runs `probekit bake`.
 pub fn run(a: &BakeArgs) -> Result<()> {
     let scene = load_scene(&a.scene)?;
     let codec = Codec::from_name(&a.codec)
         .ok_or_else(|| anyhow!("--codec {}: expected f32, f16, l1, zh3 or l2", a.codec))?;
-    let method = match (a.placement.as_deref(), &a.positions) {
-        (Some("manual") | None, Some(_)) => "manual",
-        (Some("manual"), None) => bail!("--placement manual needs --positions FILE.csv"),
-        (None, None) if a.grid.is_none() && a.cell.is_none() => "adaptive",
-        (Some("grid") | None, None) => "grid",
-        (Some("grid"), Some(_)) => bail!("--placement grid and --positions exclude each other"),
-        (Some("adaptive"), None) => "adaptive",
-        (Some("adaptive"), Some(_)) => {
-            bail!("--placement adaptive and --positions exclude each other")
-        }
-        (Some(m @ ("spawn-merge" | "gradient-ascent")), None) => m,
-        (Some(m @ ("spawn-merge" | "gradient-ascent")), Some(_)) => {
-            bail!("--placement {m} and --positions exclude each other")
-        }
-        (Some(o), _) => bail!(
-            "--placement {o}: expected grid, manual, adaptive, spawn-merge or gradient-ascent"
-        ),
-    };
+    let method = placement_method(a)?;
+    let budget = a.budget.unwrap_or(DEFAULT_BUDGET);
     // The capture settings the user asked for (seed, bounces, order,
     // samples); placement captures with them too (at most
     // `PLACEMENT_SAMPLES` each), so `--seed` gives another placement.
@@ -316,7 +358,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
         a.seed003
-            .place(&baker, &a.scene, method, a.budget, &placement_settings)?
+            .place(&baker, &a.scene, method, budget, &placement_settings)?
     } else if method == "adaptive" {
         let light_shells = LightShells::from_name(&a.light_shells).ok_or_else(|| {
             anyhow!(
@@ -324,7 +366,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 a.light_shells
             )
         })?;
-        let pb = ProgressBar::new(a.budget as u64);
+        let pb = ProgressBar::new(budget as u64);
         pb.set_style(
             ProgressStyle::with_template(
                 "placing: {msg:9} {bar:40} {pos}/{len}  {elapsed} elapsed",
@@ -335,7 +377,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             &baker,
             scene.bake_box(),
             &probekit::placement::PlacementMethod::Adaptive {
-                budget: a.budget,
+                budget,
                 tolerance: a.tolerance,
                 light_shells,
             },
@@ -351,7 +393,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let n = placed.positions.len();
         (
             placed.positions,
-            serde_json::json!({ "budget": a.budget, "tolerance": a.tolerance, "light_shells": placed.stats.light_shells, "light_shells_mode": light_shells.name(), "held_out_error": placed.stats.held_out_error, "count": n }),
+            serde_json::json!({ "budget": budget, "tolerance": a.tolerance, "light_shells": placed.stats.light_shells, "light_shells_mode": light_shells.name(), "held_out_error": placed.stats.held_out_error, "count": n }),
         )
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;
@@ -366,11 +408,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let n = pts.len();
         (pts, serde_json::json!({ "count": n }))
     } else {
-        let (pts, res) = grid_points(&scene, a.grid, a.cell)?;
+        let count = a.grid.or(a.budget);
+        let (pts, res) = grid_points(&scene, count, a.cell)?;
         let param = match a.cell {
             Some(c) => serde_json::json!({ "cell": c, "resolution": res }),
             None => {
-                serde_json::json!({ "grid": a.grid.unwrap_or(DEFAULT_GRID), "resolution": res })
+                serde_json::json!({ "grid": count.unwrap_or(DEFAULT_GRID), "resolution": res })
             }
         };
         (pts, param)
