@@ -463,3 +463,38 @@ fn bake_flags_fit_the_placement_or_are_refused() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// Manual positions that span a volume as given but not once the virtual
+/// offset has moved a probe out of a wall are refused before the capture,
+/// with a message that says so, and nothing is written.
+#[test]
+fn manual_positions_flattened_by_the_virtual_offset_are_refused_before_capture() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
+    // Inside the wall (x 2–2.2): `capture` reports where the offset moves
+    // it, with the same index (row 0), seed and pre-pass as the bake.
+    let in_wall = "2.1,0.7,0.5";
+    let c = json(&probekit(&["capture", &scene, "--at", in_wall, "--json"]));
+    let moved = c["position"].as_array().unwrap();
+    let z = moved[2].to_string();
+    assert_ne!(moved[0].as_f64().unwrap(), 2.1, "not moved: {c}");
+    assert_ne!(z.parse::<f32>().unwrap(), 0.5, "moved within z = 0.5: {c}");
+    // Three free points in the moved probe's plane z = const.
+    let csv = format!("{in_wall}\n0.5,0.5,{z}\n1.0,1.2,{z}\n3.0,1.0,{z}\n");
+    let positions = dir.path().join("p.csv");
+    std::fs::write(&positions, csv).unwrap();
+    let out = dir.path().join("m.probes");
+    let o = probekit(&[
+        "bake",
+        &scene,
+        "--positions",
+        positions.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "accepted");
+    assert!(err.contains("once the virtual offset"), "{err}");
+    assert!(err.contains("co-planar"), "{err}");
+    assert!(!out.exists());
+}

@@ -398,10 +398,23 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;
         let pts: Vec<Vec3> = rows.iter().map(|r| Vec3::new(r[0], r[1], r[2])).collect();
-        // Refuse a set that spans no volume before capturing it, not after.
+        // Refuse a set that spans no volume before capturing it, not after:
+        // as given, then where the capture will put them (the virtual
+        // offset moves probes out of geometry and sphere lights, and the
+        // file is tetrahedralized at those positions).
         probekit::cloud::tetrahedralize(&pts).with_context(|| {
             format!(
                 "{}: the probe positions cannot be tetrahedralized",
+                p.display()
+            )
+        })?;
+        let captured = baker
+            .capture_positions(&pts, 0, &placement_settings)
+            .with_context(|| format!("{}: {}", a.scene, p.display()))?;
+        probekit::cloud::tetrahedralize(&captured).with_context(|| {
+            format!(
+                "{}: the probe positions cannot be tetrahedralized once the virtual offset has \
+                 moved the probes in geometry or in sphere lights out of them",
                 p.display()
             )
         })?;

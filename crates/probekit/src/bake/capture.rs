@@ -785,6 +785,49 @@ impl<'s> Baker<'s> {
             });
         }
         let v = &s.validity;
+        let (pos, pushed, in_light) = self.offset_position(point, probe_index, s);
+        let (acc, st, se) = self.capture_at(pos, probe_index, s);
+        let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
+        if in_light || self.scene.sphere_light_at(pos, 0.0).is_some() {
+            validity.valid = false;
+        }
+        let se = se.map(|e| e.into_iter().map(|v| v.as_vec3()).collect());
+        Ok((self.assemble(acc, s, pos, validity), se))
+    }
+
+    /// Where [`Baker::capture`] captures probe `probe_index` (its global
+    /// index in the bake) requested at `point` (metres): `point` itself, or
+    /// where the virtual offset moves it out of geometry or out of a sphere
+    /// light (see [`super::validity`]). The same position, bit for bit, as
+    /// [`CaptureResult::position`], for a small part of a capture's cost (the
+    /// validity pre-pass only): a caller checks the captured set (e.g. that
+    /// it can be tetrahedralized) before spending the capture on it.
+    pub fn capture_position(
+        &self,
+        point: Vec3,
+        probe_index: u64,
+        s: &CaptureSettings,
+    ) -> Result<Vec3, BakeError> {
+        s.validate()?;
+        if !point.is_finite() {
+            return Err(BakeError::NonFinitePosition {
+                index: probe_index as usize,
+                position: point,
+            });
+        }
+        Ok(self.offset_position(point, probe_index, s).0)
+    }
+
+    /// The virtual offset of [`Baker::capture_with_error`]: the capture
+    /// position, whether the probe was moved, and whether it stays inside a
+    /// sphere light (offset off).
+    fn offset_position(
+        &self,
+        point: Vec3,
+        probe_index: u64,
+        s: &CaptureSettings,
+    ) -> (Vec3, bool, bool) {
+        let v = &s.validity;
         let mut pos = point;
         let mut pushed = false;
         if v.virtual_offset {
@@ -819,13 +862,7 @@ impl<'s> Baker<'s> {
             pos = l.position + d * (l.radius + v.offset_margin.max(0.5 * l.radius));
             pushed = true;
         }
-        let (acc, st, se) = self.capture_at(pos, probe_index, s);
-        let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
-        if in_light || self.scene.sphere_light_at(pos, 0.0).is_some() {
-            validity.valid = false;
-        }
-        let se = se.map(|e| e.into_iter().map(|v| v.as_vec3()).collect());
-        Ok((self.assemble(acc, s, pos, validity), se))
+        (pos, pushed, in_light)
     }
 
     fn assemble(
@@ -921,6 +958,23 @@ impl<'s> Baker<'s> {
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 r
             })
+            .collect()
+    }
+
+    /// [`Baker::capture_position`] of every point, in parallel: where
+    /// [`Baker::capture_many`] with the same arguments captures them (the
+    /// bake's [`super::BakeOutput::captured_positions`]). Bit-identical for
+    /// any thread count.
+    pub fn capture_positions(
+        &self,
+        points: &[Vec3],
+        first_index: usize,
+        s: &CaptureSettings,
+    ) -> Result<Vec<Vec3>, BakeError> {
+        points
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| self.capture_position(*p, (first_index + i) as u64, s))
             .collect()
     }
 

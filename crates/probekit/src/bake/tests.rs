@@ -573,17 +573,12 @@ fn environment_map_capture_matches_projection() {
     assert_close(&m, &se, &want, 0.01 * want[0].abs(), "environment map");
 }
 
-#[test]
-fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
-    // a room (inward) containing a solid block (outward)
+/// A room 6 m across (inward faces) around a solid 1 m block (outward
+/// faces) at the origin, lit by a point light above the block.
+fn room_with_block() -> Scene {
     let room = box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0);
-    let block = box_tris(
-        Vec3::new(-0.5, -0.5, -0.5),
-        Vec3::new(0.5, 0.5, 0.5),
-        false,
-        0,
-    );
-    let scene = scene_of(
+    let block = box_tris(Vec3::splat(-0.5), Vec3::splat(0.5), false, 0);
+    scene_of(
         vec![room, block],
         vec![material(0.5, 0.0)],
         vec![light(
@@ -594,7 +589,12 @@ fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
             0.0,
         )],
         Vec3::ZERO,
-    );
+    )
+}
+
+#[test]
+fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
+    let scene = room_with_block();
     let baker = Baker::new(&scene).unwrap();
     let p = Vec3::new(0.3, 0.1, 0.0); // nearest face x = 0.5
     let mut s = quick(256, 1, 3, 1);
@@ -619,6 +619,36 @@ fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
         c.position
     );
     assert!(c.sh.coeffs()[0].x > 0.0, "the pushed probe sees the light");
+}
+
+/// `capture_positions` predicts where a bake captures its probes, bit for
+/// bit, moved ones included (the CLI tetrahedralizes them before spending
+/// the capture), and refuses a non-finite point like the capture.
+#[test]
+fn capture_positions_are_where_the_bake_captures() {
+    let scene = room_with_block();
+    let baker = Baker::new(&scene).unwrap();
+    let s = quick(64, 1, 2, 7);
+    let points = [
+        Vec3::new(0.3, 0.1, 0.0),  // in the block: moved out
+        Vec3::new(-0.2, 0.4, 0.1), // in the block: moved out
+        Vec3::new(1.5, 1.0, -1.0),
+        Vec3::new(-1.5, 2.0, 1.0),
+        Vec3::new(2.0, -2.0, 2.0),
+    ];
+    let predicted = baker.capture_positions(&points, 3, &s).unwrap();
+    let baked = baker.bake_points_from(&points, 3, &s, &|_, _| {}).unwrap();
+    assert_eq!(predicted, baked.captured_positions);
+    assert!(baked.validity[0].offset_applied && baked.validity[1].offset_applied);
+    assert_ne!(predicted[0], points[0]);
+    assert_eq!(&predicted[2..], &points[2..]);
+    let err = baker
+        .capture_positions(&[Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0)], 0, &s)
+        .unwrap_err();
+    assert!(
+        matches!(err, BakeError::NonFinitePosition { index: 1, .. }),
+        "{err}"
+    );
 }
 
 #[test]
