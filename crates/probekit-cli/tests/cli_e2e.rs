@@ -326,3 +326,62 @@ fn manual_probe_sets_degenerate_and_duplicate() {
     // Four distinct, non-co-planar positions: one tetrahedron.
     assert_eq!(i["tetrahedra"], 1);
 }
+
+/// Flags a file kind or a command's mode would ignore are refused with a
+/// one-line error: the volume's `--interp` on a cloud, the cloud's blend
+/// flags on a volume, the sweep's `--budgets`/`--methods` without `--plot`,
+/// `--samples` without a bake to set, and no evaluation points.
+#[test]
+fn ignored_flags_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let bake = ["bake", "--grid", "12", "--samples", "16", "--bounces", "1"];
+    json(d, &[&bake[..], &["-o", "c.probes", "--json"]].concat());
+    let volume = ["volume", "builtin:demo", "-o", "v.probes", "--uniform"];
+    json(
+        d,
+        &[&volume[..], &["--resolution", "3,3,3", "--json"]].concat(),
+    );
+    let at = ["--at", "1,1.5,2", "--json"];
+    json(d, &[&["query", "c.probes"][..], &at].concat());
+    json(
+        d,
+        &[&["query", "v.probes", "--interp", "trilinear"][..], &at].concat(),
+    );
+    fails_one_line(
+        d,
+        &[&["query", "c.probes", "--interp", "trilinear"][..], &at].concat(),
+        "probe cloud",
+    );
+    for flag in [
+        &["--no-visibility"][..],
+        &["--no-cell-visibility"],
+        &["--no-probe-weights"],
+        &["--visibility-bias", "0.1"],
+        &["--visibility-sharpness", "4"],
+        &["--brightness-weight", "1"],
+        &["--directional-brightness", "1"],
+    ] {
+        let args = [&["query", "v.probes"][..], flag, &at].concat();
+        fails_one_line(d, &args, &format!("{} applies to probe clouds", flag[0]));
+    }
+    let eval = ["eval", "c.probes", "--scene", "builtin:demo", "--json"];
+    for (extra, needle) in [
+        (&["--budgets", "10,20"][..], "--budgets"),
+        (&["--methods", "grid"], "--methods"),
+        (&["--samples", "8"], "--samples"),
+        (&["--points", "0"], "--points 0"),
+        (&["--interp", "taylor"], "probe cloud"),
+    ] {
+        fails_one_line(d, &[&eval[..], extra].concat(), needle);
+    }
+    let v = json(
+        d,
+        &[
+            &eval[..],
+            &["--points", "20", "--compare", "grid", "--samples", "8"],
+        ]
+        .concat(),
+    );
+    assert_eq!(v["compare"]["grid"]["points"], 20);
+}

@@ -53,9 +53,10 @@ pub struct EvalArgs {
     /// default the scene's `[bake] box`.
     #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
     pub bbox: Option<Vec<f32>>,
-    /// Volumes: trilinear (default), taylor or tricubic.
-    #[arg(long, default_value = "trilinear")]
-    pub interp: String,
+    /// Volumes: trilinear (default), taylor or tricubic (an error with a
+    /// probe cloud, which interpolates by its tetrahedra).
+    #[arg(long)]
+    pub interp: Option<String>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -68,10 +69,11 @@ pub struct EvalArgs {
     /// Run a placement sweep over `--budgets` and draw it to this PNG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Probe budgets of the sweep.
-    #[arg(long, value_delimiter = ',', default_value = "50,100,200,400")]
-    pub budgets: Vec<usize>,
-    /// Methods of the sweep (default grid, adaptive, spawn-merge, gradient-ascent).
+    /// Probe budgets of the sweep (default 50,100,200,400; `--plot` only).
+    #[arg(long, value_delimiter = ',')]
+    pub budgets: Option<Vec<usize>>,
+    /// Methods of the sweep (default grid, adaptive, spawn-merge,
+    /// gradient-ascent; `--plot` only).
     #[arg(long, value_delimiter = ',')]
     pub methods: Option<Vec<String>>,
     /// Receiver samples per probe for the `--compare`/`--plot` bakes
@@ -87,6 +89,30 @@ pub struct EvalArgs {
     pub worst: usize,
 }
 
+/// The sweep's budgets when `--plot` is given without `--budgets`.
+const DEFAULT_BUDGETS: [usize; 4] = [50, 100, 200, 400];
+
+/// Refuses flags that would be ignored: the sweep's `--budgets` and
+/// `--methods` without `--plot`, `--samples` with neither `--compare` nor
+/// `--plot` (it sets their bakes' samples), and no evaluation points.
+fn check_flags(a: &EvalArgs) -> Result<()> {
+    if a.plot.is_none() {
+        if a.budgets.is_some() {
+            bail!("--budgets sets the sweep of --plot FILE.png; give --plot too");
+        }
+        if a.methods.is_some() {
+            bail!("--methods sets the sweep of --plot FILE.png; give --plot too");
+        }
+    }
+    if a.samples.is_some() && a.plot.is_none() && a.compare.is_none() {
+        bail!("--samples sets the bakes of --compare and --plot; give one of them too");
+    }
+    if a.points == 0 {
+        bail!("--points 0: expected at least one evaluation point");
+    }
+    Ok(())
+}
+
 fn to_json(m: &Metrics) -> serde_json::Value {
     serde_json::json!({"points": m.points, "rel_rmse": m.rel_rmse, "p95_rel_error": m.p95_rel_error, "leaks": m.leaks})
 }
@@ -95,9 +121,12 @@ fn to_json(m: &Metrics) -> serde_json::Value {
 pub fn run(a: &EvalArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let file = load_probes(&a.probes)?;
-    let mut predictor =
-        Predictor::from_file(&file, parse_interp(&a.interp)?).with_context(|| name.clone())?;
-    a.visibility.apply(&mut predictor)?;
+    check_flags(a)?;
+    let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
+    let mut predictor = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
+    a.visibility
+        .apply(&mut predictor)
+        .with_context(|| name.clone())?;
     let scene = Scene::load(&a.scene).with_context(|| a.scene.display().to_string())?;
     let baker = Baker::new(&scene).with_context(|| a.scene.display().to_string())?;
     let bbox = match &a.bbox {
@@ -162,7 +191,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             kinds
                 .fit_weights_into(&baker, &settings, &mut g, &|_, _| {})
                 .with_context(ctx)?;
-            let mut gpred = Predictor::from_file(&g, parse_interp(&a.interp)?).with_context(ctx)?;
+            let mut gpred = Predictor::from_file(&g, interp).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
             let gf = figures(
@@ -180,7 +209,8 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         Some(o) => bail!("--compare {o}: expected grid"),
     }
     if let Some(plot) = &a.plot {
-        if a.budgets.is_empty() || a.budgets.iter().any(|&b| b < 8) {
+        let budgets = a.budgets.clone().unwrap_or(DEFAULT_BUDGETS.to_vec());
+        if budgets.is_empty() || budgets.iter().any(|&b| b < 8) {
             bail!("--budgets: expected probe counts of at least 8");
         }
         let methods: Vec<&str> = match &a.methods {
@@ -204,7 +234,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             &baker,
             scene.bake_box(),
             &methods,
-            &a.budgets,
+            &budgets,
             &settings,
             &kinds,
             &|p| a.visibility.set(p),

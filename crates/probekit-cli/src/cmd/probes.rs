@@ -121,9 +121,10 @@ pub struct QueryArgs {
     /// CSV rows `x,y,z,nx,ny,nz` instead of `--at`.
     #[arg(long)]
     pub points: Option<PathBuf>,
-    /// Volumes: trilinear (default), taylor or tricubic.
-    #[arg(long, default_value = "trilinear")]
-    pub interp: String,
+    /// Volumes: trilinear (default), taylor or tricubic (an error with a
+    /// probe cloud, which interpolates by its tetrahedra).
+    #[arg(long)]
+    pub interp: Option<String>,
     /// Relight before querying: `NAME=s[,NAME=s...]` scales light group
     /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
     #[arg(long)]
@@ -167,7 +168,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let mut file = load_probes(&a.probes)?;
     let scales = parse_group_scales(&a.group_scale)?;
-    let interp = parse_interp(&a.interp)?;
+    let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
     let mut relit = None;
     if !scales.is_empty() {
         if file.groups.is_empty() {
@@ -197,7 +198,9 @@ pub fn query(a: &QueryArgs) -> Result<()> {
         }
         dst.copy_from_slice(&coeffs);
     }
-    a.visibility.apply(&mut probes)?;
+    a.visibility
+        .apply(&mut probes)
+        .with_context(|| name.clone())?;
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
         (Some(at), None) => {

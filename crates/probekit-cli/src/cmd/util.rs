@@ -71,10 +71,15 @@ pub fn rgb(v: Vec3) -> [f32; 3] {
     v.to_array()
 }
 
-/// `--interp` of volume files: `trilinear`, `taylor` or `tricubic`.
-pub fn parse_interp(s: &str) -> Result<probekit_runtime::Interp> {
+/// `--interp` of volume files: `trilinear` (the default, `None`), `taylor`
+/// or `tricubic`. A probe cloud (a file with tetrahedra) interpolates by its
+/// tetrahedra, so `--interp` given with one is an error rather than ignored.
+pub fn parse_interp(file: &ProbeFile, s: Option<&str>) -> Result<probekit_runtime::Interp> {
     use probekit_runtime::Interp;
-    Ok(match s {
+    if let (Some(s), Some(_)) = (s, &file.tetrahedra) {
+        bail!("--interp {s} applies to irradiance volumes; this file is a probe cloud (it interpolates by its tetrahedra)");
+    }
+    Ok(match s.unwrap_or("trilinear") {
         "trilinear" => Interp::Trilinear,
         "taylor" => Interp::Taylor,
         "tricubic" => Interp::Tricubic,
@@ -167,10 +172,37 @@ impl VisibilityArgs {
         Ok(())
     }
 
-    /// Applies the settings to a cloud predictor (volumes ignore them),
-    /// after [`Self::check`].
+    /// The first of these flags given on the command line, if any.
+    fn first_given(&self) -> Option<&'static str> {
+        [
+            (self.no_visibility, "--no-visibility"),
+            (self.no_cell_visibility, "--no-cell-visibility"),
+            (self.no_probe_weights, "--no-probe-weights"),
+            (self.visibility_bias.is_some(), "--visibility-bias"),
+            (
+                self.visibility_sharpness.is_some(),
+                "--visibility-sharpness",
+            ),
+            (self.brightness_weight.is_some(), "--brightness-weight"),
+            (
+                self.directional_brightness.is_some(),
+                "--directional-brightness",
+            ),
+        ]
+        .into_iter()
+        .find_map(|(given, flag)| given.then_some(flag))
+    }
+
+    /// Applies the settings to a cloud predictor, after [`Self::check`].
+    /// They are the cloud's blend: given with a volume they are an error
+    /// rather than ignored.
     pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
         self.check()?;
+        if let (Some(flag), probekit::placement::eval::Predictor::Volume(..)) =
+            (self.first_given(), &*p)
+        {
+            bail!("{flag} applies to probe clouds; this file is an irradiance volume");
+        }
         self.set(p);
         Ok(())
     }
