@@ -329,7 +329,7 @@ fn manual_probe_sets_degenerate_and_duplicate() {
 
 /// Flags a file kind or a command's mode would ignore are refused with a
 /// one-line error: the volume's `--interp` on a cloud, the cloud's blend
-/// flags on a volume, the sweep's `--budgets`/`--methods` without `--plot`,
+/// flags on a volume (`query`, `render`), the sweep's `--budgets`/`--methods` without `--plot`,
 /// `--samples` without a bake to set, and no evaluation points.
 #[test]
 fn ignored_flags_are_refused() {
@@ -365,6 +365,11 @@ fn ignored_flags_are_refused() {
         let args = [&["query", "v.probes"][..], flag, &at].concat();
         fails_one_line(d, &args, &format!("{} applies to probe clouds", flag[0]));
     }
+    for flag in ["--brightness-weight", "--directional-brightness"] {
+        let args = ["render", "--probes", "v.probes", "-o", "r.png", flag, "1"];
+        fails_one_line(d, &args, &format!("{flag} applies to probe clouds"));
+    }
+    assert!(!d.join("r.png").exists());
     let eval = ["eval", "c.probes", "--scene", "builtin:demo", "--json"];
     for (extra, needle) in [
         (&["--budgets", "10,20"][..], "--budgets"),

@@ -134,6 +134,23 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         check_directional_brightness(g)?;
     }
     let file = load_probes(&a.probes)?;
+    if file.tetrahedra.is_none() {
+        let flag = [
+            (a.brightness_weight.is_some(), "--brightness-weight"),
+            (
+                a.directional_brightness.is_some(),
+                "--directional-brightness",
+            ),
+        ]
+        .into_iter()
+        .find_map(|(given, flag)| given.then_some(flag));
+        if let Some(flag) = flag {
+            bail!(
+                "{}: {flag} applies to probe clouds; this file is an irradiance volume",
+                a.probes.display()
+            );
+        }
+    }
     let scene = load_scene(&a.scene)?;
     let object = match a.object.as_str() {
         "spheres" => ObjectKind::default(),
