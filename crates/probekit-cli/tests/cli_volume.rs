@@ -273,3 +273,41 @@ fn volume_of_a_path_traced_scene_evaluates() {
         "{err}"
     );
 }
+
+/// The adaptive octree's options with `--uniform`, and the uniform grid's
+/// with `--adaptive`, are refused (exit code 2, the flag named) rather than
+/// ignored, and nothing is written.
+#[test]
+fn volume_options_of_the_other_layout_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("v.probes");
+    let o = out.to_str().unwrap();
+    for (args, flag) in [
+        (
+            &["--uniform", "--resolution", "3,3,3", "--max-depth", "2"][..],
+            "--max-depth",
+        ),
+        (
+            &["--uniform", "--cell", "1", "--tolerance", "0.5"],
+            "--tolerance",
+        ),
+        (
+            &["--uniform", "--cell", "1", "--geometry", "false"],
+            "--geometry",
+        ),
+        (&["--uniform", "--cell", "1", "--balance"], "--balance"),
+        (&["--adaptive", "--resolution", "3,3,3"], "--resolution"),
+        (&["--adaptive", "--cell", "0.5"], "--cell"),
+    ] {
+        let mut all = vec!["volume", "builtin:lights-demo", "-o", o];
+        all.extend_from_slice(args);
+        let r = probekit(&all);
+        assert_eq!(r.status.code(), Some(2), "{args:?} was accepted");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            err.contains(flag) && err.contains("cannot be used with"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -25,6 +25,24 @@ use probekit::volume::{
 };
 use std::path::PathBuf;
 
+/// The options that only the adaptive octree reads (clap ids: the field
+/// names), refused with `--uniform`.
+const ADAPTIVE_ONLY: [&str; 13] = [
+    "min_depth",
+    "max_depth",
+    "roots",
+    "tolerance",
+    "prune",
+    "relative_floor",
+    "geometry",
+    "geometry_depth",
+    "emitter_depth",
+    "noise_k",
+    "balance",
+    "depth_factor",
+    "gradient_threshold",
+];
+
 /// Arguments of `probekit volume`.
 #[derive(Debug, Args)]
 pub struct VolumeArgs {
@@ -34,8 +52,9 @@ pub struct VolumeArgs {
     /// Output `.probes` file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Uniform grid, probes at cell corners.
-    #[arg(long, conflicts_with = "adaptive")]
+    /// Uniform grid, probes at cell corners. The adaptive octree's options
+    /// are refused with it rather than ignored.
+    #[arg(long, conflicts_with = "adaptive", conflicts_with_all = ADAPTIVE_ONLY)]
     pub uniform: bool,
     /// Cell size in metres (uniform).
     #[arg(long, conflicts_with = "resolution")]
@@ -43,8 +62,9 @@ pub struct VolumeArgs {
     /// Probes per axis `X,Y,Z` (uniform).
     #[arg(long, value_delimiter = ',')]
     pub resolution: Option<Vec<u32>>,
-    /// Adaptive octree.
-    #[arg(long)]
+    /// Adaptive octree. `--cell` and `--resolution` (the uniform grid's)
+    /// are refused with it rather than ignored.
+    #[arg(long, conflicts_with_all = ["cell", "resolution"])]
     pub adaptive: bool,
     /// Cells shallower than this always subdivide (adaptive).
     #[arg(long, default_value_t = 1)]
