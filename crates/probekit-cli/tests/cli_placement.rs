@@ -79,21 +79,16 @@ fn json(o: &Output) -> serde_json::Value {
 fn seed_placements_bake_and_record_their_parameters() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path());
-    for (method, key) in [("spawn-merge", "contrast"), ("gradient-ascent", "step")] {
+    // `--directions` is spawn-merge's (gradient-ascent refuses it).
+    for (method, key, extra) in [
+        ("spawn-merge", "contrast", &["--directions", "6"][..]),
+        ("gradient-ascent", "step", &[]),
+    ] {
         let out = dir.path().join(format!("{method}.probes"));
-        let v = json(&probekit(&[
-            "bake",
-            &scene,
-            "--placement",
-            method,
-            "--budget",
-            "24",
-            "--directions",
-            "6",
-            "-o",
-            out.to_str().unwrap(),
-            "--json",
-        ]));
+        let mut args = vec!["bake", &scene, "--placement", method, "--budget", "24"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", out.to_str().unwrap(), "--json"]);
+        let v = json(&probekit(&args));
         let n = v["probes"].as_u64().unwrap();
         assert!(n >= 4, "{method}: {v}");
         let i = json(&probekit(&["inspect", out.to_str().unwrap(), "--json"]));
@@ -403,7 +398,8 @@ fn bake_light_shells_auto_records_its_choice() {
 }
 
 /// `--placement grid --budget N` is the grid `--grid N` gives, and flags
-/// the chosen method would ignore are refused before any capture.
+/// the chosen method would ignore (a grid's size elsewhere, adaptive's or
+/// seed 003's flags with another method) are refused before any capture.
 #[test]
 fn bake_flags_fit_the_placement_or_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -454,6 +450,24 @@ fn bake_flags_fit_the_placement_or_are_refused() {
             vec!["--placement", "grid", "--positions", p],
             "exclude each other",
         ),
+        (
+            vec!["--grid", "20", "--tolerance", "0.1"],
+            "--tolerance applies",
+        ),
+        (
+            vec!["--positions", p, "--light-shells", "off"],
+            "--light-shells applies",
+        ),
+        (
+            vec!["--placement", "spawn-merge", "--step", "0.3"],
+            "--step applies",
+        ),
+        (
+            vec!["--placement", "gradient-ascent", "--contrast", "0.3"],
+            "--contrast applies",
+        ),
+        (vec!["--max-iterations", "2"], "--max-iterations applies"),
+        (vec!["--grid", "20", "--initial", "8"], "--initial applies"),
     ] {
         let (o, out) = bake(&args, "refused.probes");
         assert!(!o.status.success(), "{args:?} was accepted");

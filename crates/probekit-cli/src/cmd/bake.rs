@@ -45,6 +45,8 @@ pub const DEFAULT_SAMPLES: u32 = 1024;
 pub const DEFAULT_GRID: usize = 256;
 /// Default `--budget` of the adaptive and seed-003 placements.
 pub const DEFAULT_BUDGET: usize = 256;
+/// Default `--tolerance` of the adaptive placement.
+pub const DEFAULT_TOLERANCE: f32 = 0.02;
 
 /// The capture settings the flags ask for: the scene's, with `samples`
 /// (else the scene's `[bake] samples`, else [`DEFAULT_SAMPLES`]), `bounces`
@@ -84,15 +86,15 @@ pub struct BakeArgs {
     #[arg(long)]
     pub budget: Option<usize>,
     /// Adaptive placement: stop when the relative RMSE estimated on the
-    /// placement's own captured pool is below this.
-    #[arg(long, default_value_t = 0.02)]
-    pub tolerance: f32,
+    /// placement's own captured pool is below this (default 0.02).
+    #[arg(long)]
+    pub tolerance: Option<f32>,
     /// Adaptive placement: candidate shells around point, spot, sphere and
     /// disk lights (lower error near small bright lights, fewer probes
     /// elsewhere): `auto` (default: place both ways, keep the lower error at
     /// held-out points), `on` (also the bare flag) or `off`.
-    #[arg(long, value_name = "WHEN", num_args = 0..=1, default_missing_value = "on", default_value = "auto")]
-    pub light_shells: String,
+    #[arg(long, value_name = "WHEN", num_args = 0..=1, default_missing_value = "on")]
+    pub light_shells: Option<String>,
     /// CSV of probe positions `x,y,z` (header optional).
     #[arg(long)]
     pub positions: Option<PathBuf>,
@@ -291,7 +293,8 @@ fn stored_groups(out: &BakeOutput, indirect_only: bool) -> Vec<(String, Vec<ShRg
 /// `adaptive`. Flags that the method would ignore are errors, so that a
 /// user never gets a bake other than the one asked for (`--grid` beside
 /// `--cell`, `--budget` beside either, or any of them with `--positions`;
-/// `--grid` or `--cell` with a method other than `grid`).
+/// `--grid` or `--cell` with a method other than `grid`; adaptive's and
+/// seed 003's flags with another method).
 fn placement_method(a: &BakeArgs) -> Result<&'static str> {
     let sized_grid = a.grid.is_some() || a.cell.is_some();
     let method = match (a.placement.as_deref(), &a.positions) {
@@ -337,6 +340,18 @@ fn placement_method(a: &BakeArgs) -> Result<&'static str> {
             }
         }
     }
+    if method != "adaptive" {
+        let adaptive_only = [
+            (a.tolerance.is_some(), "--tolerance"),
+            (a.light_shells.is_some(), "--light-shells"),
+        ];
+        if let Some((_, flag)) = adaptive_only.iter().find(|(given, _)| *given) {
+            bail!("{flag} applies to --placement adaptive, not {method}");
+        }
+    }
+    if let Some((flag, methods)) = a.seed003.first_inapplicable(method) {
+        bail!("{flag} applies to --placement {methods}, not {method}");
+    }
     Ok(method)
 }
 
@@ -360,12 +375,10 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         a.seed003
             .place(&baker, &a.scene, method, budget, &placement_settings)?
     } else if method == "adaptive" {
-        let light_shells = LightShells::from_name(&a.light_shells).ok_or_else(|| {
-            anyhow!(
-                "--light-shells {}: expected off, on or auto",
-                a.light_shells
-            )
-        })?;
+        let shells = a.light_shells.as_deref().unwrap_or("auto");
+        let light_shells = LightShells::from_name(shells)
+            .ok_or_else(|| anyhow!("--light-shells {shells}: expected off, on or auto"))?;
+        let tolerance = a.tolerance.unwrap_or(DEFAULT_TOLERANCE);
         let pb = ProgressBar::new(budget as u64);
         pb.set_style(
             ProgressStyle::with_template(
@@ -378,7 +391,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             scene.bake_box(),
             &probekit::placement::PlacementMethod::Adaptive {
                 budget,
-                tolerance: a.tolerance,
+                tolerance,
                 light_shells,
             },
             &placement_settings,
@@ -393,7 +406,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let n = placed.positions.len();
         (
             placed.positions,
-            serde_json::json!({ "budget": budget, "tolerance": a.tolerance, "light_shells": placed.stats.light_shells, "light_shells_mode": light_shells.name(), "held_out_error": placed.stats.held_out_error, "count": n }),
+            serde_json::json!({ "budget": budget, "tolerance": tolerance, "light_shells": placed.stats.light_shells, "light_shells_mode": light_shells.name(), "held_out_error": placed.stats.held_out_error, "count": n }),
         )
     } else if let Some(p) = &a.positions {
         let rows = read_csv(p, 3)?;
@@ -883,12 +896,13 @@ pub struct Seed003Args {
     /// (default: budget/2 for spawn-merge, budget for gradient-ascent).
     #[arg(long)]
     pub initial: Option<usize>,
-    /// Spawn-merge: contrast threshold in (0, 1).
-    #[arg(long, default_value_t = 0.2)]
-    pub contrast: f32,
-    /// Spawn-merge: SH sampling directions for the contrast, 6 or 26.
-    #[arg(long, default_value_t = 26)]
-    pub directions: u32,
+    /// Spawn-merge: contrast threshold in (0, 1) (default 0.2).
+    #[arg(long)]
+    pub contrast: Option<f32>,
+    /// Spawn-merge: SH sampling directions for the contrast, 6 or 26
+    /// (default 26).
+    #[arg(long)]
+    pub directions: Option<u32>,
     /// Spawn-merge: merge similar pairs shorter than this (metres; default 1.05 cells).
     #[arg(long)]
     pub merge_distance: Option<f32>,
@@ -898,24 +912,53 @@ pub struct Seed003Args {
     /// Spawn-merge: spawned probes at least this far from both ends (metres; default cell/4).
     #[arg(long)]
     pub min_distance: Option<f32>,
-    /// Spawn-merge / gradient-ascent: most iterations.
-    #[arg(long, default_value_t = 8)]
-    pub max_iterations: u32,
+    /// Spawn-merge / gradient-ascent: most iterations (default 8).
+    #[arg(long)]
+    pub max_iterations: Option<u32>,
     /// Gradient-ascent: gradient field from indirect light only.
     #[arg(long)]
     pub gradient_indirect: bool,
-    /// Gradient-ascent: initial step as a fraction of the grid cell.
-    #[arg(long, default_value_t = 0.5)]
-    pub step: f32,
-    /// Gradient-ascent: stop a probe once its step is below this fraction of the cell.
-    #[arg(long, default_value_t = 0.05)]
-    pub min_step: f32,
+    /// Gradient-ascent: initial step as a fraction of the grid cell
+    /// (default 0.5).
+    #[arg(long)]
+    pub step: Option<f32>,
+    /// Gradient-ascent: stop a probe once its step is below this fraction
+    /// of the cell (default 0.05).
+    #[arg(long)]
+    pub min_step: Option<f32>,
     /// Gradient-ascent: k-means clusters replacing dark probes (default n/8).
     #[arg(long)]
     pub dark_clusters: Option<usize>,
 }
 
 impl Seed003Args {
+    /// The first flag given that placement `method` does not read, with
+    /// the placements that read it: each applies to spawn-merge,
+    /// gradient-ascent or both, and to no other method.
+    fn first_inapplicable(&self, method: &str) -> Option<(&'static str, &'static str)> {
+        const SM: &str = "spawn-merge";
+        const GA: &str = "gradient-ascent";
+        const BOTH: &str = "spawn-merge and gradient-ascent";
+        [
+            (self.initial.is_some(), "--initial", BOTH),
+            (self.contrast.is_some(), "--contrast", SM),
+            (self.directions.is_some(), "--directions", SM),
+            (self.merge_distance.is_some(), "--merge-distance", SM),
+            (self.spawn_distance.is_some(), "--spawn-distance", SM),
+            (self.min_distance.is_some(), "--min-distance", SM),
+            (self.max_iterations.is_some(), "--max-iterations", BOTH),
+            (self.gradient_indirect, "--gradient-indirect", GA),
+            (self.step.is_some(), "--step", GA),
+            (self.min_step.is_some(), "--min-step", GA),
+            (self.dark_clusters.is_some(), "--dark-clusters", GA),
+        ]
+        .into_iter()
+        .find_map(|(given, flag, methods)| {
+            let applies = methods == method || (methods == BOTH && (method == SM || method == GA));
+            (given && !applies).then_some((flag, methods))
+        })
+    }
+
     /// The placement method `name` (`spawn-merge` or `gradient-ascent`)
     /// with these flags; spawn-merge's probe limit is `budget`.
     pub fn method(
@@ -929,20 +972,20 @@ impl Seed003Args {
         Ok(match name {
             "spawn-merge" => PlacementMethod::SpawnMerge(SpawnMergeParams {
                 initial: self.initial.unwrap_or(budget / 2),
-                contrast: self.contrast,
+                contrast: self.contrast.unwrap_or(0.2),
                 merge_distance: self.merge_distance,
                 spawn_distance: self.spawn_distance,
                 min_distance: self.min_distance,
-                directions: Directions::from_count(self.directions)?,
+                directions: Directions::from_count(self.directions.unwrap_or(26))?,
                 max_probes: budget,
-                max_iterations: self.max_iterations,
+                max_iterations: self.max_iterations.unwrap_or(8),
             }),
             _ => PlacementMethod::GradientAscent(GradientAscentParams {
                 initial: self.initial.unwrap_or(budget),
                 indirect_only: self.gradient_indirect,
-                step: self.step,
-                min_step: self.min_step,
-                max_iterations: self.max_iterations,
+                step: self.step.unwrap_or(0.5),
+                min_step: self.min_step.unwrap_or(0.05),
+                max_iterations: self.max_iterations.unwrap_or(8),
                 dark_clusters: self.dark_clusters,
                 ..Default::default()
             }),
