@@ -468,6 +468,15 @@ fn bake_flags_fit_the_placement_or_are_refused() {
         ),
         (vec!["--max-iterations", "2"], "--max-iterations applies"),
         (vec!["--grid", "20", "--initial", "8"], "--initial applies"),
+        // `bake` below passes --no-visibility and --no-probe-weights.
+        (
+            vec!["--grid", "20", "--visibility-res", "4"],
+            "'--visibility-res <VISIBILITY_RES>' cannot be used with '--no-visibility'",
+        ),
+        (
+            vec!["--grid", "20", "--fit-points", "8"],
+            "'--fit-points <FIT_POINTS>' cannot be used with '--no-probe-weights'",
+        ),
     ] {
         let (o, out) = bake(&args, "refused.probes");
         assert!(!o.status.success(), "{args:?} was accepted");

@@ -155,11 +155,20 @@ pub struct BakeArgs {
     pub no_cell_planes: bool,
     /// Do not bake distance moments or cell visibility (the cloud blends
     /// without visibility; probe weights are still fitted unless
-    /// `--no-probe-weights`).
-    #[arg(long)]
+    /// `--no-probe-weights`). The visibility flags are refused with it.
+    #[arg(long, conflicts_with_all = ["visibility_res", "cell_visibility", "no_cell_planes"])]
     pub no_visibility: bool,
-    /// Do not fit per-probe blend weights (`PWGT`).
-    #[arg(long)]
+    /// Do not fit per-probe blend weights (`PWGT`). The fit's flags and
+    /// the two brightness exponents stored with the weights are refused
+    /// with it.
+    #[arg(long, conflicts_with_all = [
+        "fit_points",
+        "fit_samples",
+        "fit_regularization",
+        "fit_absolute_weight",
+        "brightness_weight",
+        "directional_brightness",
+    ])]
     pub no_probe_weights: bool,
     /// Training points per probe of the probe weight fit.
     #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_POINTS_PER_PROBE)]
