@@ -175,3 +175,52 @@ fn rig_bad_input_is_one_line_exit_1() {
         assert!(err.contains(needle), "{err}");
     }
 }
+
+/// `--interp` is the volume's: refused without `--probes` (exit code 2,
+/// from the argument parser) and with a probe cloud (exit code 1, the
+/// file named), rather than ignored.
+#[test]
+fn rig_interp_needs_a_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = dir.path().join("c.probes");
+    let c = cloud.to_str().unwrap();
+    let bake = probekit()
+        .args(["bake", "--grid", "12", "--samples", "16", "--bounces", "1"])
+        .args(["--no-visibility", "--no-probe-weights", "-o", c])
+        .output()
+        .unwrap();
+    assert!(
+        bake.status.success(),
+        "{}",
+        String::from_utf8_lossy(&bake.stderr)
+    );
+    let rig = ["rig", "builtin:car", "--rig", "constant", "--samples", "16"];
+    let no_probes = probekit()
+        .args(rig)
+        .args(["--scene", "builtin:rig-demo", "--interp", "taylor"])
+        .output()
+        .unwrap();
+    assert_eq!(no_probes.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&no_probes.stderr).contains("--probes"));
+    let on_cloud = probekit()
+        .args(rig)
+        .args(["--probes", c, "--interp", "trilinear"])
+        .output()
+        .unwrap();
+    assert_eq!(on_cloud.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&on_cloud.stderr);
+    assert!(
+        err.contains("c.probes") && err.contains("probe cloud"),
+        "{err}"
+    );
+    let plain = probekit()
+        .args(rig)
+        .args(["--probes", c, "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        plain.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plain.stderr)
+    );
+}

@@ -40,9 +40,11 @@ pub struct RigArgs {
     /// scene's lights, or a full bake alone, to avoid counting direct light twice).
     #[arg(long)]
     pub probes: Option<PathBuf>,
-    /// Volume interpolation for --probes: trilinear, taylor, tricubic, idw, leaf-trilinear.
-    #[arg(long, default_value = "trilinear")]
-    pub interp: String,
+    /// Volume interpolation for --probes: trilinear (default), taylor,
+    /// tricubic, idw, leaf-trilinear. Refused without --probes or with a
+    /// probe cloud (it interpolates by its tetrahedra).
+    #[arg(long, requires = "probes")]
+    pub interp: Option<String>,
     /// Rig type: constant, gradient, lattice:NXxNYxNZ or mixed:X,Y,Z (c, g, lN per axis).
     #[arg(long)]
     pub rig: String,
@@ -134,18 +136,26 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         None if a.probes.is_some() => Vec::new(),
         None => return Err(anyhow!("rig needs --scene, --probes or both")),
     };
-    let interp = Interp::from_name(&a.interp).ok_or_else(|| {
-        anyhow!(
-            "--interp {}: expected trilinear, taylor, tricubic, idw or leaf-trilinear",
-            a.interp
-        )
+    let name = a.interp.as_deref().unwrap_or("trilinear");
+    let interp = Interp::from_name(name).ok_or_else(|| {
+        anyhow!("--interp {name}: expected trilinear, taylor, tricubic, idw or leaf-trilinear")
     })?;
     let probes = match &a.probes {
-        Some(p) => Some(
-            ProbeSource::load(p)?
-                .with_interp(interp)
-                .map_err(|e| anyhow!("{}: {e}", p.display()))?,
-        ),
+        Some(p) => {
+            let source = ProbeSource::load(p)?;
+            if let (Some(i), true) = (&a.interp, source.is_cloud()) {
+                return Err(anyhow!(
+                    "{}: --interp {i} applies to irradiance volumes; this file is a probe \
+                     cloud (it interpolates by its tetrahedra)",
+                    p.display()
+                ));
+            }
+            Some(
+                source
+                    .with_interp(interp)
+                    .map_err(|e| anyhow!("{}: {e}", p.display()))?,
+            )
+        }
         None => None,
     };
     if let Some(w) = a.white {

@@ -72,6 +72,12 @@ impl ProbeSource {
         }
     }
 
+    /// Whether the file is a probe cloud (tetrahedra), which
+    /// [`ProbeSource::with_interp`] leaves as it is, rather than a volume.
+    pub fn is_cloud(&self) -> bool {
+        matches!(self.0, Predictor::Cloud(_))
+    }
+
     /// SH order (bands) stored in the file.
     pub fn order(&self) -> usize {
         self.0.order()
