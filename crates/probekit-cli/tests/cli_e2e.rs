@@ -242,6 +242,47 @@ fn json_shapes_and_bad_input() {
         ej["tetrahedra"].as_array().unwrap().len() as u64,
         i["tetrahedra"].as_u64().unwrap()
     );
+    // The outer cells' hull faces are the tetrahedra's faces that no other
+    // tetrahedron shares, counted here from the exported tetrahedra alone.
+    let index = |v: &Value| v.as_u64().unwrap() as u32;
+    let mut faces = std::collections::HashMap::<[u32; 3], usize>::new();
+    for t in ej["tetrahedra"].as_array().unwrap() {
+        let t: Vec<u32> = t.as_array().unwrap().iter().map(index).collect();
+        for skip in 0..4 {
+            let mut f: Vec<u32> = (0..4).filter(|&k| k != skip).map(|k| t[k]).collect();
+            f.sort_unstable();
+            *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
+        }
+    }
+    let mut once: Vec<[u32; 3]> = faces
+        .into_iter()
+        .filter(|e| e.1 == 1)
+        .map(|e| e.0)
+        .collect();
+    let mut hull: Vec<[u32; 3]> = ej["outer_cells"]["hull_faces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let mut f: Vec<u32> = f.as_array().unwrap().iter().map(index).collect();
+            f.sort_unstable();
+            [f[0], f[1], f[2]]
+        })
+        .collect();
+    once.sort_unstable();
+    hull.sort_unstable();
+    assert!(!hull.is_empty());
+    assert_eq!(hull, once);
+    assert!(ej["outer_cells"]["rule"].as_str().unwrap().contains("hull"));
+    // Volume-only options are refused for a cloud rather than ignored.
+    fails_one_line(
+        d,
+        &[
+            "export", "c.probes", "--format", "json", "-o", "x.json", "--layout", "dense",
+        ],
+        "--layout applies",
+    );
+    assert!(!d.join("x.json").exists());
     let e = run(d, &["export", "c.probes", "--format", "csv", "-o", "c.csv"]);
     assert!(e.status.success());
     let csv = std::fs::read_to_string(d.join("c.csv")).unwrap();

@@ -26,16 +26,17 @@ pub struct ExportArgs {
     /// Output directory (ktx2) or file (bevy).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// `f16` or `quantized` (ktx2).
-    #[arg(long, default_value = "f16")]
-    pub encoding: String,
+    /// `f16` (default) or `quantized`; ktx2 only.
+    #[arg(long)]
+    pub encoding: Option<String>,
     /// `bricks` (an octree as a brick atlas plus indirection texture),
     /// `dense` (resampled at its finest level) or `auto` (the smaller of
-    /// the two for an octree; a uniform volume is always dense); ktx2 only.
-    #[arg(long, default_value = "auto")]
-    pub layout: String,
-    /// Voxels per axis `X,Y,Z` (bevy; default the grid's probe counts, or
-    /// 2^depth for an octree).
+    /// the two for an octree, the default; a uniform volume is always
+    /// dense); ktx2 only.
+    #[arg(long)]
+    pub layout: Option<String>,
+    /// Voxels per axis `X,Y,Z` (bevy only; default the grid's probe
+    /// counts, or 2^depth for an octree).
     #[arg(long, value_delimiter = ',')]
     pub resolution: Option<Vec<u32>>,
 }
@@ -44,18 +45,34 @@ pub struct ExportArgs {
 pub fn run(a: &ExportArgs) -> Result<()> {
     let name = a.volume.display().to_string();
     let file = ProbeFile::load(&a.volume).with_context(|| name.clone())?;
+    // Each option belongs to one output: given with another, an error
+    // rather than ignored.
+    let kind = if file.tetrahedra.is_some() {
+        "a probe cloud's json/csv"
+    } else {
+        a.format.as_str()
+    };
+    for (given, flag, applies) in [
+        (a.encoding.is_some(), "--encoding", "ktx2"),
+        (a.layout.is_some(), "--layout", "ktx2"),
+        (a.resolution.is_some(), "--resolution", "bevy"),
+    ] {
+        if given && kind != applies {
+            bail!("{name}: {flag} applies to a volume's --format {applies}, not to {kind} export");
+        }
+    }
     if file.tetrahedra.is_some() {
         return export_cloud(a, &file);
     }
     let v = Volume::from_file(&file).with_context(|| name.clone())?;
     match a.format.as_str() {
         "ktx2" => {
-            let enc = match a.encoding.as_str() {
+            let enc = match a.encoding.as_deref().unwrap_or("f16") {
                 "f16" => Ktx2Encoding::F16,
                 "quantized" => Ktx2Encoding::Quantized,
                 o => bail!("{name}: --encoding {o}: expected f16 or quantized"),
             };
-            let ex = match a.layout.as_str() {
+            let ex = match a.layout.as_deref().unwrap_or("auto") {
                 "auto" => export_auto(&v, enc),
                 "bricks" => export_bricks(&v, enc),
                 "dense" => export_ktx2(&v, enc, None),
@@ -93,9 +110,18 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
+/// How a cloud lights points beyond its probes' convex hull, as the JSON
+/// export states it beside the hull faces.
+const OUTER_RULE: &str = "a point outside the convex hull of the probes takes the blend of the \
+    hull face holding its closest hull point, with that point's barycentric weights in the face \
+    (continuous across the hull)";
+
 /// Clouds: `--format json` writes `{"probes":[{"position":[x,y,z],
-/// "sh":[[r,g,b],...]}],"tetrahedra":[[a,b,c,d],...]}`; `--format csv` a
-/// header `x,y,z,c0_r,c0_g,c0_b,...` and one row per probe (radiance SH).
+/// "sh":[[r,g,b],...]}],"tetrahedra":[[a,b,c,d],...],"outer_cells":
+/// {"rule":..., "hull_faces":[[a,b,c],...]}}` (the hull faces counter-clockwise
+/// seen from outside, from which points beyond the hull are lit:
+/// [`probekit_runtime::cloud::Location::Outside`]); `--format csv` a header
+/// `x,y,z,c0_r,c0_g,c0_b,...` and one row per probe (radiance SH).
 fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
     let name = a.volume.display().to_string();
     let coeffs = file.coefficients.to_f32().with_context(|| name.clone())?;
@@ -113,7 +139,18 @@ fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
                 })
                 .collect();
             let tets = file.tetrahedra.as_ref().map(|t| t.vertices.clone());
-            serde_json::json!({ "probes": probes, "tetrahedra": tets }).to_string()
+            let cloud = probekit_runtime::cloud::ProbeCloud::from_file(file)
+                .with_context(|| name.clone())?;
+            let mesh = cloud.mesh();
+            let hull: Vec<[u32; 3]> = (0..mesh.hull_face_count() as u32)
+                .filter_map(|f| mesh.hull_face_probes(f))
+                .collect();
+            serde_json::json!({
+                "probes": probes,
+                "tetrahedra": tets,
+                "outer_cells": { "rule": OUTER_RULE, "hull_faces": hull },
+            })
+            .to_string()
         }
         "csv" => {
             let mut s = String::from("x,y,z");
