@@ -468,6 +468,10 @@ fn bake_flags_fit_the_placement_or_are_refused() {
         ),
         (vec!["--max-iterations", "2"], "--max-iterations applies"),
         (vec!["--grid", "20", "--initial", "8"], "--initial applies"),
+        (
+            vec!["--grid", "20", "--shard", "0/2", "--render", "x.png"],
+            "'--shard <SHARD>' cannot be used with '--render <RENDER>'",
+        ),
         // `bake` below passes --no-visibility and --no-probe-weights.
         (
             vec!["--grid", "20", "--visibility-res", "4"],

@@ -134,8 +134,9 @@ pub struct BakeArgs {
     pub shard: Option<String>,
     /// Also write a picture of the result (`probekit render` with the
     /// automatic camera); the default demo bake writes `demo.png` beside
-    /// `demo.probes`.
-    #[arg(long)]
+    /// `demo.probes`. Not with `--shard` (a part has no tetrahedra to
+    /// light the picture with; render the merged file).
+    #[arg(long, conflicts_with = "shard")]
     pub render: Option<PathBuf>,
     /// Texels per side of each probe's octahedral distance-moment map
     /// (`VISM`, visibility-aware blending at run time; 1..=64).
