@@ -431,3 +431,41 @@ fn ignored_flags_are_refused() {
     );
     assert_eq!(v["compare"]["grid"]["points"], 20);
 }
+
+/// Output paths are checked before the work: a missing folder or a folder
+/// given as the file is reported first (before a later error the inputs
+/// would give, here co-planar positions or a bad SH order), and nothing is
+/// left behind.
+#[test]
+fn outputs_are_checked_before_the_work() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("flat.csv"), "0,1,0\n1,1,0\n0,1,1\n1,1,1\n").unwrap();
+    let flat = ["bake", "--positions", "flat.csv", "-o"];
+    let volume = [
+        "volume",
+        "builtin:demo",
+        "--uniform",
+        "--resolution",
+        "3,3,3",
+    ];
+    let bad_order = ["--order", "99", "-o", "v.probes", "--plot", "missing/p.png"];
+    for (args, needle) in [
+        (
+            [&flat[..], &["missing/x.probes"]].concat(),
+            "missing/x.probes",
+        ),
+        ([&flat[..], &["."]].concat(), "is a directory"),
+        ([&volume[..], &bad_order].concat(), "missing/p.png"),
+        // With a writable output the same inputs fail on their own problem.
+        ([&flat[..], &["x.probes"]].concat(), "co-planar"),
+    ] {
+        fails_one_line(d, &args, needle);
+    }
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "flat.csv")
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

@@ -19,7 +19,7 @@
 //! `"default"`, `"emissive"` and `"environment"`), so scaling a group rescales
 //! its indirect light while the engine scales its direct light itself.
 
-use super::util::{load_probes, load_scene, read_csv};
+use super::util::{check_outputs, load_probes, load_scene, read_csv};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
@@ -367,6 +367,7 @@ fn placement_method(a: &BakeArgs) -> Result<&'static str> {
 
 /// Runs `probekit bake`.
 pub fn run(a: &BakeArgs) -> Result<()> {
+    check_outputs(&[Some(&a.output), a.render.as_deref()])?;
     let scene = load_scene(&a.scene)?;
     let codec = Codec::from_name(&a.codec)
         .ok_or_else(|| anyhow!("--codec {}: expected f32, f16, l1, zh3 or l2", a.codec))?;
@@ -704,6 +705,7 @@ fn advance(pb: &ProgressBar, done: usize, total: usize) {
 
 /// Runs `probekit merge`.
 pub fn merge(a: &MergeArgs) -> Result<()> {
+    check_outputs(&[Some(&a.output)])?;
     struct Part {
         name: String,
         first: usize,

@@ -122,6 +122,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let file = load_probes(&a.probes)?;
     check_flags(a)?;
+    super::util::check_outputs(&[a.plot.as_deref()])?;
     let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
     let mut predictor = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
     a.visibility

@@ -127,6 +127,7 @@ pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
 
 /// Runs `probekit render`.
 pub fn run(a: &RenderArgs) -> Result<()> {
+    super::util::check_outputs(&[Some(&a.output)])?;
     if let Some(w) = a.brightness_weight {
         check_brightness_weight(w)?;
     }

@@ -118,6 +118,7 @@ fn kind_name(p: &ProbeSource) -> &'static str {
 
 /// Runs `probekit rig`.
 pub fn run(a: RigArgs) -> anyhow::Result<()> {
+    super::util::check_outputs(&[a.out.as_deref(), a.render.as_deref()])?;
     let spec: RigSpec = a.rig.parse().map_err(|e| anyhow!("--rig: {e}"))?;
     let at = parse_vec3(&a.at)?;
     // The loader's errors name the file already; validation errors do not.

@@ -61,6 +61,16 @@ pub fn load_scene(name: &str) -> Result<Scene> {
     Ok(scene)
 }
 
+/// Checks, before a command's long work, that each of its output files
+/// can be written ([`probekit::format::check_writable`]): a mistyped folder
+/// then costs nothing rather than the bake. `None`s are skipped.
+pub fn check_outputs(paths: &[Option<&Path>]) -> Result<()> {
+    for p in paths.iter().flatten() {
+        probekit::format::check_writable(p).with_context(|| p.display().to_string())?;
+    }
+    Ok(())
+}
+
 /// Loads a `.probes` file.
 pub fn load_probes(path: &Path) -> Result<ProbeFile> {
     ProbeFile::load(path).with_context(|| path.display().to_string())

@@ -231,6 +231,7 @@ fn gradient_mode(a: &VolumeArgs) -> Result<GradientMode> {
 
 /// Runs `probekit volume`.
 pub fn run(a: &VolumeArgs) -> Result<()> {
+    super::util::check_outputs(&[Some(&a.output), a.plot.as_deref()])?;
     if !(1..=probekit::sh::MAX_ORDER).contains(&a.order) {
         bail!(
             "{}: --order must be in 1..={}",

@@ -40,19 +40,13 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteErr
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// [`write_atomic`] with the contents produced by `fill` (tests inject
-/// failures here).
-pub(crate) fn write_atomic_with(
-    path: &Path,
-    fill: impl FnOnce(&mut File) -> io::Result<()>,
-) -> Result<(), WriteError> {
-    let io_err = |source| WriteError::Io {
+/// The directory [`write_atomic`] writes `path`'s temporary file in, and a
+/// fresh temporary name there (unique per process and call).
+fn temporary_for(path: &Path) -> Result<(PathBuf, PathBuf), WriteError> {
+    let name = path.file_name().ok_or_else(|| WriteError::Io {
         path: path.to_path_buf(),
-        source,
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| io_err(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
+        source: io::Error::new(io::ErrorKind::InvalidInput, "no file name"),
+    })?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -63,6 +57,45 @@ pub(crate) fn write_atomic_with(
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
+    Ok((dir, tmp))
+}
+
+/// Checks, before long work, that [`write_atomic`] could write `path`: its
+/// directory exists and takes a new file (one is created and removed), and
+/// `path` is not a directory. Nothing at `path` is touched. A bake checks
+/// its outputs first so that a mistyped folder costs nothing, not the bake.
+pub fn check_writable(path: impl AsRef<Path>) -> Result<(), WriteError> {
+    let path = path.as_ref();
+    let io_err = |source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    if path.is_dir() {
+        return Err(io_err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "is a directory",
+        )));
+    }
+    let (_, tmp) = temporary_for(path)?;
+    OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(io_err)?;
+    fs::remove_file(&tmp).map_err(io_err)
+}
+
+/// [`write_atomic`] with the contents produced by `fill` (tests inject
+/// failures here).
+pub(crate) fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut File) -> io::Result<()>,
+) -> Result<(), WriteError> {
+    let io_err = |source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (dir, tmp) = temporary_for(path)?;
     let mut file = OpenOptions::new()
         .write(true)
         .create_new(true)
@@ -102,6 +135,28 @@ mod tests {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .filter(|n| n.ends_with(".tmp"))
             .collect()
+    }
+
+    #[test]
+    fn check_writable_refuses_a_missing_folder_and_a_folder_and_leaves_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let ok = dir.path().join("out.probes");
+        check_writable(&ok).unwrap();
+        assert!(!ok.exists(), "the check must not create the file");
+        assert!(leftovers(dir.path()).is_empty());
+        fs::write(&ok, b"old").unwrap();
+        check_writable(&ok).unwrap();
+        assert_eq!(fs::read(&ok).unwrap(), b"old");
+        let missing = dir.path().join("no such folder").join("out.probes");
+        assert!(matches!(
+            check_writable(&missing),
+            Err(WriteError::Io { .. })
+        ));
+        assert!(matches!(
+            check_writable(dir.path()),
+            Err(WriteError::Io { .. })
+        ));
+        assert!(leftovers(dir.path()).is_empty());
     }
 
     #[test]

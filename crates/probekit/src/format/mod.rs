@@ -21,7 +21,7 @@
 mod atomic;
 mod metadata;
 
-pub use atomic::{write_atomic, write_probe_file, WriteError};
+pub use atomic::{check_writable, write_atomic, write_probe_file, WriteError};
 pub use metadata::{scene_hash, BakeMetadata, Placement};
 pub use probekit_runtime::format::*;
 
