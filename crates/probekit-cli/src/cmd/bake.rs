@@ -80,9 +80,10 @@ pub struct BakeArgs {
     #[arg(long)]
     pub placement: Option<String>,
     /// Probe budget (default 256). Adaptive placement: a hard cap (the
-    /// final leak and orphan-pocket probes included); spawn-merge and
-    /// gradient-ascent: their size; grid placement: the grid's approximate
-    /// probe count, like `--grid`.
+    /// final leak and orphan-pocket probes included); spawn-merge: its cap
+    /// before the final leak pass (which may add a tenth more, at least 4);
+    /// gradient-ascent: its initial grid unless `--initial`; grid
+    /// placement: the grid's approximate probe count, like `--grid`.
     #[arg(long)]
     pub budget: Option<usize>,
     /// Adaptive placement: stop when the relative RMSE estimated on the

@@ -20,14 +20,15 @@ use super::util::{load_probes, parse_interp};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
-    leaks_at, mean_luminance, metrics, reference, region_leaks_at, region_metrics, sample_points,
-    unlit_points, worst_points, EvalPoint, Metrics, Predictor,
+    leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
+    sample_points, unlit_points, worst_points, EvalPoint, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
-    place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
+    bake_blend_data, place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
@@ -154,7 +155,22 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         relative_precision: 0.03,
         ..Default::default()
     };
-    let truth = reference(&baker, &pts, &rs).with_context(|| a.scene.display().to_string())?;
+    // One bar for the long phases: ground truth, the compared grid's bake,
+    // the sweep's configurations (on stderr; cleared before the output).
+    let pb = ProgressBar::new(0);
+    pb.set_style(
+        ProgressStyle::with_template("{msg:32} {bar:40} {pos}/{len}  {elapsed} elapsed")
+            .expect("static template"),
+    );
+    let progress = |phase: &str, done: usize, total: usize| {
+        if pb.message() != phase {
+            pb.set_message(phase.to_string());
+        }
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    };
+    let truth = reference_with_progress(&baker, &pts, &rs, &|d, t| progress("ground truth", d, t))
+        .with_context(|| a.scene.display().to_string())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
     let mut out = figures(
         &scene,
@@ -181,17 +197,13 @@ pub fn run(a: &EvalArgs) -> Result<()> {
                 budget: Some(file.positions.len().max(8)),
             };
             let ctx = || format!("{scene_name}: --compare grid");
-            let mut g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec)
+            let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
+            let mut g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec, &step)
                 .with_context(ctx)?;
             // The grid gets the visibility data and probe weights the
             // evaluated file has, so both blend the same way.
             let kinds = VisibilityBake::like(&file, settings.seed);
-            kinds
-                .bake_into(baker.tracer(), &mut g, &|_, _| {}, &|_, _| {})
-                .with_context(ctx)?;
-            kinds
-                .fit_weights_into(&baker, &settings, &mut g, &|_, _| {})
-                .with_context(ctx)?;
+            bake_blend_data(&baker, &kinds, &settings, &mut g, &step).with_context(ctx)?;
             let mut gpred = Predictor::from_file(&g, interp).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
@@ -241,7 +253,12 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             &|p| a.visibility.set(p),
             &pts,
             &truth,
-            &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),
+            &mut |m, b, e| {
+                pb.suspend(|| {
+                    eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}")
+                })
+            },
+            &progress,
         );
         if rows.is_empty() {
             bail!("{scene_name}: every sweep configuration failed");
@@ -250,6 +267,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         out["sweep"] = rows.iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
         out["plot"] = plot.display().to_string().into();
     }
+    pb.finish_and_clear();
     if a.json {
         println!("{out}");
     } else {

@@ -5,6 +5,7 @@ use super::util::{load_probes, load_scene, parse_interp, parse_vec3, read_csv, r
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::placement::eval::Predictor;
 use probekit_runtime::cloud::WalkState;
@@ -90,19 +91,30 @@ pub fn reference(a: &ReferenceArgs) -> Result<()> {
         s.max_samples = n;
         s.min_samples = s.min_samples.min(n);
     }
+    // Every row is checked before the first point is traced.
+    if let Some(i) = rows
+        .iter()
+        .position(|r| Vec3::new(r[3], r[4], r[5]).length_squared() < 1e-12)
+    {
+        bail!("{}: row {}: zero normal", a.points.display(), i + 1);
+    }
     let baker = Baker::new(&scene).with_context(|| a.scene.clone())?;
+    let pb = ProgressBar::new(rows.len() as u64);
+    pb.set_style(
+        ProgressStyle::with_template("ground truth {bar:40} {pos}/{len} points  {elapsed} elapsed")
+            .expect("static template"),
+    );
     let mut out = Vec::with_capacity(rows.len());
     for (i, r) in rows.iter().enumerate() {
         let p = Vec3::new(r[0], r[1], r[2]);
-        let n = Vec3::new(r[3], r[4], r[5]);
-        if n.length_squared() < 1e-12 {
-            bail!("{}: row {}: zero normal", a.points.display(), i + 1);
-        }
+        let n = Vec3::new(r[3], r[4], r[5]).normalize();
         let e = baker
-            .reference_irradiance(p, n.normalize(), i as u64, &s)
+            .reference_irradiance(p, n, i as u64, &s)
             .with_context(|| format!("{}: row {}", a.points.display(), i + 1))?;
         out.push(rgb(e.irradiance));
+        pb.inc(1);
     }
+    pb.finish_and_clear();
     println!("{}", serde_json::json!({ "irradiance": out }));
     Ok(())
 }

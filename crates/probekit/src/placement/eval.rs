@@ -95,13 +95,24 @@ pub fn reference(
     points: &[EvalPoint],
     s: &ReferenceSettings,
 ) -> Result<Vec<Vec3>, BakeError> {
+    reference_with_progress(baker, points, s, &|_, _| {})
+}
+
+/// [`reference()`], calling `progress(done, total)` after each point (the
+/// points run in order, each in parallel over its sample batches).
+pub fn reference_with_progress(
+    baker: &Baker,
+    points: &[EvalPoint],
+    s: &ReferenceSettings,
+    progress: &dyn Fn(usize, usize),
+) -> Result<Vec<Vec3>, BakeError> {
     points
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            Ok(baker
-                .reference_irradiance(p.position, p.normal, i as u64, s)?
-                .irradiance)
+            let e = baker.reference_irradiance(p.position, p.normal, i as u64, s)?;
+            progress(i + 1, points.len());
+            Ok(e.irradiance)
         })
         .collect()
 }

@@ -128,7 +128,8 @@ pub struct SpawnMergeParams {
     pub min_distance: Option<f32>,
     /// Sampling directions of the contrast.
     pub directions: Directions,
-    /// Spawning stops at this many probes (leak prevention may add up to 10 % more).
+    /// Spawning stops at this many probes (leak prevention may add up to
+    /// a tenth more, at least 4).
     pub max_probes: usize,
     /// Most spawn/merge iterations.
     pub max_iterations: u32,
@@ -340,7 +341,9 @@ pub(super) fn spawn_merge(
     st.fix_leaks(ls, (p.max_probes / 10).max(4))?;
     let (_, after) = crossing_extent(st.baker.tracer(), &st.positions)?;
     st.stats.crossing_after = after;
-    progress("leaks", st.positions.len(), p.max_probes);
+    // The leak pass may add probes beyond `max_probes`: the bar ends full.
+    let n = st.positions.len();
+    progress("leaks", n, n.max(p.max_probes));
     Ok(())
 }
 

@@ -34,6 +34,11 @@ use probekit_runtime::Interp;
 use std::path::Path;
 use thiserror::Error;
 
+/// Progress of a long step: `(phase, done, total)`, as
+/// [`place`] reports it; `phase` names what is running
+/// (`"capture"`, `"visibility"`, a sweep's `"adaptive 100: capture"`).
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
 /// The methods a sweep runs, in plot order.
 pub const SWEEP_METHODS: [&str; 4] = ["grid", "adaptive", "spawn-merge", "gradient-ascent"];
 
@@ -91,28 +96,60 @@ pub fn method_for_budget(name: &str, budget: usize) -> Result<PlacementMethod, S
 
 /// Places probes with `method` in `bake_box`, bakes them with `settings`
 /// and returns the cloud file (coefficients in `codec`; placement metadata
-/// names the method).
+/// names the method). `progress` hears placement's phases, then
+/// `"capture"` per probe.
 pub fn place_and_bake(
     baker: &Baker,
     bake_box: Aabb,
     method: &PlacementMethod,
     settings: &CaptureSettings,
     codec: Codec,
+    progress: Progress<'_>,
 ) -> Result<ProbeFile, SweepError> {
-    let placed = place(baker, bake_box, method, settings, &|_, _, _| {})?;
-    bake_cloud(baker, &placed.positions, settings, codec, method.name())
+    let placed = place(baker, bake_box, method, settings, progress)?;
+    bake_cloud(
+        baker,
+        &placed.positions,
+        settings,
+        codec,
+        method.name(),
+        &|done, total| progress("capture", done, total),
+    )
+}
+
+/// Bakes what `visibility` selects into `file` ([`VisibilityBake::bake_into`],
+/// then [`VisibilityBake::fit_weights_into`]), telling `progress` the
+/// phases `"visibility"`, `"cell visibility"` and `"probe weights"`.
+pub fn bake_blend_data(
+    baker: &Baker,
+    visibility: &VisibilityBake,
+    settings: &CaptureSettings,
+    file: &mut ProbeFile,
+    progress: Progress<'_>,
+) -> Result<(), VisibilityBakeError> {
+    visibility.bake_into(
+        baker.tracer(),
+        file,
+        &|d, t| progress("visibility", d, t),
+        &|d, t| progress("cell visibility", d, t),
+    )?;
+    visibility.fit_weights_into(baker, settings, file, &|d, t| {
+        progress("probe weights", d, t)
+    })
 }
 
 /// Bakes `positions` with `settings` (probe indices from 0) into an
-/// in-memory cloud file, as `probekit bake` would write it.
+/// in-memory cloud file, as `probekit bake` would write it;
+/// `progress(done, total)` after each probe.
 pub fn bake_cloud(
     baker: &Baker,
     positions: &[Vec3],
     settings: &CaptureSettings,
     codec: Codec,
     method: &str,
+    progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ProbeFile, SweepError> {
-    let res = baker.capture_many(positions, 0, settings, &|_, _| {})?;
+    let res = baker.capture_many(positions, 0, settings, progress)?;
     let pos: Vec<Vec3> = res.iter().map(|r| r.position).collect();
     let sh: Vec<_> = res
         .iter()
@@ -224,16 +261,20 @@ pub fn sweep(
     points: &[EvalPoint],
     truth: &[Vec3],
     on_error: &mut dyn FnMut(&str, usize, &SweepError),
+    progress: Progress<'_>,
 ) -> Vec<SweepRow> {
     let mean = mean_luminance(truth);
     let mut rows = Vec::new();
     for &m in methods {
         for &b in budgets {
+            let step =
+                |phase: &str, done, total| progress(&format!("{m} {b}: {phase}"), done, total);
             let r = method_for_budget(m, b)
-                .and_then(|method| place_and_bake(baker, bake_box, &method, settings, Codec::F32))
+                .and_then(|method| {
+                    place_and_bake(baker, bake_box, &method, settings, Codec::F32, &step)
+                })
                 .and_then(|mut file| {
-                    visibility.bake_into(baker.tracer(), &mut file, &|_, _| {}, &|_, _| {})?;
-                    visibility.fit_weights_into(baker, settings, &mut file, &|_, _| {})?;
+                    bake_blend_data(baker, visibility, settings, &mut file, &step)?;
                     let mut p = Predictor::from_file(&file, Interp::Trilinear)?;
                     configure(&mut p);
                     let pred = p.predict(points)?;
@@ -354,6 +395,7 @@ mod tests {
         };
         let truth = reference(&baker, &pts, &rs).unwrap();
         let mut failures = Vec::new();
+        let phases = std::sync::Mutex::new(std::collections::BTreeSet::new());
         let budgets = [16usize, 32];
         let rows = sweep(
             &baker,
@@ -366,8 +408,19 @@ mod tests {
             &pts,
             &truth,
             &mut |m, b, e| failures.push(format!("{m} {b}: {e}")),
+            &|phase, done, total| {
+                assert!(done <= total, "{phase}: {done} of {total}");
+                phases.lock().unwrap().insert(phase.to_string());
+            },
         );
         assert_eq!(rows.len() + failures.len(), 8, "{failures:?}");
+        // Every configuration that ran reported its captures, named by
+        // method and budget.
+        let phases = phases.into_inner().unwrap();
+        for r in &rows {
+            let p = format!("{} {}: capture", r.method, r.budget);
+            assert!(phases.contains(&p), "{p} missing from {phases:?}");
+        }
         assert!(rows.iter().any(|r| r.method == "grid"));
         assert!(
             rows.iter().any(|r| r.method == "spawn-merge"),
@@ -429,9 +482,18 @@ mod tests {
             &pts,
             &truth,
             &mut |m, b, e| panic!("{m} {b}: {e}"),
+            &|_, _, _| {},
         );
         let method = method_for_budget("grid", 32).unwrap();
-        let mut f = place_and_bake(&baker, scene.bake_box(), &method, &s, Codec::F32).unwrap();
+        let mut f = place_and_bake(
+            &baker,
+            scene.bake_box(),
+            &method,
+            &s,
+            Codec::F32,
+            &|_, _, _| {},
+        )
+        .unwrap();
         assert!(f.visibility.is_none() && f.cell_visibility.is_none());
         vis.bake_into(baker.tracer(), &mut f, &|_, _| {}, &|_, _| {})
             .unwrap();
