@@ -274,6 +274,39 @@ fn volume_of_a_path_traced_scene_evaluates() {
     );
 }
 
+/// Export options of one format are refused with another (exit code 1,
+/// the flag named), and nothing is written.
+#[test]
+fn export_options_of_another_format_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = dir.path().join("v.probes");
+    let v = v.to_str().unwrap();
+    let grid = ["--uniform", "--resolution", "3,3,3"];
+    let o = probekit(&[&["volume", "builtin:lights-demo", "-o", v][..], &grid].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("x.ktx2");
+    let x = out.to_str().unwrap();
+    for (args, flag) in [
+        (
+            &["--format", "bevy", "--encoding", "quantized"][..],
+            "--encoding",
+        ),
+        (&["--format", "bevy", "--layout", "dense"], "--layout"),
+        (
+            &["--format", "ktx2", "--resolution", "4,4,4"],
+            "--resolution",
+        ),
+    ] {
+        let mut all = vec!["export", v, "-o", x];
+        all.extend_from_slice(args);
+        let r = probekit(&all);
+        assert_eq!(r.status.code(), Some(1), "{args:?} was accepted");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains(&format!("{flag} applies to")), "{err}");
+        assert!(!out.exists());
+    }
+}
+
 /// The adaptive octree's options with `--uniform`, and the uniform grid's
 /// with `--adaptive`, are refused (exit code 2, the flag named) rather than
 /// ignored, and nothing is written.
