@@ -778,14 +778,8 @@ impl<'s> Baker<'s> {
     ) -> Result<(CaptureResult, Option<Vec<Vec3>>), BakeError> {
         s.validate()?;
         self.check_excluded(s)?;
-        if !point.is_finite() {
-            return Err(BakeError::NonFinitePosition {
-                index: probe_index as usize,
-                position: point,
-            });
-        }
         let v = &s.validity;
-        let (pos, pushed, in_light) = self.offset_position(point, probe_index, s);
+        let (pos, pushed, in_light) = self.offset_position(point, probe_index, s)?;
         let (acc, st, se) = self.capture_at(pos, probe_index, s);
         let mut validity = Validity::from_stats(&st, v, pos - point, pushed);
         if in_light || self.scene.sphere_light_at(pos, 0.0).is_some() {
@@ -809,16 +803,11 @@ impl<'s> Baker<'s> {
         s: &CaptureSettings,
     ) -> Result<Vec3, BakeError> {
         s.validate()?;
-        if !point.is_finite() {
-            return Err(BakeError::NonFinitePosition {
-                index: probe_index as usize,
-                position: point,
-            });
-        }
-        Ok(self.offset_position(point, probe_index, s).0)
+        Ok(self.offset_position(point, probe_index, s)?.0)
     }
 
-    /// The virtual offset of [`Baker::capture_with_error`]: the capture
+    /// The virtual offset of [`Baker::capture_with_error`] for a finite
+    /// `point` (else [`BakeError::NonFinitePosition`]): the capture
     /// position, whether the probe was moved, and whether it stays inside a
     /// sphere light (offset off).
     fn offset_position(
@@ -826,7 +815,13 @@ impl<'s> Baker<'s> {
         point: Vec3,
         probe_index: u64,
         s: &CaptureSettings,
-    ) -> (Vec3, bool, bool) {
+    ) -> Result<(Vec3, bool, bool), BakeError> {
+        if !point.is_finite() {
+            return Err(BakeError::NonFinitePosition {
+                index: probe_index as usize,
+                position: point,
+            });
+        }
         let v = &s.validity;
         let mut pos = point;
         let mut pushed = false;
@@ -862,7 +857,7 @@ impl<'s> Baker<'s> {
             pos = l.position + d * (l.radius + v.offset_margin.max(0.5 * l.radius));
             pushed = true;
         }
-        (pos, pushed, in_light)
+        Ok((pos, pushed, in_light))
     }
 
     fn assemble(

@@ -40,13 +40,17 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteErr
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// The directory [`write_atomic`] writes `path`'s temporary file in, and a
-/// fresh temporary name there (unique per process and call).
-fn temporary_for(path: &Path) -> Result<(PathBuf, PathBuf), WriteError> {
-    let name = path.file_name().ok_or_else(|| WriteError::Io {
+/// Creates [`write_atomic`]'s temporary file for `path`: a fresh name
+/// (unique per process and call) in `path`'s directory, opened new for
+/// writing. Returns the directory, the temporary's path and the file.
+fn create_temporary(path: &Path) -> Result<(PathBuf, PathBuf, File), WriteError> {
+    let io_err = |source| WriteError::Io {
         path: path.to_path_buf(),
-        source: io::Error::new(io::ErrorKind::InvalidInput, "no file name"),
-    })?;
+        source,
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| io_err(io::Error::new(io::ErrorKind::InvalidInput, "no file name")))?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -57,7 +61,12 @@ fn temporary_for(path: &Path) -> Result<(PathBuf, PathBuf), WriteError> {
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
-    Ok((dir, tmp))
+    let file = OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(io_err)?;
+    Ok((dir, tmp, file))
 }
 
 /// Checks, before long work, that [`write_atomic`] could write `path`: its
@@ -76,12 +85,8 @@ pub fn check_writable(path: impl AsRef<Path>) -> Result<(), WriteError> {
             "is a directory",
         )));
     }
-    let (_, tmp) = temporary_for(path)?;
-    OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(io_err)?;
+    let (_, tmp, file) = create_temporary(path)?;
+    drop(file);
     fs::remove_file(&tmp).map_err(io_err)
 }
 
@@ -95,12 +100,7 @@ pub(crate) fn write_atomic_with(
         path: path.to_path_buf(),
         source,
     };
-    let (dir, tmp) = temporary_for(path)?;
-    let mut file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(io_err)?;
+    let (dir, tmp, mut file) = create_temporary(path)?;
     let result = (|| {
         fill(&mut file)?;
         file.sync_all()?;
