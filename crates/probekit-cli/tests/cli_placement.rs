@@ -408,13 +408,10 @@ fn bake_flags_fit_the_placement_or_are_refused() {
         let out = dir.path().join(name);
         let mut args = vec!["bake", &scene, "--samples", "16", "--bounces", "1"];
         args.extend_from_slice(extra);
-        args.extend_from_slice(&["--no-visibility", "--no-probe-weights", "-o"]);
-        let o = out.to_str().unwrap().to_string();
-        let mut args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
-        args.push(o);
-        args.push("--json".into());
-        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
-        (probekit(&refs), out)
+        args.extend_from_slice(&["--no-visibility", "--no-probe-weights", "--json", "-o"]);
+        args.push(out.to_str().unwrap());
+        let o = probekit(&args);
+        (o, out)
     };
     let (by_budget, a) = bake(&["--placement", "grid", "--budget", "20"], "a.probes");
     let (by_grid, b) = bake(&["--grid", "20"], "b.probes");

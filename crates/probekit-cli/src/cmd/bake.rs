@@ -19,7 +19,7 @@
 //! `"default"`, `"emissive"` and `"environment"`), so scaling a group rescales
 //! its indirect light while the engine scales its direct light itself.
 
-use super::util::{check_outputs, load_probes, load_scene, read_csv};
+use super::util::{check_outputs, first_given, load_probes, load_scene, read_csv};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
@@ -352,11 +352,11 @@ fn placement_method(a: &BakeArgs) -> Result<&'static str> {
         }
     }
     if method != "adaptive" {
-        let adaptive_only = [
+        let adaptive_only = first_given([
             (a.tolerance.is_some(), "--tolerance"),
             (a.light_shells.is_some(), "--light-shells"),
-        ];
-        if let Some((_, flag)) = adaptive_only.iter().find(|(given, _)| *given) {
+        ]);
+        if let Some(flag) = adaptive_only {
             bail!("{flag} applies to --placement adaptive, not {method}");
         }
     }

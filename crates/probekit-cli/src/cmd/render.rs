@@ -3,7 +3,10 @@
 //! [--samples N] [--json]`: the scene lit by the probes beside the same
 //! path-traced, and the error (library: [`probekit::render`]).
 
-use super::util::{check_brightness_weight, check_directional_brightness, load_probes, load_scene};
+use super::util::{
+    check_brightness_weight, check_directional_brightness, cloud_flag_on_volume, first_given,
+    load_probes, load_scene,
+};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
@@ -136,20 +139,15 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let file = load_probes(&a.probes)?;
     if file.tetrahedra.is_none() {
-        let flag = [
+        let flag = first_given([
             (a.brightness_weight.is_some(), "--brightness-weight"),
             (
                 a.directional_brightness.is_some(),
                 "--directional-brightness",
             ),
-        ]
-        .into_iter()
-        .find_map(|(given, flag)| given.then_some(flag));
+        ]);
         if let Some(flag) = flag {
-            bail!(
-                "{}: {flag} applies to probe clouds; this file is an irradiance volume",
-                a.probes.display()
-            );
+            return Err(cloud_flag_on_volume(flag)).with_context(|| a.probes.display().to_string());
         }
     }
     let scene = load_scene(&a.scene)?;

@@ -145,11 +145,8 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         Some(p) => {
             let source = ProbeSource::load(p)?;
             if let (Some(i), true) = (&a.interp, source.is_cloud()) {
-                return Err(anyhow!(
-                    "{}: --interp {i} applies to irradiance volumes; this file is a probe \
-                     cloud (it interpolates by its tetrahedra)",
-                    p.display()
-                ));
+                return Err(super::util::interp_on_cloud(i))
+                    .with_context(|| p.display().to_string());
             }
             Some(
                 source

@@ -1,7 +1,7 @@
 //! Helpers shared by the probe commands: CSV rows, `x,y,z` arguments,
 //! loading scenes and probe files with one-line errors.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use glam::Vec3;
 use probekit::format::ProbeFile;
 use probekit::scene::Scene;
@@ -71,6 +71,28 @@ pub fn check_outputs(paths: &[Option<&Path>]) -> Result<()> {
     Ok(())
 }
 
+/// The first flag of `flags` (`(given, flag)`, in order) that was given on
+/// the command line, if any: the one to name when a set of flags does not
+/// apply.
+pub fn first_given<'a>(flags: impl IntoIterator<Item = (bool, &'a str)>) -> Option<&'a str> {
+    flags
+        .into_iter()
+        .find_map(|(given, flag)| given.then_some(flag))
+}
+
+/// The error for a flag of the cloud's blend given with a volume file.
+pub fn cloud_flag_on_volume(flag: &str) -> anyhow::Error {
+    anyhow!("{flag} applies to probe clouds; this file is an irradiance volume")
+}
+
+/// The error for a volume's `--interp` given with a probe cloud.
+pub fn interp_on_cloud(interp: &str) -> anyhow::Error {
+    anyhow!(
+        "--interp {interp} applies to irradiance volumes; this file is a probe cloud (it \
+         interpolates by its tetrahedra)"
+    )
+}
+
 /// Loads a `.probes` file.
 pub fn load_probes(path: &Path) -> Result<ProbeFile> {
     ProbeFile::load(path).with_context(|| path.display().to_string())
@@ -87,7 +109,7 @@ pub fn rgb(v: Vec3) -> [f32; 3] {
 pub fn parse_interp(file: &ProbeFile, s: Option<&str>) -> Result<probekit_runtime::Interp> {
     use probekit_runtime::Interp;
     if let (Some(s), Some(_)) = (s, &file.tetrahedra) {
-        bail!("--interp {s} applies to irradiance volumes; this file is a probe cloud (it interpolates by its tetrahedra)");
+        return Err(interp_on_cloud(s));
     }
     Ok(match s.unwrap_or("trilinear") {
         "trilinear" => Interp::Trilinear,
@@ -184,7 +206,7 @@ impl VisibilityArgs {
 
     /// The first of these flags given on the command line, if any.
     fn first_given(&self) -> Option<&'static str> {
-        [
+        first_given([
             (self.no_visibility, "--no-visibility"),
             (self.no_cell_visibility, "--no-cell-visibility"),
             (self.no_probe_weights, "--no-probe-weights"),
@@ -198,9 +220,7 @@ impl VisibilityArgs {
                 self.directional_brightness.is_some(),
                 "--directional-brightness",
             ),
-        ]
-        .into_iter()
-        .find_map(|(given, flag)| given.then_some(flag))
+        ])
     }
 
     /// Applies the settings to a cloud predictor, after [`Self::check`].
@@ -211,7 +231,7 @@ impl VisibilityArgs {
         if let (Some(flag), probekit::placement::eval::Predictor::Volume(..)) =
             (self.first_given(), &*p)
         {
-            bail!("{flag} applies to probe clouds; this file is an irradiance volume");
+            return Err(cloud_flag_on_volume(flag));
         }
         self.set(p);
         Ok(())
