@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 mod cmd;
+mod progress;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -76,7 +77,10 @@ fn main() -> ExitCode {
             let mut msg = String::new();
             for cause in e.chain() {
                 let c = cause.to_string();
-                if !msg.contains(&c) {
+                if !msg.is_empty() && c.starts_with(&format!("{msg}: ")) {
+                    // The cause names the file already: keep its text alone.
+                    msg = c;
+                } else if !msg.contains(&c) {
                     if !msg.is_empty() {
                         msg += ": ";
                     }

@@ -148,6 +148,7 @@ fn render_json_png_and_errors() {
         d,
         &[
             "render",
+            "builtin:demo",
             "--probes",
             "v.probes",
             "-o",
@@ -191,4 +192,103 @@ fn render_json_png_and_errors() {
         "--camera",
     );
     assert!(!d.join("x.png").exists());
+}
+
+/// The shared scenes (`../shared/data`; skipped with a message when absent),
+/// or `None`.
+fn shared_scene(name: &str) -> Option<std::path::PathBuf> {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    if !data.is_dir() {
+        eprintln!("SKIPPED: {} not found", data.display());
+        return None;
+    }
+    Some(data.join("scenes").join(name).join(format!("{name}.toml")))
+}
+
+/// On each shared scene the automatic camera stands inside the bake box,
+/// in free space, and the default picture shows the test objects.
+#[test]
+fn the_automatic_camera_shows_the_objects_on_every_shared_scene() {
+    for name in ["cornell_box", "fzk_haus", "duplex_apartment"] {
+        let Some(scene) = shared_scene(name) else {
+            return;
+        };
+        let t = tempfile::tempdir().unwrap();
+        let d = t.path();
+        let scene = scene.to_str().unwrap();
+        json(
+            d,
+            &[
+                "bake",
+                scene,
+                "--grid",
+                "27",
+                "--samples",
+                "16",
+                "--no-probe-weights",
+                "--no-visibility",
+                "-o",
+                "s.probes",
+                "--json",
+            ],
+        );
+        let j = json(
+            d,
+            &[
+                "render",
+                "--probes",
+                "s.probes",
+                "-o",
+                "s.png",
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--samples",
+                "16",
+                "--json",
+            ],
+        );
+        assert!(j["object_pixels"].as_u64().unwrap() > 0, "{name}: {j}");
+    }
+}
+
+/// A camera with no free space in view for the test objects (looking
+/// into the floor from just above it) is an error, not a picture of the
+/// scene alone.
+#[test]
+fn no_place_for_the_objects_is_an_error() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    json(
+        d,
+        &[
+            "bake",
+            "--grid",
+            "12",
+            "--samples",
+            "16",
+            "-o",
+            "t.probes",
+            "--json",
+        ],
+    );
+    fails_one_line(
+        d,
+        &[
+            "render",
+            "--probes",
+            "t.probes",
+            "-o",
+            "r.png",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--camera",
+            "1,0.05,1,1,-1,1.001",
+        ],
+        "no place for the test objects",
+    );
+    assert!(!d.join("r.png").exists());
 }

@@ -10,6 +10,7 @@ pub mod bake;
 pub mod cloud;
 pub mod env;
 pub mod format;
+pub mod inspect;
 pub mod placement;
 pub mod plot;
 pub mod render;

@@ -23,7 +23,6 @@ use super::util::{check_outputs, first_given, load_probes, load_scene, read_csv}
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::blend_fit::BlendFitSettings;
 use probekit::cloud::cell_visibility::CellLattice;
@@ -105,9 +104,11 @@ pub struct BakeArgs {
     /// Grid placement: cell size in metres (instead of `--grid`).
     #[arg(long)]
     pub cell: Option<f32>,
-    /// Output probe file (a part file with `--shard`).
-    #[arg(short, long, default_value = "demo.probes")]
-    pub output: PathBuf,
+    /// Output probe file (a part file with `--shard`); default: named after
+    /// the scene in the current folder (`builtin:demo` → `demo.probes`,
+    /// `rooms/cornell_box.toml` → `cornell_box.probes`).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
     /// Receiver directions per probe.
     #[arg(long)]
     pub samples: Option<u32>,
@@ -220,50 +221,27 @@ pub struct MergeArgs {
     /// Output probe file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// The scene the parts were baked from (file or `builtin:NAME`):
-    /// needed when they were baked with cell visibility, which depends on
-    /// all probes and is baked here.
+    /// The scene the parts were baked from (file or `builtin:NAME`; default:
+    /// the scene the parts recorded): needed when they were baked with cell
+    /// visibility or probe weights, which depend on all probes and are
+    /// baked here.
     #[arg(long)]
     pub scene: Option<String>,
 }
 
-/// Grid over `scene.bake_box()`: cell centres of a grid with about `n`
-/// cells (or cells of edge `cell`), at least 2 per axis.
+/// Grid over `scene.bake_box()` sized by the library's one rule
+/// ([`probekit::placement::grid_resolution`]): about `n` cells (or cells of
+/// edge `cell`), at least 2 per axis.
 fn grid_points(
     scene: &Scene,
     n: Option<usize>,
     cell: Option<f32>,
 ) -> Result<(Vec<Vec3>, [usize; 3])> {
     let b = scene.bake_box();
-    let size = b.size();
-    if !(size.is_finite() && size.min_element() > 0.0) {
-        bail!("{}: the bake box is empty or flat", scene.source.display());
-    }
-    let cell = match (n, cell) {
-        (_, Some(c)) if c.is_finite() && c > 0.0 => c,
-        (_, Some(c)) => bail!("--cell {c}: expected a positive size"),
-        (Some(0), None) => bail!("--grid 0: expected a positive probe count"),
-        (n, None) => (size.x * size.y * size.z / n.unwrap_or(DEFAULT_GRID) as f32).cbrt(),
-    };
-    let res = size
-        .to_array()
-        .map(|s| ((s / cell).round() as usize).max(2));
-    if res.iter().product::<usize>() > 5_000_000 {
-        bail!("grid of {res:?} probes is too large");
-    }
-    let mut pts = Vec::new();
-    for k in 0..res[2] {
-        for j in 0..res[1] {
-            for i in 0..res[0] {
-                let t = Vec3::new(
-                    (i as f32 + 0.5) / res[0] as f32,
-                    (j as f32 + 0.5) / res[1] as f32,
-                    (k as f32 + 0.5) / res[2] as f32,
-                );
-                pts.push(b.min + t * size);
-            }
-        }
-    }
+    let n = n.or(cell.is_none().then_some(DEFAULT_GRID));
+    let ctx = || scene.source.display().to_string();
+    let res = probekit::placement::grid_resolution(&b, cell, n).with_context(ctx)?;
+    let pts = probekit::placement::grid_points(&b, cell, n).with_context(ctx)?;
     Ok((pts, res))
 }
 
@@ -368,7 +346,12 @@ fn placement_method(a: &BakeArgs) -> Result<&'static str> {
 
 /// Runs `probekit bake`.
 pub fn run(a: &BakeArgs) -> Result<()> {
-    check_outputs(&[Some(&a.output), a.render.as_deref()])?;
+    let output = a
+        .output
+        .clone()
+        .unwrap_or_else(|| super::util::output_named_after(&a.scene, "probes"));
+    check_outputs(&[Some(&output), a.render.as_deref()])?;
+    let progress = crate::progress::Progress::new();
     let scene = load_scene(&a.scene)?;
     let codec = Codec::from_name(&a.codec)
         .ok_or_else(|| anyhow!("--codec {}: expected f32, f16, l1, zh3 or l2", a.codec))?;
@@ -384,20 +367,19 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     // One baker (and BVH) for placement, the probes and the blend data.
     let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
-        a.seed003
-            .place(&baker, &a.scene, method, budget, &placement_settings)?
+        a.seed003.place(
+            &baker,
+            &a.scene,
+            method,
+            budget,
+            &placement_settings,
+            &progress,
+        )?
     } else if method == "adaptive" {
         let shells = a.light_shells.as_deref().unwrap_or("auto");
         let light_shells = LightShells::from_name(shells)
             .ok_or_else(|| anyhow!("--light-shells {shells}: expected off, on or auto"))?;
         let tolerance = a.tolerance.unwrap_or(DEFAULT_TOLERANCE);
-        let pb = ProgressBar::new(budget as u64);
-        pb.set_style(
-            ProgressStyle::with_template(
-                "placing: {msg:9} {bar:40} {pos}/{len}  {elapsed} elapsed",
-            )
-            .expect("static template"),
-        );
         let placed = probekit::placement::place(
             &baker,
             scene.bake_box(),
@@ -407,14 +389,9 @@ pub fn run(a: &BakeArgs) -> Result<()> {
                 light_shells,
             },
             &placement_settings,
-            &|phase, done, total| {
-                pb.set_message(phase.to_string());
-                pb.set_length(total as u64);
-                pb.set_position(done as u64)
-            },
+            &|phase, done, total| progress.update(&format!("placing: {phase}"), done, total),
         )
         .with_context(|| format!("{}: adaptive placement", a.scene))?;
-        pb.finish_and_clear();
         let n = placed.positions.len();
         (
             placed.positions,
@@ -520,34 +497,29 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     }
     sj["probe_weights"] = weights.map_or(serde_json::Value::Null, |w| w.to_json());
     let meta = BakeMetadata::new(
-        format!("{:016x}", scene.content_hash()),
+        String::new(),
         Placement {
             method: method.into(),
             parameters,
         },
         sj,
-    );
+    )
+    .with_scene(&a.scene, &scene);
     let (shard, shards) = match &a.shard {
         Some(s) => parse_shard(s)?,
         None => (0, 1),
     };
     let range = shard_range(points.len(), shard, shards)?;
-    let pb = ProgressBar::new(range.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} probes  {elapsed} elapsed, ETA {eta}")
-            .expect("static template"),
-    );
     let out = baker
         .bake_shard(&points, shard, shards, &settings, &|done, _| {
-            pb.set_position(done as u64)
+            progress.update("capture", done, range.len())
         })
         .with_context(|| a.scene.clone())?;
-    pb.finish_and_clear();
     let sh = stored_sh(&out, a.indirect_only);
     let groups = stored_groups(&out, a.indirect_only);
     let validity: Vec<Validity> = out.validity.iter().map(file_validity).collect();
     let invalid = out.validity.iter().filter(|v| !v.valid).count();
-    let outname = a.output.display().to_string();
+    let outname = output.display().to_string();
     let mut file = if a.shard.is_some() {
         let mut f = part_file(&out, &sh, validity, &meta, shard, shards, points.len())
             .with_context(|| outname.clone())?;
@@ -571,19 +543,26 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
-        bake_blend_data(&baker, &kinds, &settings, &mut file)
-            .with_context(|| format!("{}: visibility data and probe weights", outname))?;
+        probekit::placement::sweep::bake_blend_data(
+            &baker,
+            &kinds,
+            &settings,
+            &mut file,
+            &progress.callback(),
+        )
+        .with_context(|| format!("{}: visibility data and probe weights", outname))?;
     }
+    progress.finish();
     file.validate().with_context(|| outname.clone())?;
-    write_probe_file(&a.output, &file).with_context(|| outname.clone())?;
+    write_probe_file(&output, &file).with_context(|| outname.clone())?;
     warn_unused_probes(&outname, &file);
-    let default_demo = a.scene == probekit::scene::BUILTIN_DEMO
-        && a.output == std::path::Path::new("demo.probes")
-        && a.shard.is_none();
+    // README's first command, `probekit bake`, also draws its picture.
+    let default_demo =
+        a.scene == probekit::scene::BUILTIN_DEMO && a.output.is_none() && a.shard.is_none();
     let picture = a
         .render
         .clone()
-        .or_else(|| default_demo.then(|| a.output.with_extension("png")));
+        .or_else(|| default_demo.then(|| output.with_extension("png")));
     if let Some(png) = &picture {
         let rs = super::render::bake_settings(&file, &scene);
         super::render::render_to_png(&scene, &file, &rs, png, &outname)?;
@@ -665,48 +644,10 @@ fn part_file(
     Ok(f)
 }
 
-/// Progress-bar templates of the two visibility bakes and the weight fit.
-const MOMENTS_BAR: &str = "visibility: {bar:40} {pos}/{len} probes  {elapsed} elapsed";
-const CELLS_BAR: &str = "cell visibility: {bar:40} {pos}/{len} cells  {elapsed} elapsed";
-const FIT_BAR: &str = "probe weights: {bar:40} {pos}/{len} training points  {elapsed} elapsed";
-
-/// Bakes what `kinds` selects into `file` — visibility data, then probe
-/// weights fitted to that blend — with progress bars; one baker (one BVH
-/// build) for all.
-fn bake_blend_data(
-    baker: &probekit::bake::Baker,
-    kinds: &VisibilityBake,
-    capture: &probekit::bake::CaptureSettings,
-    file: &mut ProbeFile,
-) -> Result<()> {
-    let (pm, pc) = (counting_bar(MOMENTS_BAR), counting_bar(CELLS_BAR));
-    kinds.bake_into(baker.tracer(), file, &|d, t| advance(&pm, d, t), &|d, t| {
-        advance(&pc, d, t)
-    })?;
-    pm.finish_and_clear();
-    pc.finish_and_clear();
-    let pf = counting_bar(FIT_BAR);
-    kinds.fit_weights_into(baker, capture, file, &|d, t| advance(&pf, d, t))?;
-    pf.finish_and_clear();
-    Ok(())
-}
-
-/// A progress bar with `template` whose length [`advance`] sets.
-fn counting_bar(template: &str) -> ProgressBar {
-    let pb = ProgressBar::new(0);
-    pb.set_style(ProgressStyle::with_template(template).expect("static template"));
-    pb
-}
-
-/// A library progress callback `(done, total)` on `pb`.
-fn advance(pb: &ProgressBar, done: usize, total: usize) {
-    pb.set_length(total as u64);
-    pb.set_position(done as u64)
-}
-
 /// Runs `probekit merge`.
 pub fn merge(a: &MergeArgs) -> Result<()> {
     check_outputs(&[Some(&a.output)])?;
+    let progress = crate::progress::Progress::new();
     struct Part {
         name: String,
         first: usize,
@@ -748,9 +689,21 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let head = &parts[0];
     for p in &parts[1..] {
         if p.meta.scene_hash != head.meta.scene_hash {
-            bail!("{} and {}: different scene hashes", head.name, p.name);
+            bail!(
+                "{} and {}: baked from scenes of different lighting (hashes {} and {})",
+                head.name,
+                p.name,
+                head.meta.scene_hash,
+                p.meta.scene_hash
+            );
         }
-        if p.meta != head.meta || p.total != head.total {
+        // Nodes may name the same scene by different paths: the lighting
+        // hash says it is the same; the rest must match.
+        let same_settings = BakeMetadata {
+            scene: head.meta.scene.clone(),
+            ..p.meta.clone()
+        } == head.meta;
+        if !same_settings || p.total != head.total {
             bail!("{} and {}: different bake settings", head.name, p.name);
         }
     }
@@ -835,37 +788,41 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     let cells = CellLattice::from_json(&head.meta.settings["cell_visibility"]);
     let weights = &head.meta.settings["probe_weights"];
     if cells.is_some() || weights.is_object() {
-        let Some(scene_name) = &a.scene else {
-            bail!(
-                "{}: baked with cell visibility or probe weights, which merge bakes over all probes: pass --scene",
+        // The scene given, else the one the parts recorded.
+        let scene_name = match (&a.scene, head.meta.scene.is_empty()) {
+            (Some(s), _) => s.clone(),
+            (None, false) => head.meta.scene.clone(),
+            (None, true) => bail!(
+                "{}: baked with cell visibility or probe weights, which merge bakes over all \
+                 probes, and the part records no scene: pass --scene",
                 head.name
-            );
+            ),
         };
-        let scene = super::util::load_scene(scene_name)?;
-        if format!("{:016x}", scene.content_hash()) != head.meta.scene_hash {
-            bail!("{scene_name}: not the scene {} was baked from", head.name);
-        }
+        let scene = super::util::load_scene(&scene_name)?;
+        probekit::format::check_scene_hash(
+            &serde_json::to_string(&head.meta).unwrap_or_default(),
+            &head.name,
+            &scene.lighting_hash_hex(),
+            &scene_name,
+        )?;
+        let scene_name = &scene_name;
         let baker = probekit::bake::Baker::new(&scene).with_context(|| scene_name.clone())?;
         if let Some(lattice) = cells {
-            let pb = counting_bar(CELLS_BAR);
             let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
                 baker.tracer(),
                 &file,
                 lattice,
-                &|d, t| advance(&pb, d, t),
+                &progress.phase("cell visibility"),
             )
             .with_context(|| out.clone())?;
-            pb.finish_and_clear();
             file.cell_visibility = Some(cells);
             if head.meta.settings["cell_planes"] == serde_json::json!(true) {
-                let pb = counting_bar(CELLS_BAR);
                 file.cell_planes = probekit::cloud::cell_visibility::bake_file_cell_planes(
                     baker.tracer(),
                     &file,
-                    &|d, t| advance(&pb, d, t),
+                    &progress.phase("occluder planes"),
                 )
                 .with_context(|| out.clone())?;
-                pb.finish_and_clear();
             }
         }
         if weights.is_object() {
@@ -875,20 +832,18 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
                 &probekit::bake::CaptureSettings::from_scene(&scene),
             );
             let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));
-            let pb = counting_bar(FIT_BAR);
             let fitted = probekit::cloud::blend_fit::fit_file_probe_weights(
                 &baker,
                 &file,
                 &scene.bake_box(),
                 &capture,
                 &fit,
-                &|d, t| advance(&pb, d, t),
+                &progress.phase("probe weights"),
             )
             .with_context(|| out.clone())?;
             file.probe_weights = Some(fitted.weights);
             file.brightness_exponent = fitted.brightness;
             file.directional_exponent = fitted.directional;
-            pb.finish_and_clear();
         }
     }
     file.validate().with_context(|| out.clone())?;
@@ -1016,23 +971,19 @@ impl Seed003Args {
         name: &str,
         budget: usize,
         settings: &CaptureSettings,
+        progress: &crate::progress::Progress,
     ) -> Result<(Vec<Vec3>, serde_json::Value)> {
         use probekit::placement::PlacementMethod;
         let method = self.method(name, budget)?;
         let scene = baker.scene();
-        let pb = ProgressBar::new(budget as u64);
         let placed = probekit::placement::place(
             baker,
             scene.bake_box(),
             &method,
             settings,
-            &|_, done, total| {
-                pb.set_length(total as u64);
-                pb.set_position(done as u64)
-            },
+            &|phase, done, total| progress.update(&format!("placing: {phase}"), done, total),
         )
         .with_context(|| format!("{scene_name}: {name} placement"))?;
-        pb.finish_and_clear();
         let mut params = match &method {
             PlacementMethod::SpawnMerge(p) => p.to_json(&scene.bake_box()),
             PlacementMethod::GradientAscent(p) => p.to_json(),

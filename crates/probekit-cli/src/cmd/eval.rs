@@ -16,11 +16,10 @@
 //! most squared error, worst first, with their shares of it (under
 //! `"worst"`, for the grid too).
 
-use super::util::{load_probes, parse_interp};
+use super::util::{load_probes, parse_interp, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
@@ -41,9 +40,15 @@ use std::path::PathBuf;
 pub struct EvalArgs {
     /// A cloud or volume `.probes` file.
     pub probes: PathBuf,
-    /// Scene file or `builtin:demo`.
+    /// Scene file or `builtin:NAME` (default: the scene the file was baked
+    /// from, as it records it).
     #[arg(long)]
-    pub scene: PathBuf,
+    pub scene: Option<String>,
+    /// Evaluate against a scene whose lighting differs from the scene the
+    /// file was baked from (refused otherwise: the figures would measure
+    /// the probes against another scene's light).
+    #[arg(long)]
+    pub allow_other_scene: bool,
     /// Evaluation points.
     #[arg(long, default_value_t = 2000)]
     pub points: usize,
@@ -129,8 +134,9 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     a.visibility
         .apply(&mut predictor)
         .with_context(|| name.clone())?;
-    let scene = Scene::load(&a.scene).with_context(|| a.scene.display().to_string())?;
-    let baker = Baker::new(&scene).with_context(|| a.scene.display().to_string())?;
+    let (scene, scene_name) =
+        scene_for_file(&file, &a.probes, a.scene.as_deref(), a.allow_other_scene)?;
+    let baker = Baker::new(&scene).with_context(|| scene_name.clone())?;
     let bbox = match &a.bbox {
         None => scene.bake_box(),
         Some(b)
@@ -147,9 +153,10 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         }
         Some(_) => bail!("--box: expected MINX,MINY,MINZ,MAXX,MAXY,MAXZ with min < max"),
     };
+    bbox.check_bake_box().with_context(|| scene_name.clone())?;
     let pts = sample_points(baker.tracer(), &bbox, a.points, a.seed);
     if pts.is_empty() {
-        bail!("{}: no free-space points in the box", a.scene.display());
+        bail!("{scene_name}: no free-space points in the box");
     }
     let rs = ReferenceSettings {
         relative_precision: 0.03,
@@ -157,20 +164,10 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     };
     // One bar for the long phases: ground truth, the compared grid's bake,
     // the sweep's configurations (on stderr; cleared before the output).
-    let pb = ProgressBar::new(0);
-    pb.set_style(
-        ProgressStyle::with_template("{msg:32} {bar:40} {pos}/{len}  {elapsed} elapsed")
-            .expect("static template"),
-    );
-    let progress = |phase: &str, done: usize, total: usize| {
-        if pb.message() != phase {
-            pb.set_message(phase.to_string());
-        }
-        pb.set_length(total as u64);
-        pb.set_position(done as u64);
-    };
+    let bar = crate::progress::Progress::new();
+    let progress = bar.callback();
     let truth = reference_with_progress(&baker, &pts, &rs, &|d, t| progress("ground truth", d, t))
-        .with_context(|| a.scene.display().to_string())?;
+        .with_context(|| scene_name.clone())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
     let mut out = figures(
         &scene,
@@ -182,7 +179,6 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         a.worst,
         &predictor,
     );
-    let scene_name = a.scene.display().to_string();
     let mut fallback = CaptureSettings::from_scene(&scene);
     fallback.samples = scene.bake.samples.unwrap_or(super::bake::DEFAULT_SAMPLES);
     let (mut settings, codec) = settings_from_metadata(&file.metadata, &fallback);
@@ -253,11 +249,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             &|p| a.visibility.set(p),
             &pts,
             &truth,
-            &mut |m, b, e| {
-                pb.suspend(|| {
-                    eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}")
-                })
-            },
+            &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),
             &progress,
         );
         if rows.is_empty() {
@@ -267,7 +259,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         out["sweep"] = rows.iter().map(|r| r.to_json()).collect::<Vec<_>>().into();
         out["plot"] = plot.display().to_string().into();
     }
-    pb.finish_and_clear();
+    bar.finish();
     if a.json {
         println!("{out}");
     } else {

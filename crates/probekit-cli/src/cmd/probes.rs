@@ -5,7 +5,6 @@ use super::util::{load_probes, load_scene, parse_interp, parse_vec3, read_csv, r
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::placement::eval::Predictor;
 use probekit_runtime::cloud::WalkState;
@@ -99,11 +98,7 @@ pub fn reference(a: &ReferenceArgs) -> Result<()> {
         bail!("{}: row {}: zero normal", a.points.display(), i + 1);
     }
     let baker = Baker::new(&scene).with_context(|| a.scene.clone())?;
-    let pb = ProgressBar::new(rows.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("ground truth {bar:40} {pos}/{len} points  {elapsed} elapsed")
-            .expect("static template"),
-    );
+    let progress = crate::progress::Progress::new();
     let mut out = Vec::with_capacity(rows.len());
     for (i, r) in rows.iter().enumerate() {
         let p = Vec3::new(r[0], r[1], r[2]);
@@ -112,9 +107,9 @@ pub fn reference(a: &ReferenceArgs) -> Result<()> {
             .reference_irradiance(p, n, i as u64, &s)
             .with_context(|| format!("{}: row {}", a.points.display(), i + 1))?;
         out.push(rgb(e.irradiance));
-        pb.inc(1);
+        progress.update("ground truth", i + 1, rows.len());
     }
-    pb.finish_and_clear();
+    progress.finish();
     println!("{}", serde_json::json!({ "irradiance": out }));
     Ok(())
 }
@@ -256,86 +251,16 @@ pub struct InspectArgs {
     pub json: bool,
 }
 
-/// Runs `probekit inspect`. Clouds: `{"kind":"cloud","probes","tetrahedra","hull_slivers",
-/// "unused_probes","basis","invalid","bytes","bytes_by_section","visibility","cell_visibility","probe_weights",
-/// "placement","scene_hash"}`
-/// (`hull_slivers`: [`probekit::cloud::hull_slivers`], hull tetrahedra flat
-/// up to rounding, which light points outside the hull from far probes;
-/// `unused_probes`: [`probekit::cloud::unused_probes`], probes at the
-/// position of another that no tetrahedron uses)
-/// (`visibility`: `{"resolution","max_distance"}` of the `VISM` section, or null;
-/// `cell_visibility`: `{"subdivision","cells","stored_cells","planes"}` of
-/// the `CVSP` / `CVIS` section — cells in all, those not clear, which have a
-/// record, and the tetrahedra with an occluder plane (`CPLN`) — or null; `probe_weights`: `{"min","median","max","below_half",
-/// "above_two","brightness_exponent","directional_exponent"}` of the fitted
-/// weights (`PWGT`), the brightness exponent they were fitted for and the
-/// directional one the cloud blends with, or null);
-/// volumes: [`probekit::volume::inspect_json`].
+/// Runs `probekit inspect`: a short summary for people, or with `--json`
+/// the [`probekit::inspect::FileSummary`] as one JSON object.
 pub fn inspect(a: &InspectArgs) -> Result<()> {
     let name = a.probes.display().to_string();
     let file = load_probes(&a.probes)?;
-    let j = if file.tetrahedra.is_none() && (file.grid.is_some() || file.octree.is_some()) {
-        probekit::volume::inspect_json(&file).with_context(|| name.clone())?
-    } else {
-        let by = file.bytes_by_section().with_context(|| name.clone())?;
-        let bytes: u64 = by.values().sum();
-        let meta = probekit::format::BakeMetadata::from_json(&file.metadata);
-        let part: Option<serde_json::Value> =
-            serde_json::from_str::<serde_json::Value>(&file.metadata)
-                .ok()
-                .and_then(|v| v.get("part").cloned());
-        let invalid = file.validity.as_ref().map_or(0, |v| {
-            v.iter()
-                .filter(|x| x.flags & probekit::format::layout::VALIDITY_INVALID != 0)
-                .count()
-        });
-        serde_json::json!({
-            "kind": if part.is_some() { "cloud-part" } else { "cloud" },
-            "probes": file.positions.len(),
-            "tetrahedra": file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
-            "hull_slivers": file.tetrahedra.as_ref().map_or(0, |t| {
-                probekit::cloud::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
-            }),
-            "unused_probes": file.tetrahedra.as_ref().map_or(0, |t| {
-                probekit::cloud::unused_probes(file.positions.len(), &t.vertices).len()
-            }),
-            "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
-            "invalid": invalid,
-            "bytes": bytes,
-            "bytes_by_section": by,
-            "groups": file.group_names().collect::<Vec<_>>(),
-            "visibility": file.visibility.as_ref().map(|v| serde_json::json!({
-                "resolution": v.resolution,
-                "max_distance": v.max_distance,
-            })),
-            "cell_visibility": file.cell_visibility.as_ref().map(|c| serde_json::json!({
-                "subdivision": c.subdivision(),
-                "cells": c.tet_count() + c.hull_face_count(),
-                "stored_cells": c.record_count(),
-                "planes": file.cell_planes.as_ref().map_or(0, |p| p.len()),
-            })),
-            "probe_weights": file.probe_weights.as_ref().filter(|w| !w.is_empty()).map(|w| {
-                let mut s = w.clone();
-                s.sort_by(f32::total_cmp);
-                serde_json::json!({
-                    "min": s[0],
-                    "median": s[s.len() / 2],
-                    "max": s[s.len() - 1],
-                    "below_half": s.iter().filter(|&&x| x < 0.5).count(),
-                    "above_two": s.iter().filter(|&&x| x > 2.0).count(),
-                    "brightness_exponent": file.brightness_exponent,
-                    "directional_exponent": file.directional_exponent,
-                })
-            }),
-            "placement": meta.as_ref().map(|m| serde_json::to_value(&m.placement).unwrap_or_default()),
-            "scene_hash": meta.as_ref().map(|m| m.scene_hash.clone()),
-            "part": part,
-        })
-    };
+    let summary = probekit::inspect::summarize(&file).with_context(|| name.clone())?;
     if a.json {
-        println!("{j}");
+        println!("{}", serde_json::to_string(&summary)?);
     } else {
-        println!("{name}: {}", serde_json::to_string_pretty(&j)?);
+        print!("{name}: {summary}");
     }
     Ok(())
 }

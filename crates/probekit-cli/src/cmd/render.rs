@@ -5,12 +5,11 @@
 
 use super::util::{
     check_brightness_weight, check_directional_brightness, cloud_flag_on_volume, first_given,
-    load_probes, load_scene,
+    load_probes, scene_for_file,
 };
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use probekit::bake::CaptureSettings;
 use probekit::format::ProbeFile;
 use probekit::render::{render, Camera, ObjectKind, RenderSettings, Rendered};
@@ -20,9 +19,9 @@ use std::path::{Path, PathBuf};
 /// Arguments of `probekit render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene file or `builtin:demo`.
-    #[arg(default_value = "builtin:demo")]
-    pub scene: String,
+    /// Scene file or `builtin:NAME` (default: the scene the probes were
+    /// baked from, as the file records it).
+    pub scene: Option<String>,
     /// The baked cloud or volume.
     #[arg(long)]
     pub probes: PathBuf,
@@ -57,6 +56,11 @@ pub struct RenderArgs {
     /// without; as `query --directional-brightness`).
     #[arg(long)]
     pub directional_brightness: Option<f32>,
+    /// Use a scene whose lighting differs from the scene the probes were
+    /// baked from (refused otherwise: the picture would compare the probes
+    /// with another scene's light).
+    #[arg(long)]
+    pub allow_other_scene: bool,
     /// Print a JSON summary.
     #[arg(long)]
     pub json: bool,
@@ -98,17 +102,10 @@ pub fn render_to_png(
     output: &Path,
     what: &str,
 ) -> Result<Rendered> {
-    let pb = ProgressBar::new(1);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} render  {elapsed} elapsed, ETA {eta}")
-            .expect("static template"),
-    );
-    let r = render(scene, file, settings, &|done, total| {
-        pb.set_length(total as u64);
-        pb.set_position(done as u64)
-    })
-    .with_context(|| what.to_string())?;
-    pb.finish_and_clear();
+    let progress = crate::progress::Progress::new();
+    let r = render(scene, file, settings, &progress.phase("render"))
+        .with_context(|| what.to_string())?;
+    progress.finish();
     for w in &r.warnings {
         eprintln!("warning: {what}: {w}");
     }
@@ -150,7 +147,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             return Err(cloud_flag_on_volume(flag)).with_context(|| a.probes.display().to_string());
         }
     }
-    let scene = load_scene(&a.scene)?;
+    let (scene, scene_name) =
+        scene_for_file(&file, &a.probes, a.scene.as_deref(), a.allow_other_scene)?;
     let object = match a.object.as_str() {
         "spheres" => ObjectKind::default(),
         path => ObjectKind::Mesh(PathBuf::from(path)),
@@ -167,7 +165,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         directional_brightness: a.directional_brightness,
         ..RenderSettings::default()
     };
-    let what = format!("{} with {}", a.scene, a.probes.display());
+    let what = format!("{scene_name} with {}", a.probes.display());
     let r = render_to_png(&scene, &file, &settings, &a.output, &what)?;
     let out = a.output.display().to_string();
     if a.json {

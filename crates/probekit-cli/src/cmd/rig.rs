@@ -45,6 +45,10 @@ pub struct RigArgs {
     /// probe cloud (it interpolates by its tetrahedra).
     #[arg(long, requires = "probes")]
     pub interp: Option<String>,
+    /// Use --probes with a --scene whose lighting differs from the scene
+    /// the file was baked from (refused otherwise).
+    #[arg(long, requires = "probes")]
+    pub allow_other_scene: bool,
     /// Rig type: constant, gradient, lattice:NXxNYxNZ or mixed:X,Y,Z (c, g, lN per axis).
     #[arg(long)]
     pub rig: String,
@@ -129,6 +133,16 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
     let lights = match &a.scene {
         Some(s) => {
             let l = load_lights(s)?;
+            if let (Some(p), Some(hash)) = (&a.probes, &l.lighting_hash) {
+                let file = super::util::load_probes(p)?;
+                let name = p.display().to_string();
+                if let Err(e) = probekit::format::check_scene_hash(&file.metadata, &name, hash, s) {
+                    if !a.allow_other_scene {
+                        return Err(e.into());
+                    }
+                    eprintln!("warning: {e}");
+                }
+            }
             for w in &l.warnings {
                 eprintln!("warning: {w}");
             }

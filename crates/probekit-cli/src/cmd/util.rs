@@ -52,6 +52,19 @@ pub fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
     }
 }
 
+/// The default output file of a command run on `scene`: its name without
+/// folder and extension (`builtin:NAME` → `NAME`), with `ext`, in the
+/// current folder.
+pub fn output_named_after(scene: &str, ext: &str) -> std::path::PathBuf {
+    let stem = match scene.strip_prefix("builtin:") {
+        Some(name) => name.to_string(),
+        None => Path::new(scene)
+            .file_stem()
+            .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned()),
+    };
+    std::path::PathBuf::from(format!("{stem}.{ext}"))
+}
+
 /// Loads a scene (path or `builtin:demo`), printing its warnings to stderr.
 pub fn load_scene(name: &str) -> Result<Scene> {
     let scene = Scene::load(name).with_context(|| name.to_string())?;
@@ -59,6 +72,40 @@ pub fn load_scene(name: &str) -> Result<Scene> {
         eprintln!("warning: {name}: {w}");
     }
     Ok(scene)
+}
+
+/// The scene to use with a probe file: `given` (`--scene`), else the scene
+/// the file recorded when it was baked. Refuses one whose lighting hash
+/// differs from the file's ([`probekit::format::check_scene`]) unless
+/// `allow_other`, then only warns. Returns the scene and the name it was
+/// loaded by.
+pub fn scene_for_file(
+    file: &ProbeFile,
+    file_path: &Path,
+    given: Option<&str>,
+    allow_other: bool,
+) -> Result<(Scene, String)> {
+    let file_name = file_path.display().to_string();
+    let name = match given {
+        Some(g) => g.to_string(),
+        None => probekit::format::recorded_scene(&file.metadata).ok_or_else(|| {
+            anyhow!("{file_name}: the file records no scene it was baked from; give --scene")
+        })?,
+    };
+    let scene = Scene::load(&name).with_context(|| match given {
+        Some(_) => name.clone(),
+        None => format!("{name} (the scene {file_name} was baked from; give --scene if it moved)"),
+    })?;
+    for w in &scene.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    if let Err(e) = probekit::format::check_scene(&file.metadata, &file_name, &scene, &name) {
+        if !allow_other {
+            return Err(e.into());
+        }
+        eprintln!("warning: {e}");
+    }
+    Ok((scene, name))
 }
 
 /// Checks, before a command's long work, that each of its output files

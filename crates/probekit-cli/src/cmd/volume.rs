@@ -16,8 +16,8 @@ use super::util::load_scene;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use indicatif::{ProgressBar, ProgressStyle};
-use probekit::format::write_probe_file;
+use probekit::cloud::file::settings_json;
+use probekit::format::{write_probe_file, BakeMetadata, Placement};
 use probekit::volume::{
     build_adaptive, build_uniform, inspect_json, plot_depths, resolution_for_cell,
     truncate_gradients, AdaptiveSettings, BakerSource, CommonSettings, GradientMode, LightsDemo,
@@ -239,11 +239,18 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             probekit::sh::MAX_ORDER
         );
     }
+    if !a.uniform && !a.adaptive {
+        bail!(
+            "{}: choose a volume: --adaptive (an octree), or --uniform with --cell SIZE or \
+             --resolution X,Y,Z",
+            a.scene
+        );
+    }
     let gradients = gradient_mode(a)?;
     if a.scene == "builtin:lights-demo" {
         let src = LightsDemo::demo(a.order);
         let (min, max) = parse_box(a, LightsDemo::demo_box())?;
-        return build_and_write(a, &src, gradients, min, max, 0.5, None);
+        return build_and_write(a, &src, gradients, min, max, 0.5, None, None);
     }
     if a.gradients.as_deref() == Some("analytic") {
         bail!(
@@ -255,19 +262,20 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
     let scene = load_scene(&a.scene)?;
     let mut settings = capture_settings(&scene, a.samples, a.bounces, a.seed);
     settings.order = a.order;
+    let settings_for_meta = settings.clone();
     let bb = scene.bake_box();
     let (min, max) = parse_box(a, (bb.min, bb.max))?;
-    let pb = ProgressBar::new(0);
-    pb.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} captures  {elapsed} elapsed, ETA {eta}")
-            .expect("valid template"),
-    );
+    // Before any work: a box that can hold a volume (a scene without
+    // geometry needs `--box` or a `[bake] box`).
+    probekit::scene::Aabb { min, max }
+        .check_bake_box()
+        .with_context(|| a.scene.clone())?;
+    let pb = std::sync::Arc::new(crate::progress::Progress::new());
     let bar = pb.clone();
     let src = BakerSource::new(&scene, settings)
         .with_context(|| a.scene.clone())?
         .with_progress(Box::new(move |done, requested| {
-            bar.set_length(requested as u64);
-            bar.set_position(done as u64);
+            bar.update("capture", done, requested)
         }));
     // A virtual offset longer than a quarter of the finest cell moves a
     // corner sample out of its cell (typically through a wall): dilate it.
@@ -282,13 +290,23 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
     };
     let src = src.with_max_offset(0.25 * finest);
     let thr = src.validity_threshold();
-    let r = build_and_write(a, &src, gradients, min, max, thr, Some(&pb));
+    let meta = BakeMetadata::new(
+        String::new(),
+        Placement {
+            method: if a.adaptive { "octree" } else { "uniform" }.into(),
+            parameters: serde_json::Value::Null,
+        },
+        settings_json(&settings_for_meta, probekit::format::Codec::F32),
+    )
+    .with_scene(&a.scene, &scene);
+    let r = build_and_write(a, &src, gradients, min, max, thr, Some(&pb), Some(meta));
     if let Some(e) = src.take_error() {
         bail!("{}: capture failed: {e}", a.scene);
     }
     r
 }
 
+#[allow(clippy::too_many_arguments)] // rewritten with the pipeline
 fn build_and_write(
     a: &VolumeArgs,
     src: &dyn VolumeSource,
@@ -296,7 +314,8 @@ fn build_and_write(
     min: Vec3,
     max: Vec3,
     validity_threshold: f32,
-    pb: Option<&ProgressBar>,
+    pb: Option<&crate::progress::Progress>,
+    meta: Option<BakeMetadata>,
 ) -> Result<()> {
     let common = CommonSettings {
         min,
@@ -334,11 +353,14 @@ fn build_and_write(
         bail!("{}: choose --uniform or --adaptive", a.scene)
     };
     if let Some(pb) = pb {
-        pb.finish_and_clear();
+        pb.finish();
     }
     let (mut file, stats) = built.with_context(|| a.scene.clone())?;
     if let Some(g) = a.gradient_order {
         truncate_gradients(&mut file, g).with_context(|| a.scene.clone())?;
+    }
+    if let Some(m) = meta {
+        file.metadata = m.to_json();
     }
     write_probe_file(&a.output, &file).with_context(|| a.output.display().to_string())?;
     if let Some(p) = &a.plot {

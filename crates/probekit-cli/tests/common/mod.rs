@@ -28,12 +28,20 @@ pub fn json(dir: &Path, args: &[&str]) -> Value {
     serde_json::from_str(text.lines().last().unwrap()).unwrap()
 }
 
+/// True for a progress line (what long commands print on stderr off a
+/// terminal before any result or error): `PHASE: started (N)`, `PHASE: 40 %
+/// (…)`, `PHASE: done …`.
+pub fn is_progress_line(line: &str) -> bool {
+    line.contains(": started (") || line.contains(" % (") || line.contains(": done ")
+}
+
 /// Asserts that `probekit ARGS` exits with code 1 and one stderr line
-/// containing `needle`.
+/// (progress lines aside) containing `needle`.
 pub fn fails_one_line(dir: &Path, args: &[&str], needle: &str) {
     let o = run(dir, args);
     assert_eq!(o.status.code(), Some(1), "{args:?}");
     let err = String::from_utf8(o.stderr).unwrap();
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains(needle), "{err} lacks {needle}");
+    let lines: Vec<&str> = err.lines().filter(|l| !is_progress_line(l)).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains(needle), "{err} lacks {needle}");
 }

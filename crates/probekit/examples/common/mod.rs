@@ -54,7 +54,7 @@ pub fn with_truth(
     let truth = reference_cached(
         baker,
         &points,
-        &reference_cache_path(scene.content_hash(), &points),
+        &reference_cache_path(scene.lighting_hash(), &points),
     )?;
     let mean = mean_luminance(&truth);
     Ok(EvalSet {

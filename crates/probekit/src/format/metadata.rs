@@ -24,8 +24,13 @@ pub struct Placement {
 pub struct BakeMetadata {
     /// Version of probekit that wrote the file.
     pub tool_version: String,
-    /// [`scene_hash`] of the scene file's bytes (and of the assets it names,
-    /// if the baker includes them).
+    /// The scene as it was named on the command line (a path as typed, or
+    /// `builtin:NAME`), so that `eval`, `render` and `rig --probes` can
+    /// default to it. Empty when unknown.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub scene: String,
+    /// The scene's lighting hash ([`crate::scene::Scene::lighting_hash`],
+    /// 16 hex digits): what lights the probes, by content.
     pub scene_hash: String,
     /// Placement method and parameters.
     pub placement: Placement,
@@ -39,6 +44,7 @@ impl BakeMetadata {
     pub fn new(scene_hash: String, placement: Placement, settings: serde_json::Value) -> Self {
         Self {
             tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: String::new(),
             scene_hash,
             placement,
             settings,
@@ -56,6 +62,82 @@ impl BakeMetadata {
     pub fn from_json(text: &str) -> Option<Self> {
         serde_json::from_str(text).ok()
     }
+
+    /// This metadata with the scene recorded as named (`builtin:demo`, a
+    /// path as typed) and its lighting hash.
+    pub fn with_scene(mut self, name: &str, scene: &crate::scene::Scene) -> Self {
+        self.scene = name.to_string();
+        self.scene_hash = scene.lighting_hash_hex();
+        self
+    }
+}
+
+/// A probe file used with a scene whose lighting differs from the one it
+/// was baked from ([`check_scene`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{file} was baked from {baked_scene} (lighting hash {baked_hash}), not from {scene} \
+     (lighting hash {scene_hash}); give the scene it was baked from, or --allow-other-scene"
+)]
+pub struct SceneMismatch {
+    /// The probe file, as named.
+    pub file: String,
+    /// The scene the file recorded (`unknown` when it recorded none).
+    pub baked_scene: String,
+    /// The lighting hash the file recorded.
+    pub baked_hash: String,
+    /// The scene given, as named.
+    pub scene: String,
+    /// Its lighting hash.
+    pub scene_hash: String,
+}
+
+/// The scene a probe file's metadata recorded (as it was named when
+/// baking), if any.
+pub fn recorded_scene(metadata: &str) -> Option<String> {
+    BakeMetadata::from_json(metadata)
+        .map(|m| m.scene)
+        .filter(|s| !s.is_empty())
+}
+
+/// Checks that `scene` (named `scene_name`) lights the probes as the scene
+/// `file_name` was baked from: equal lighting hashes
+/// ([`crate::scene::Scene::lighting_hash`]). A file that recorded no hash
+/// (written by another tool) passes: there is nothing to compare.
+pub fn check_scene(
+    metadata: &str,
+    file_name: &str,
+    scene: &crate::scene::Scene,
+    scene_name: &str,
+) -> Result<(), SceneMismatch> {
+    check_scene_hash(metadata, file_name, &scene.lighting_hash_hex(), scene_name)
+}
+
+/// [`check_scene`] with the scene's lighting hash (16 hex digits) given.
+pub fn check_scene_hash(
+    metadata: &str,
+    file_name: &str,
+    hash: &str,
+    scene_name: &str,
+) -> Result<(), SceneMismatch> {
+    let Some(meta) = BakeMetadata::from_json(metadata) else {
+        return Ok(());
+    };
+    let hash = hash.to_string();
+    if meta.scene_hash.is_empty() || meta.scene_hash == hash {
+        return Ok(());
+    }
+    Err(SceneMismatch {
+        file: file_name.into(),
+        baked_scene: if meta.scene.is_empty() {
+            "an unrecorded scene".into()
+        } else {
+            meta.scene
+        },
+        baked_hash: meta.scene_hash,
+        scene: scene_name.into(),
+        scene_hash: hash,
+    })
 }
 
 /// A stable 64-bit content hash (FNV-1a), as 16 lowercase hex digits.

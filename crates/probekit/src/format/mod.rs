@@ -22,7 +22,10 @@ mod atomic;
 mod metadata;
 
 pub use atomic::{check_writable, write_atomic, write_probe_file, WriteError};
-pub use metadata::{scene_hash, BakeMetadata, Placement};
+pub use metadata::{
+    check_scene, check_scene_hash, recorded_scene, scene_hash, BakeMetadata, Placement,
+    SceneMismatch,
+};
 pub use probekit_runtime::format::*;
 
 use glam::Vec3;

@@ -296,6 +296,10 @@ fn energy(w: &[f32], a: &ShRgb) -> f32 {
 fn jittered(b: &Aabb, n: usize, seed: u64, layer: Option<&Aabb>) -> Vec<Vec3> {
     let size = b.size();
     let cell = (size.x * size.y * size.z / n.max(1) as f32).cbrt();
+    // `place` refuses flat boxes first; a zero cell would make the grid unbounded.
+    if !(cell.is_finite() && cell > 0.0) {
+        return Vec::new();
+    }
     let dims = (size / cell).ceil().max(Vec3::ONE);
     let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
     let mut out = Vec::with_capacity(nx * ny * nz);

@@ -36,13 +36,20 @@ pub use adaptive::PROBE_CLEARANCE;
 
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
-use crate::scene::Aabb;
+use crate::scene::{Aabb, BakeBoxError};
 use crate::trace::{Hit, Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::ShRgb;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
 use thiserror::Error;
+
+/// The most probes any placement may be asked for (a grid's cell count, an
+/// adaptive or spawn-and-merge budget, a gradient-ascent initial grid, a
+/// manual positions file): larger requests are refused before any work, so
+/// memory stays bounded by the request. 5 M probes at L2 f32 are 540 MB of
+/// coefficients alone.
+pub const MAX_PROBES: usize = 5_000_000;
 
 /// Receiver samples per probe used while placing (captures are reused by the
 /// bake when its own sample count is not larger).
@@ -129,6 +136,30 @@ impl LightShells {
 }
 
 impl PlacementMethod {
+    /// Refuses a request above [`MAX_PROBES`] (a grid counted by
+    /// [`grid_resolution`] over `bake_box`).
+    pub fn check_size(&self, bake_box: &Aabb) -> Result<(), PlacementError> {
+        let (what, count) = match self {
+            PlacementMethod::Grid { cell, budget } => {
+                grid_resolution(bake_box, *cell, *budget)?;
+                return Ok(());
+            }
+            PlacementMethod::Manual(p) => ("manual positions:", p.len()),
+            PlacementMethod::Adaptive { budget, .. } => ("adaptive budget", *budget),
+            PlacementMethod::SpawnMerge(p) => {
+                ("spawn-and-merge budget", p.max_probes.max(p.initial))
+            }
+            PlacementMethod::GradientAscent(p) => ("gradient-ascent initial grid", p.initial),
+        };
+        if count > MAX_PROBES {
+            return Err(PlacementError::TooMany {
+                what: what.into(),
+                count,
+            });
+        }
+        Ok(())
+    }
+
     /// Short name as used on the command line (`grid`, `manual`, `adaptive`, ...).
     pub fn name(&self) -> &'static str {
         match self {
@@ -157,6 +188,17 @@ pub enum PlacementError {
     /// The probes could not be tetrahedralized (e.g. fewer than 4, co-planar).
     #[error(transparent)]
     Delaunay(#[from] DelaunayError),
+    /// The bake box cannot hold probes (no geometry and no `[bake] box`, or flat).
+    #[error(transparent)]
+    BakeBox(#[from] BakeBoxError),
+    /// More probes asked for than [`MAX_PROBES`].
+    #[error("{what} {count} is above the limit of {MAX_PROBES} probes")]
+    TooMany {
+        /// What was asked for (`adaptive budget`, `grid of 300×300×300`, ...).
+        what: String,
+        /// How many probes that is.
+        count: usize,
+    },
 }
 
 /// What placement did.
@@ -314,28 +356,34 @@ pub fn is_open(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
     4 * back < 26
 }
 
-/// Cell-centred uniform grid over `b`: cell size `cell`, or about `budget`
-/// points. At least 2 points per axis.
-pub fn grid_points(
+/// The smallest grid: 2 cells per axis.
+pub const MIN_GRID: usize = 8;
+
+/// Cells per axis of the cell-centred grid over `b` with cells of edge
+/// `cell` metres (when given), else about `budget` cells: cell edge
+/// `∛(V / budget)`, each axis `round(extent / edge)`, at least 2. The one
+/// sizing rule of every grid placement (`bake`, the sweeps, `eval
+/// --compare grid`). Refuses a flat or empty box, a budget below
+/// [`MIN_GRID`] (rather than baking 8 probes for `--grid 1`), a
+/// non-positive cell and grids above [`MAX_PROBES`].
+pub fn grid_resolution(
     b: &Aabb,
     cell: Option<f32>,
     budget: Option<usize>,
-) -> Result<Vec<Vec3>, PlacementError> {
+) -> Result<[usize; 3], PlacementError> {
+    b.check_bake_box()?;
     let size = b.size();
-    if b.is_empty() || !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0) || !size.is_finite() {
-        return Err(PlacementError::BadParameter("bake box is empty".into()));
-    }
     let cell = match (cell, budget) {
         (Some(c), _) if c.is_finite() && c > 0.0 => c,
         (Some(c), _) => {
             return Err(PlacementError::BadParameter(format!(
-                "grid cell {c} must be > 0"
+                "grid cell {c} must be a positive length in metres"
             )))
         }
-        (None, Some(n)) if n >= 8 => (size.x * size.y * size.z / n as f32).cbrt(),
+        (None, Some(n)) if n >= MIN_GRID => (size.x * size.y * size.z / n as f32).cbrt(),
         (None, Some(n)) => {
             return Err(PlacementError::BadParameter(format!(
-                "grid budget {n} must be ≥ 8"
+                "grid of {n} probes: a grid has at least 2 probes per axis, {MIN_GRID} in all"
             )))
         }
         (None, None) => {
@@ -344,11 +392,29 @@ pub fn grid_points(
             ))
         }
     };
-    let dims = (size / cell)
-        .round()
-        .max(Vec3::splat(2.0))
-        .min(Vec3::splat(1024.0));
-    let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
+    // `as` saturates, so a tiny cell gives a huge count, refused below.
+    let dims = size
+        .to_array()
+        .map(|s| ((s / cell).round() as usize).max(2));
+    let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    match count {
+        Some(n) if n <= MAX_PROBES => Ok(dims),
+        _ => Err(PlacementError::TooMany {
+            what: format!("grid of {}×{}×{}", dims[0], dims[1], dims[2]),
+            count: count.unwrap_or(usize::MAX),
+        }),
+    }
+}
+
+/// Cell-centred uniform grid over `b` sized by [`grid_resolution`], x
+/// fastest, then y, then z. No point lies on the box faces.
+pub fn grid_points(
+    b: &Aabb,
+    cell: Option<f32>,
+    budget: Option<usize>,
+) -> Result<Vec<Vec3>, PlacementError> {
+    let [nx, ny, nz] = grid_resolution(b, cell, budget)?;
+    let size = b.size();
     let mut out = Vec::with_capacity(nx * ny * nz);
     for k in 0..nz {
         for j in 0..ny {
@@ -854,6 +920,10 @@ pub fn place(
     progress: &(dyn Fn(&str, usize, usize) + Sync),
 ) -> Result<Placement, PlacementError> {
     settings.validate()?;
+    // Before any work: a box that can hold probes, and a request that
+    // bounds the memory it takes.
+    bake_box.check_bake_box()?;
+    method.check_size(&bake_box)?;
     let mut cs = settings.clone();
     cs.samples = cs.samples.min(PLACEMENT_SAMPLES);
     let reusable = settings.samples <= PLACEMENT_SAMPLES;

@@ -160,7 +160,7 @@ pub fn bake_cloud(
         .collect();
     let validity: Vec<_> = res.iter().map(|r| file_validity(&r.validity)).collect();
     let meta = BakeMetadata::new(
-        format!("{:016x}", baker.scene().content_hash()),
+        format!("{:016x}", baker.scene().lighting_hash()),
         PlacementMeta {
             method: method.into(),
             parameters: serde_json::json!({ "count": pos.len() }),

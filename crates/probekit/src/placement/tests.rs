@@ -342,7 +342,7 @@ fn reference_cache_round_trips_and_rejects_a_wrong_length() {
 fn reference_cache_path_is_keyed_by_the_points() {
     let scene = Scene::builtin_demo();
     let baker = Baker::new(&scene).unwrap();
-    let h = scene.content_hash();
+    let h = scene.lighting_hash();
     let pts = sample_points(baker.tracer(), &scene.bake_box(), 20, 5);
     let path = reference_cache_path(h, &pts);
     assert_eq!(path, reference_cache_path(h, &pts.clone()));

@@ -8,6 +8,9 @@ use glam::Vec3;
 /// Default vertical field of view, degrees.
 pub const DEFAULT_FOV_DEGREES: f32 = 65.0;
 
+/// No automatic camera stands nearer than this to a surface, metres.
+pub const EYE_CLEARANCE: f32 = 0.1;
+
 /// A pinhole camera: right-handed, +Y up; it looks from `eye` at `target`.
 /// Pixel `(x, y)` (continuous, `(0, 0)` the top-left corner of the image)
 /// maps to the ray through the image plane at unit distance, `fov_y_degrees`
@@ -88,77 +91,99 @@ impl Camera {
         ((sx + 1.0) * 0.5 * w as f32, (1.0 - sy) * 0.5 * h as f32)
     }
 
-    /// The automatic view of `bake_box`. A closed scene (all of 14 rays from
-    /// the box centre hit something) is seen from inside: from each of the
-    /// four upper corners of the box (inset 6 % of its size, at 85 % of its
-    /// height) looking at the centre lowered to 35 % of the height, the
-    /// candidate whose 16 × 9 probe rays see deepest on average (a view
-    /// through a doorway beats a view of the nearest wall) wins; candidates
-    /// inside geometry are skipped. An open scene is seen from outside the
-    /// box, above a corner. Deterministic.
-    pub fn auto(tracer: &Tracer, bake_box: &Aabb, aspect: f32) -> Camera {
+    /// The automatic view of `bake_box` for test objects that `fits` counts
+    /// (the spheres [`super::place_spheres`] finds room for in a view, or
+    /// whether a mesh is in sight): always from inside the box, from free
+    /// space, looking at where the objects can go.
+    ///
+    /// Candidate eyes sit on a 3 × 2 × 3 lattice in the box (at 10 %, 50 %
+    /// and 90 % of its width and depth, 55 % and 80 % of its height); an eye
+    /// within [`EYE_CLEARANCE`] of a surface, or inside geometry, is
+    /// skipped. Each looks at the box's centre lowered to 35 % of its
+    /// height, and along ±x and ±z, tilted 20° down. A view is ranked by
+    /// how many objects fit, then by how enclosed it is (the share of 16 × 9
+    /// probe rays that hit a surface within the box's diagonal: a view of a
+    /// room beats a view out of a window), then by how deep it sees. `None`
+    /// when no view has room for any object. Deterministic.
+    pub fn auto(
+        tracer: &Tracer,
+        bake_box: &Aabb,
+        aspect: f32,
+        fits: &dyn Fn(&Camera) -> usize,
+    ) -> Option<Camera> {
         let (lo, size) = (bake_box.min, bake_box.size());
-        let centre = bake_box.center();
         let diag = size.length().max(1e-3);
-        let mut misses = 0;
-        for x in -1i32..=1 {
-            for y in -1i32..=1 {
-                for z in -1i32..=1 {
-                    let d = Vec3::new(x as f32, y as f32, z as f32);
-                    let axis = x.abs() + y.abs() + z.abs();
-                    if axis == 1 || axis == 3 {
-                        let ray = Ray::new(centre, d.normalize());
-                        if tracer.closest_hit(&ray, f32::INFINITY).is_none() {
-                            misses += 1;
+        let target = lo + size * Vec3::new(0.5, 0.35, 0.5);
+        let tilt = 20f32.to_radians().tan();
+        let mut best: Option<((usize, f32, f32), Camera)> = None;
+        for fy in [0.8, 0.55] {
+            for fz in [0.1, 0.5, 0.9] {
+                for fx in [0.1, 0.5, 0.9] {
+                    let eye = lo + size * Vec3::new(fx, fy, fz);
+                    if !crate::placement::is_free(tracer, eye, EYE_CLEARANCE) {
+                        continue;
+                    }
+                    let mut targets = vec![target];
+                    for d in [Vec3::X, Vec3::NEG_X, Vec3::Z, Vec3::NEG_Z] {
+                        targets.push(eye + d - Vec3::Y * tilt);
+                    }
+                    for t in targets {
+                        let Ok(cam) = Camera::new(eye, t, DEFAULT_FOV_DEGREES) else {
+                            continue;
+                        };
+                        let n = fits(&cam);
+                        if n == 0 {
+                            continue;
+                        }
+                        let (enclosed, depth) = cam.openness(tracer, aspect, diag);
+                        let score = (n, enclosed, depth);
+                        let better = match &best {
+                            None => true,
+                            Some((b, _)) => score.partial_cmp(b).is_some_and(|o| o.is_gt()),
+                        };
+                        if better {
+                            best = Some((score, cam));
                         }
                     }
                 }
             }
         }
-        let target = lo + size * Vec3::new(0.5, 0.35, 0.5);
-        if misses > 0 {
-            let eye = centre + (size * Vec3::new(0.5, 0.5, 0.5)) * Vec3::new(1.6, 1.3, 1.6);
-            return Camera {
-                eye,
-                target: centre,
-                fov_y_degrees: DEFAULT_FOV_DEGREES,
-            };
+        best.map(|(_, c)| c)
+    }
+
+    /// True when `p` is in front of the camera, inside the frame of an
+    /// image of `aspect`, and no surface lies between the eye and it.
+    pub fn sees(&self, tracer: &Tracer, p: Vec3, aspect: f32) -> bool {
+        let v = self.to_view(p);
+        if v.z <= 0.0 {
+            return false;
         }
-        let mut best: Option<(f32, Camera)> = None;
-        for (fx, fz) in [(0.94, 0.94), (0.06, 0.94), (0.94, 0.06), (0.06, 0.06)] {
-            let eye = lo + size * Vec3::new(fx, 0.85, fz);
-            if crate::placement::inside_geometry(tracer, eye) {
-                continue;
-            }
-            let cam = Camera {
-                eye,
-                target,
-                fov_y_degrees: DEFAULT_FOV_DEGREES,
-            };
-            let (w, h) = ((90.0 * aspect).round().max(1.0) as u32, 90u32);
-            let mut sum = 0.0;
-            for j in 0..9 {
-                for i in 0..16 {
-                    let x = (i as f32 + 0.5) / 16.0 * w as f32;
-                    let y = (j as f32 + 0.5) / 9.0 * h as f32;
-                    let ray = cam.ray(x, y, w, h);
-                    sum += tracer
-                        .closest_hit(&ray, diag)
-                        .map_or(diag, |hit| hit.t.min(diag));
+        let th = self.half_height();
+        if (v.x / v.z).abs() > th * aspect || (v.y / v.z).abs() > th {
+            return false;
+        }
+        let d = p - self.eye;
+        !tracer.occluded_ray(&Ray::new(self.eye, d), 0.99)
+    }
+
+    /// The share of 16 × 9 probe rays of this view that hit a surface
+    /// within `diag`, and their mean depth (misses count `diag`).
+    fn openness(&self, tracer: &Tracer, aspect: f32, diag: f32) -> (f32, f32) {
+        let (w, h) = ((90.0 * aspect).round().max(1.0) as u32, 90u32);
+        let (mut hits, mut sum) = (0usize, 0.0f32);
+        for j in 0..9 {
+            for i in 0..16 {
+                let x = (i as f32 + 0.5) / 16.0 * w as f32;
+                let y = (j as f32 + 0.5) / 9.0 * h as f32;
+                match tracer.closest_hit(&self.ray(x, y, w, h), diag) {
+                    Some(hit) => {
+                        hits += 1;
+                        sum += hit.t.min(diag);
+                    }
+                    None => sum += diag,
                 }
             }
-            let better = match &best {
-                None => true,
-                Some((s, _)) => sum > *s,
-            };
-            if better {
-                best = Some((sum, cam));
-            }
         }
-        best.map(|(_, c)| c).unwrap_or(Camera {
-            eye: lo + size * Vec3::new(0.94, 0.85, 0.94),
-            target,
-            fov_y_degrees: DEFAULT_FOV_DEGREES,
-        })
+        (hits as f32 / 144.0, sum / 144.0)
     }
 }

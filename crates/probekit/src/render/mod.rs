@@ -14,7 +14,8 @@
 //!    by lightmaps in an engine, the test object keeps the weighting);
 //!    the test object (albedo [`RenderSettings::albedo`]) is lit only by the
 //!    probes.
-//! 2. **path traced** — the same, with the test object's irradiance from
+//! 2. **objects path traced** — the same (the scene still lit by the
+//!    probes: the label says so), with the test object's irradiance from
 //!    ground-truth path tracing ([`Baker::reference_irradiance`]; how it is
 //!    sampled and interpolated: [`objects`]). The object is not in the scene
 //!    for either: it receives light and casts no shadow, as probes see it.
@@ -97,6 +98,13 @@ pub enum RenderError {
     /// The PNG could not be written.
     #[error(transparent)]
     Write(#[from] PlotError),
+    /// No view has room for the test objects: no automatic view from free
+    /// space inside the bake box, or not the given camera's.
+    #[error(
+        "no place for the test objects: no view from free space inside the bake box (or from \
+         the given camera) has room for them in free space"
+    )]
+    NoView,
 }
 
 /// The test object placed in the scene.
@@ -431,9 +439,50 @@ pub fn render(
     let tracer = baker.tracer();
     let bake_box = scene.bake_box();
     let aspect = w as f32 / h as f32;
+    bake_box
+        .check_bake_box()
+        .map_err(|e| RenderError::BadSettings(e.to_string()))?;
+    if let ObjectKind::Spheres {
+        radius, normals, ..
+    } = &settings.object
+    {
+        if *normals < 4 || !(radius.is_finite() && *radius > 0.0) {
+            return Err(RenderError::BadSettings(
+                "spheres need a positive radius and at least 4 normals".into(),
+            ));
+        }
+    }
+    let sphere_radius = match &settings.object {
+        ObjectKind::Spheres { radius, .. } => {
+            radius.min(0.08 * bake_box.size().min_element().max(1e-3))
+        }
+        ObjectKind::Mesh(_) => 0.0,
+    };
+    let mesh_scene = match &settings.object {
+        ObjectKind::Mesh(path) => Some(Scene::load(path)?),
+        ObjectKind::Spheres { .. } => None,
+    };
+    // What a view can show: the spheres it has room for, or whether the
+    // mesh's centre is in sight and in frame.
+    let fits = |cam: &Camera| -> usize {
+        match (&settings.object, &mesh_scene) {
+            (ObjectKind::Spheres { grid, .. }, _) => place_spheres(
+                tracer,
+                cam,
+                aspect,
+                &bake_box,
+                sphere_radius,
+                grid.0,
+                grid.1,
+            )
+            .len(),
+            (_, Some(m)) => usize::from(cam.sees(tracer, m.bounds.center(), aspect)),
+            _ => 0,
+        }
+    };
     let camera = match settings.camera {
         Some(c) => Camera::new(c.eye, c.target, c.fov_y_degrees)?,
-        None => Camera::auto(tracer, &bake_box, aspect),
+        None => Camera::auto(tracer, &bake_box, aspect, &fits).ok_or(RenderError::NoView)?,
     };
     let refs = ReferenceSettings {
         relative_precision: 0.01,
@@ -443,26 +492,20 @@ pub fn render(
         seed: settings.seed,
         ..ReferenceSettings::default()
     };
-    let mut warnings = Vec::new();
-    let mesh_scene;
-    let (object, spheres, truth_total) = match &settings.object {
-        ObjectKind::Spheres {
-            grid,
-            radius,
-            normals,
-        } => {
-            if *normals < 4 || !(radius.is_finite() && *radius > 0.0) {
-                return Err(RenderError::BadSettings(
-                    "spheres need a positive radius and at least 4 normals".into(),
-                ));
-            }
-            let r = radius.min(0.08 * bake_box.size().min_element().max(1e-3));
-            let spheres = place_spheres(tracer, &camera, aspect, &bake_box, r, grid.0, grid.1);
+    let warnings = Vec::new();
+    let (object, spheres, truth_total) = match (&settings.object, &mesh_scene) {
+        (ObjectKind::Spheres { grid, normals, .. }, _) => {
+            let spheres = place_spheres(
+                tracer,
+                &camera,
+                aspect,
+                &bake_box,
+                sphere_radius,
+                grid.0,
+                grid.1,
+            );
             if spheres.is_empty() {
-                warnings.push(
-                    "no free place for the test spheres in view; the picture shows the scene only"
-                        .to_string(),
-                );
+                return Err(RenderError::NoView);
             }
             let total = spheres.len() * normals + h as usize;
             let obj = TestObject::spheres(&baker, spheres.clone(), *normals, &refs, &|d| {
@@ -470,10 +513,15 @@ pub fn render(
             })?;
             (obj, spheres, spheres_total(total, h))
         }
-        ObjectKind::Mesh(path) => {
-            mesh_scene = Scene::load(path)?;
+        (ObjectKind::Mesh(path), None) => {
+            return Err(RenderError::BadSettings(format!(
+                "test mesh {} was not loaded",
+                path.display()
+            )))
+        }
+        (ObjectKind::Mesh(_), Some(mesh_scene)) => {
             let total = mesh_scene.triangles.len() * 3 + h as usize;
-            let obj = TestObject::mesh(&baker, &mesh_scene, &refs, &|d| {
+            let obj = TestObject::mesh(&baker, mesh_scene, &refs, &|d| {
                 progress(d.min(total), total)
             })?;
             (obj, Vec::new(), spheres_total(total, h))
@@ -766,9 +814,22 @@ fn compose(
             img.put_pixel(2 * (w + GAP) + x, top + y, to_srgb(e));
         }
     }
-    for (k, name) in ["probes", "path traced", "error"].iter().enumerate() {
+    // The middle panel path-traces the test objects only; the scene around
+    // them is lit by the probes in both panels (module docs).
+    for (k, name) in ["probes", "objects path traced", "error"]
+        .iter()
+        .enumerate()
+    {
         draw_text(&mut img, (k as u32 * (w + GAP)) as i64 + 4, 2, name, s, FG);
     }
+    draw_text(
+        &mut img,
+        (w + GAP) as i64 + 4,
+        (top + h + 4) as i64,
+        "scene: probes",
+        s,
+        FG,
+    );
     // Footer: colour bar under the error panel, numbers below it.
     let (bx, by) = (2 * (w + GAP) + 4, top + h + 4);
     let bw = w.saturating_sub(8).max(1);

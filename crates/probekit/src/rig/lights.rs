@@ -471,6 +471,10 @@ pub struct SceneLights {
     /// One line per thing the rig does not model (emissive triangles, the
     /// environment, degenerate lights), for the caller to print.
     pub warnings: Vec<String>,
+    /// The scene's lighting hash ([`Scene::lighting_hash_hex`]) when the
+    /// lights came from a loaded scene (not a built-in light set), to check
+    /// a probe file against.
+    pub lighting_hash: Option<String>,
 }
 
 /// Converts one scene light ([`crate::scene::Light`], units of
@@ -517,7 +521,10 @@ pub fn from_scene_light(l: &crate::scene::Light) -> Option<Light> {
 /// as a [`super::source::ProbeSource`] instead).
 pub fn lights_from_scene(scene: &Scene) -> SceneLights {
     let name = scene.source.display();
-    let mut out = SceneLights::default();
+    let mut out = SceneLights {
+        lighting_hash: Some(scene.lighting_hash_hex()),
+        ..SceneLights::default()
+    };
     for (i, l) in scene.lights.iter().enumerate() {
         match from_scene_light(l) {
             Some(r) => out.lights.push(r),

@@ -36,7 +36,7 @@ pub fn load_mesh(name: &str) -> Result<Mesh, RigSetupError> {
 pub fn load_lights(scene: &str) -> Result<SceneLights, RigSetupError> {
     let own = |lights| SceneLights {
         lights,
-        warnings: Vec::new(),
+        ..SceneLights::default()
     };
     match scene {
         "builtin:rig-demo" => Ok(own(rig_demo_lights())),

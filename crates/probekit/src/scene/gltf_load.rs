@@ -19,6 +19,21 @@ pub(crate) fn load(path: &Path) -> Result<Parts, SceneError> {
         path: path.into(),
         message,
     };
+    // A `.glb` must start with the binary container's magic; else the glTF
+    // crate would parse it as JSON and report a JSON error.
+    let is_glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if is_glb {
+        let mut magic = [0u8; 4];
+        let read = std::fs::File::open(path)
+            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut magic));
+        if read.is_err() || &magic != b"glTF" {
+            return Err(gltf_err(
+                "not a binary glTF (bad magic: a .glb file starts with \"glTF\")".into(),
+            ));
+        }
+    }
     // Open the document first so a missing external buffer or image is reported by name.
     let doc = gltf::Gltf::open(path).map_err(|e| gltf_err(e.to_string()))?;
     let base = path.parent().unwrap_or(Path::new("."));

@@ -87,6 +87,50 @@ impl Aabb {
     pub fn center(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
+
+    /// Checks that the box can hold a bake: finite, and longer than 0 along
+    /// every axis. [`Aabb::EMPTY`] (what [`Scene::bake_box`] gives for a
+    /// scene without geometry and without a `[bake] box`) is refused as
+    /// [`BakeBoxError::NoGeometry`]. Every placement, volume and evaluation
+    /// checks its box with this before any work, so a flat scene (one floor
+    /// quad) is refused the same way everywhere.
+    pub fn check_bake_box(&self) -> Result<(), BakeBoxError> {
+        if *self == Aabb::EMPTY {
+            return Err(BakeBoxError::NoGeometry);
+        }
+        let size = self.size();
+        if !(self.min.is_finite() && self.max.is_finite() && size.min_element() > 0.0) {
+            return Err(BakeBoxError::Flat {
+                min: self.min,
+                max: self.max,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why a box cannot hold a bake ([`Aabb::check_bake_box`]).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BakeBoxError {
+    /// The scene has no geometry to bound a bake and names no `[bake] box`.
+    #[error(
+        "no bake box: the scene has no geometry to take one from; give one as `[bake] box` in \
+         the scene file"
+    )]
+    NoGeometry,
+    /// The box is not finite or has no extent along some axis (a scene of one
+    /// floor quad, without a `[bake] box`).
+    #[error(
+        "the bake box {min} – {max} is empty or flat (every side must be longer than 0); \
+         give a `[bake] box` in the scene file"
+    )]
+    Flat {
+        /// Smallest corner, metres.
+        min: Vec3,
+        /// Largest corner, metres.
+        max: Vec3,
+    },
 }
 
 /// One triangle in world space, with everything needed to shade a hit on it.
@@ -520,12 +564,6 @@ pub enum SceneError {
         /// The mesh (object) name.
         mesh: String,
     },
-    /// No triangles left after loading (and dropping degenerate ones).
-    #[error("{path}: the scene has no (non-degenerate) triangles")]
-    Empty {
-        /// The file.
-        path: PathBuf,
-    },
 }
 
 /// A loaded scene: world-space triangles, materials, lights, environment, bake settings, regions.
@@ -759,16 +797,23 @@ impl Scene {
         }
     }
 
-    /// A stable 64-bit hash of the loaded content: FNV-1a (64-bit, offset basis
-    /// 0xcbf29ce484222325, prime 0x100000001b3) over the little-endian bytes of, in order:
-    /// every triangle (9 position, 9 normal, 6 uv floats, material u32), every material (name
-    /// bytes, base colour, alpha, alpha mode tag + cutoff, emissive, texture indices or u32::MAX,
-    /// double-sided byte), every texture (width, height, texels), every light (kind tag,
-    /// position, direction, colour, intensity, radius, angles, group name), the environment
-    /// (colour, map path as UTF-8, intensity, rotation), bake settings and regions. The source
-    /// path and warnings are not hashed, so the same content loaded from another folder hashes
-    /// the same (except for the environment map path, which is content).
-    pub fn content_hash(&self) -> u64 {
+    /// The **lighting hash**: a stable 64-bit hash of what lights the probes and nothing
+    /// else, so that two scenes with the same hash give the same light anywhere. FNV-1a
+    /// (64-bit, offset basis 0xcbf29ce484222325, prime 0x100000001b3) over the little-endian
+    /// bytes of, in order: every triangle (9 position, 9 normal, 6 uv floats, material u32),
+    /// every material (name bytes, base colour, alpha, alpha mode tag + cutoff, emissive,
+    /// texture indices or u32::MAX, double-sided byte), every texture (width, height, texels),
+    /// every light (kind tag, position, direction, colour, intensity, radius, angles, group
+    /// name), the environment (colour, intensity, rotation, and the map file's bytes — by
+    /// content, not by path).
+    ///
+    /// Not hashed: where the scene was loaded from (a relative and an absolute path, or a run
+    /// from another folder, hash the same), warnings, the `[bake]` table (box, samples,
+    /// bounces, seed: how to bake, not what is lit) and `[[region]]`s (names for evaluation).
+    /// A file baked from the scene stores this hash; `eval`, `render` and `rig --probes`
+    /// refuse a scene whose hash differs. An environment map that cannot be read hashes by
+    /// its path (loading it will fail with its own error).
+    pub fn lighting_hash(&self) -> u64 {
         let mut h = Fnv1a::new();
         h.u64(self.triangles.len() as u64);
         for t in &self.triangles {
@@ -830,32 +875,27 @@ impl Scene {
         let e = &self.environment;
         h.vec3(e.color);
         match &e.map {
-            Some(p) => {
-                h.u32(1);
-                h.str(&p.to_string_lossy())
-            }
+            Some(p) => match std::fs::read(p) {
+                Ok(bytes) => {
+                    h.u32(1);
+                    h.u64(bytes.len() as u64);
+                    h.bytes(&bytes)
+                }
+                Err(_) => {
+                    h.u32(2);
+                    h.str(&p.to_string_lossy())
+                }
+            },
             None => h.u32(0),
         }
         h.f32(e.intensity);
         h.f32(e.rotation_y_degrees);
-        match self.bake.r#box {
-            Some(b) => {
-                h.u32(1);
-                h.vec3(b.min);
-                h.vec3(b.max)
-            }
-            None => h.u32(0),
-        }
-        h.u64(self.bake.samples.map_or(u64::MAX, u64::from));
-        h.u64(self.bake.bounces.map_or(u64::MAX, u64::from));
-        h.u64(self.bake.seed.unwrap_or(u64::MAX));
-        h.u64(self.regions.len() as u64);
-        for r in &self.regions {
-            h.str(&r.name);
-            h.vec3(r.min);
-            h.vec3(r.max);
-        }
         h.0
+    }
+
+    /// [`Scene::lighting_hash`] as 16 lowercase hex digits, as files store it.
+    pub fn lighting_hash_hex(&self) -> String {
+        format!("{:016x}", self.lighting_hash())
     }
 
     /// Finalises loaded parts: validates positions, drops degenerate triangles, checks winding,
@@ -934,9 +974,6 @@ impl Scene {
             if count > 0 {
                 objs.push(MeshObject { name, first, count });
             }
-        }
-        if triangles.is_empty() {
-            return Err(SceneError::Empty { path: path.into() });
         }
         let mut bounds = Aabb::EMPTY;
         for t in &triangles {

@@ -98,9 +98,6 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     };
 
     let mut parts = Parts::default();
-    if file.mesh.is_empty() {
-        return Err(bad("no [[mesh]] entries".into()));
-    }
     for (i, m) in file.mesh.iter().enumerate() {
         let what = format!("mesh {} ('{}')", i + 1, m.path);
         let mesh_path = base.join(&m.path);

@@ -170,10 +170,8 @@ pub fn relative_difference(a: &[Vec3], b: &[Vec3], reference: &[Vec3]) -> f32 {
 }
 
 fn check_box(min: Vec3, max: Vec3) -> Result<(), VolumeBuildError> {
-    if !(min.is_finite() && max.is_finite()) || (0..3).any(|a| max[a] <= min[a]) {
-        return Err(VolumeBuildError::BadBox);
-    }
-    Ok(())
+    // A box given inverted is refused too (`Aabb::new` would reorder it).
+    Ok(crate::scene::Aabb { min, max }.check_bake_box()?)
 }
 
 /// Uniform grid with `resolution` probes per axis (each ≥ 2) over the box,

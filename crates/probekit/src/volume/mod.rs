@@ -31,9 +31,10 @@ use crate::format::FormatError;
 /// Why a volume cannot be built.
 #[derive(Debug, thiserror::Error)]
 pub enum VolumeBuildError {
-    /// The box is empty, inverted or not finite.
-    #[error("volume box must be finite with max > min on every axis")]
-    BadBox,
+    /// The box is empty, inverted, flat or not finite
+    /// ([`crate::scene::Aabb::check_bake_box`]).
+    #[error(transparent)]
+    BadBox(#[from] crate::scene::BakeBoxError),
     /// A resolution axis below 2.
     #[error("resolution {0:?}: every axis needs at least 2 probes")]
     BadResolution([u32; 3]),

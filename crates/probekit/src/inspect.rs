@@ -1,0 +1,224 @@
+//! What a `.probes` file holds, for `probekit inspect`: a typed summary
+//! ([`FileSummary`]) that serialises to JSON and prints as a few lines for
+//! people ([`FileSummary`]'s `Display`).
+
+use crate::format::{layout::VALIDITY_INVALID, BakeMetadata, FormatError, ProbeFile};
+use crate::format::{Placement, ProbeFileKind};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A probe file in numbers. Kind-specific parts are `None` for other kinds.
+#[derive(Clone, Debug, Serialize)]
+pub struct FileSummary {
+    /// `cloud`, `cloud-part` (a shard part of a sharded bake, without
+    /// tetrahedra), `volume` or `rigs` (irradiance rigs without probes).
+    pub kind: &'static str,
+    /// Probes (volume samples).
+    pub probes: usize,
+    /// Tetrahedra (clouds).
+    pub tetrahedra: usize,
+    /// Hull tetrahedra flat up to rounding ([`crate::cloud::hull_slivers`]).
+    pub hull_slivers: usize,
+    /// Probes at the position of another that no tetrahedron uses
+    /// ([`crate::cloud::unused_probes`]).
+    pub unused_probes: usize,
+    /// `sh{order}/{codec}`.
+    pub basis: String,
+    /// Probes flagged invalid by the capture.
+    pub invalid: usize,
+    /// File size in bytes.
+    pub bytes: u64,
+    /// Bytes per section, by section name.
+    pub bytes_by_section: BTreeMap<String, u64>,
+    /// Light group names (`LGRP`).
+    pub groups: Vec<String>,
+    /// Distance moments (`VISM`): `{"resolution","max_distance"}`.
+    pub visibility: Option<serde_json::Value>,
+    /// Cell visibility: `{"subdivision","cells","stored_cells","planes"}`.
+    pub cell_visibility: Option<serde_json::Value>,
+    /// Fitted probe weights: `{"min","median","max","below_half","above_two",
+    /// "brightness_exponent","directional_exponent"}`.
+    pub probe_weights: Option<serde_json::Value>,
+    /// Placement method and parameters, as recorded.
+    pub placement: Option<Placement>,
+    /// The scene the file was baked from, as it was named.
+    pub scene: Option<String>,
+    /// The scene's lighting hash, as recorded.
+    pub scene_hash: Option<String>,
+    /// A shard part's `{"shard","shards","first_index","count","total"}`.
+    pub part: Option<serde_json::Value>,
+    /// Irradiance rigs in the file.
+    pub rigs: usize,
+    /// A volume's `leaves`, `resolution`, `roots`, `max_depth` and
+    /// `gradients` ([`crate::volume::inspect_json`]), as top-level keys.
+    #[serde(flatten)]
+    pub volume: Option<BTreeMap<String, serde_json::Value>>,
+}
+
+/// Summarises `file`.
+pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
+    let by = file.bytes_by_section()?;
+    let bytes = by.values().sum();
+    let meta = BakeMetadata::from_json(&file.metadata);
+    let part = serde_json::from_str::<serde_json::Value>(&file.metadata)
+        .ok()
+        .and_then(|v| v.get("part").cloned());
+    let invalid = file.validity.as_ref().map_or(0, |v| {
+        v.iter().filter(|x| x.flags & VALIDITY_INVALID != 0).count()
+    });
+    let kind = match (file.kind, &part) {
+        (ProbeFileKind::Volume, _) => "volume",
+        (ProbeFileKind::Rig, _) if file.positions.is_empty() => "rigs",
+        (_, Some(_)) => "cloud-part",
+        _ => "cloud",
+    };
+    let volume = if kind == "volume" {
+        crate::volume::inspect_json(file).ok().and_then(|v| {
+            let mut o: BTreeMap<String, serde_json::Value> = serde_json::from_value(v).ok()?;
+            for k in ["kind", "probes", "basis", "bytes", "bytes_by_section"] {
+                o.remove(k);
+            }
+            Some(o)
+        })
+    } else {
+        None
+    };
+    Ok(FileSummary {
+        kind,
+        probes: file.positions.len(),
+        tetrahedra: file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
+        hull_slivers: file.tetrahedra.as_ref().map_or(0, |t| {
+            crate::cloud::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
+        }),
+        unused_probes: file.tetrahedra.as_ref().map_or(0, |t| {
+            crate::cloud::unused_probes(file.positions.len(), &t.vertices).len()
+        }),
+        basis: format!(
+            "sh{}/{}",
+            file.coefficients.order,
+            file.coefficients.codec.name()
+        ),
+        invalid,
+        bytes,
+        bytes_by_section: by.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        groups: file.group_names().map(str::to_string).collect(),
+        visibility: file.visibility.as_ref().map(
+            |v| serde_json::json!({ "resolution": v.resolution, "max_distance": v.max_distance }),
+        ),
+        cell_visibility: file.cell_visibility.as_ref().map(|c| {
+            serde_json::json!({
+                "subdivision": c.subdivision(),
+                "cells": c.tet_count() + c.hull_face_count(),
+                "stored_cells": c.record_count(),
+                "planes": file.cell_planes.as_ref().map_or(0, |p| p.len()),
+            })
+        }),
+        probe_weights: file
+            .probe_weights
+            .as_ref()
+            .filter(|w| !w.is_empty())
+            .map(|w| {
+                let mut s = w.clone();
+                s.sort_by(f32::total_cmp);
+                serde_json::json!({
+                    "min": s[0],
+                    "median": s[s.len() / 2],
+                    "max": s[s.len() - 1],
+                    "below_half": s.iter().filter(|&&x| x < 0.5).count(),
+                    "above_two": s.iter().filter(|&&x| x > 2.0).count(),
+                    "brightness_exponent": file.brightness_exponent,
+                    "directional_exponent": file.directional_exponent,
+                })
+            }),
+        placement: meta.as_ref().map(|m| m.placement.clone()),
+        scene: meta
+            .as_ref()
+            .map(|m| m.scene.clone())
+            .filter(|s| !s.is_empty()),
+        scene_hash: meta
+            .as_ref()
+            .map(|m| m.scene_hash.clone())
+            .filter(|s| !s.is_empty()),
+        part,
+        rigs: file.rigs.len(),
+        volume,
+    })
+}
+
+impl fmt::Display for FileSummary {
+    /// A few lines for people: kind, counts, basis and size; where it came
+    /// from; the blend data it carries.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let kind = match self.kind {
+            "cloud" => "probe cloud",
+            "cloud-part" => "part of a sharded probe cloud (merge the parts)",
+            "volume" => "irradiance volume",
+            _ => "irradiance rigs",
+        };
+        write!(f, "{kind}: ")?;
+        if self.kind == "rigs" {
+            write!(f, "{} rig(s)", self.rigs)?;
+        } else {
+            write!(f, "{} probes", self.probes)?;
+            if self.invalid > 0 {
+                write!(f, " ({} invalid)", self.invalid)?;
+            }
+            if self.tetrahedra > 0 {
+                write!(f, ", {} tetrahedra", self.tetrahedra)?;
+            }
+            if let Some(v) = &self.volume {
+                if let Some(l) = v.get("leaves") {
+                    write!(f, ", {l} leaves")?;
+                }
+            }
+            write!(f, ", {}", self.basis.replace('/', " "))?;
+        }
+        writeln!(f, ", {:.1} KiB", self.bytes as f64 / 1024.0)?;
+        if let Some(s) = &self.scene {
+            write!(f, "  baked from {s}")?;
+            if let Some(h) = &self.scene_hash {
+                write!(f, " (lighting hash {h})")?;
+            }
+            writeln!(f)?;
+        }
+        if let Some(p) = &self.placement {
+            writeln!(f, "  placement: {}", p.method)?;
+        }
+        let mut blend = Vec::new();
+        if let Some(v) = &self.visibility {
+            blend.push(format!("distance moments {}²", v["resolution"]));
+        }
+        if let Some(c) = &self.cell_visibility {
+            blend.push(format!(
+                "cell visibility k={} ({} of {} cells stored, {} planes)",
+                c["subdivision"], c["stored_cells"], c["cells"], c["planes"]
+            ));
+        }
+        if let Some(w) = &self.probe_weights {
+            blend.push(format!(
+                "probe weights (median {:.2}, brightness exponent {}, directional {})",
+                w["median"].as_f64().unwrap_or(0.0),
+                w["brightness_exponent"],
+                w["directional_exponent"]
+            ));
+        }
+        if !blend.is_empty() {
+            writeln!(f, "  blend data: {}", blend.join("; "))?;
+        }
+        if !self.groups.is_empty() {
+            writeln!(f, "  light groups: {}", self.groups.join(", "))?;
+        }
+        if self.rigs > 0 && self.kind != "rigs" {
+            writeln!(f, "  {} irradiance rig(s)", self.rigs)?;
+        }
+        if self.hull_slivers > 0 || self.unused_probes > 0 {
+            writeln!(
+                f,
+                "  {} hull slivers, {} unused probes",
+                self.hull_slivers, self.unused_probes
+            )?;
+        }
+        Ok(())
+    }
+}
