@@ -10,8 +10,9 @@
 //! * Without `std` the crate is `#![no_std]` + `alloc`; enable `libm` for the
 //!   float functions `core` lacks (`cargo build -p probekit-runtime
 //!   --no-default-features --features libm`). Loading from bytes and every
-//!   query work the same. (The `probekit-sh` dependency itself still needs
-//!   std today, so a target without std is not reachable yet.)
+//!   query work the same. Without `std` no crate in the dependency graph
+//!   uses std (`probekit-sh`, `glam`, `half` and `thiserror` are built
+//!   without theirs), so the crate links on targets that have no std.
 
 #![warn(missing_docs)]
 // Without the default `std` feature the crate is `no_std` + `alloc` (path
@@ -38,42 +39,41 @@ mod prelude {
     pub(crate) use alloc::vec::Vec;
 }
 
-/// Float functions that `core` lacks: std's methods, or `libm` without std.
+/// Float functions that `core` lacks: probekit-sh's [`FloatMath`], which is
+/// std's methods with `std` and `libm`'s without.
+///
+/// [`FloatMath`]: probekit_sh::math::FloatMath
 mod math {
+    use probekit_sh::math::FloatMath;
+
     /// `x.floor()`.
     #[inline]
     pub(crate) fn floor(x: f32) -> f32 {
-        #[cfg(feature = "std")]
-        return x.floor();
-        #[cfg(not(feature = "std"))]
-        return libm::floorf(x);
+        FloatMath::floor(x)
     }
 
     /// `x.sqrt()`.
     #[inline]
     pub(crate) fn sqrt(x: f32) -> f32 {
-        #[cfg(feature = "std")]
-        return x.sqrt();
-        #[cfg(not(feature = "std"))]
-        return libm::sqrtf(x);
+        FloatMath::sqrt(x)
     }
 
     /// `x.cbrt()`.
     #[inline]
     pub(crate) fn cbrt(x: f32) -> f32 {
-        #[cfg(feature = "std")]
-        return x.cbrt();
-        #[cfg(not(feature = "std"))]
-        return libm::cbrtf(x);
+        FloatMath::cbrt(x)
     }
 
     /// `x.powf(y)`.
     #[inline]
     pub(crate) fn powf(x: f32, y: f32) -> f32 {
-        #[cfg(feature = "std")]
-        return x.powf(y);
-        #[cfg(not(feature = "std"))]
-        return libm::powf(x, y);
+        FloatMath::powf(x, y)
+    }
+
+    /// `x.powi(n)`.
+    #[inline]
+    pub(crate) fn powi(x: f32, n: i32) -> f32 {
+        FloatMath::powi(x, n)
     }
 }
 

@@ -491,9 +491,9 @@ impl Volume {
                 let w = h0[0] * h0[1] * h0[2];
                 wsum[0] += w;
                 let tan = [
-                    d.x * (1.0 - t[0]).powi(2) * h0[1] * h0[2],
-                    d.y * (1.0 - t[1]).powi(2) * h0[0] * h0[2],
-                    d.z * (1.0 - t[2]).powi(2) * h0[0] * h0[1],
+                    d.x * math::powi(1.0 - t[0], 2) * h0[1] * h0[2],
+                    d.y * math::powi(1.0 - t[1], 2) * h0[0] * h0[2],
+                    d.z * math::powi(1.0 - t[2], 2) * h0[0] * h0[1],
                 ];
                 let g = self.grads.as_ref().expect("checked by sample_sh");
                 let gx = &g[(s * 3) * n..(s * 3 + 1) * n];

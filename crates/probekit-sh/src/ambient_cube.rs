@@ -26,9 +26,12 @@
 
 use crate::basis::{eval_basis_f64, num_coeffs, MAX_COEFFS, MAX_ORDER};
 use crate::convolve::clamped_cosine_band;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use crate::numeric::{gauss_legendre, solve_dense};
+use alloc::boxed::Box;
 use glam::{DVec3, Vec3};
-use std::sync::OnceLock;
+use once_cell::race::OnceBox;
 
 /// Valve's ambient cube: irradiance (not divided by π, linear RGB) for the
 /// six axis directions, in the order +X, −X, +Y, −Y, +Z, −Z (seed 002).
@@ -64,7 +67,7 @@ fn weights_f64(n: DVec3) -> [f64; 6] {
 
 /// The closed-form Gram matrix `G_kk' = ∫ b_k b_k'` (module docs).
 fn gram() -> [f64; 36] {
-    use std::f64::consts::PI;
+    use core::f64::consts::PI;
     let mut g = [0.0f64; 36];
     for k in 0..6 {
         for j in 0..6 {
@@ -82,7 +85,7 @@ fn gram() -> [f64; 36] {
 
 /// `∫ b_k Y_j` for the six faces and all 64 SH coefficients (module docs).
 fn moments() -> &'static [[f64; MAX_COEFFS]; 6] {
-    static M: OnceLock<[[f64; MAX_COEFFS]; 6]> = OnceLock::new();
+    static M: OnceBox<[[f64; MAX_COEFFS]; 6]> = OnceBox::new();
     M.get_or_init(|| {
         let nodes = gauss_legendre(12, 0.0, 1.0);
         let nphi = 32;
@@ -97,17 +100,17 @@ fn moments() -> &'static [[f64; MAX_COEFFS]; 6] {
             for &(u, wu) in &nodes {
                 let s = (1.0 - u * u).max(0.0).sqrt();
                 for p in 0..nphi {
-                    let phi = 2.0 * std::f64::consts::PI * p as f64 / nphi as f64;
+                    let phi = 2.0 * core::f64::consts::PI * p as f64 / nphi as f64;
                     let d = e * u + (t1 * phi.cos() + t2 * phi.sin()) * s;
                     eval_basis_f64(MAX_ORDER, d, &mut y);
-                    let w = wu * 2.0 * std::f64::consts::PI / nphi as f64 * u * u;
+                    let w = wu * 2.0 * core::f64::consts::PI / nphi as f64 * u * u;
                     for (r, yj) in row.iter_mut().zip(y.iter()) {
                         *r += w * yj;
                     }
                 }
             }
         }
-        m
+        Box::new(m)
     })
 }
 

@@ -10,6 +10,8 @@
 //! An *order* is a number of bands: order `N` holds bands `l = 0..N`, that is
 //! `N²` coefficients. L1 is order 2 (4 coefficients), L2 is order 3 (9).
 
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use glam::Vec3;
 
 /// The largest supported order (number of bands): 8, i.e. `l = 0..=7`, 64 coefficients.
@@ -81,7 +83,7 @@ pub fn normalization(l: usize, m: i32) -> f64 {
     for k in (l - am + 1)..=(l + am) {
         ratio /= k as f64;
     }
-    ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI) * ratio).sqrt()
+    ((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI) * ratio).sqrt()
 }
 
 /// Evaluates all basis functions of `order` bands at unit direction `d` into
@@ -120,7 +122,7 @@ pub fn eval_basis_f64(order: usize, d: glam::DVec3, out: &mut [f64]) {
         cm[m] = x * cm[m - 1] - y * sm[m - 1];
         sm[m] = x * sm[m - 1] + y * cm[m - 1];
     }
-    let sqrt2 = std::f64::consts::SQRT_2;
+    let sqrt2 = core::f64::consts::SQRT_2;
     for m in 0..order {
         // P̃_m^m = (-1)^m (2m-1)!!
         let mut pmm = 1.0f64;

@@ -46,7 +46,10 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::ambient_cube::AmbientCube;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use crate::zh3::{shared_axis, zonal_projection, Zh3};
+use alloc::vec::Vec;
 use glam::Vec3;
 
 /// Bytes of a quantized L1 probe: 4 (DC RGB9E5) + 9 (snorm8) (seed 004).
@@ -73,8 +76,8 @@ pub enum CodecError {
     },
 }
 
-impl std::fmt::Display for CodecError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl core::fmt::Display for CodecError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             CodecError::Length { len, stride } => write!(
                 f,
@@ -84,7 +87,13 @@ impl std::fmt::Display for CodecError {
     }
 }
 
+#[cfg(feature = "std")]
 impl std::error::Error for CodecError {}
+
+// `core::error::Error` is the same trait (Rust 1.81+, as thiserror needs
+// without std).
+#[cfg(not(feature = "std"))]
+impl core::error::Error for CodecError {}
 
 /// Floor of log2 of a positive finite f32 (exact, from the bits).
 fn floor_log2(x: f32) -> i32 {

@@ -2,6 +2,8 @@
 
 use crate::basis::{eval_basis, num_coeffs, order_from_len, MAX_COEFFS, MAX_ORDER};
 use crate::convolve;
+use alloc::vec;
+use alloc::vec::Vec;
 use glam::Vec3;
 
 /// Linear-RGB **radiance** spherical harmonics of `order` bands (`order²`

@@ -7,13 +7,16 @@
 //! `Â_0 = π`, `Â_1 = 2π/3`, `Â_2 = π/4`, `Â_3 = 0`, `Â_4 = −π/24`, …
 
 use crate::basis::{eval_basis, num_coeffs, order_from_len, MAX_COEFFS};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use alloc::vec::Vec;
 use glam::Vec3;
 
 /// The clamped-cosine convolution factor `Â_l` for band `l` (Ramamoorthi &
 /// Hanrahan 2001, eq. 8 and 9), in f64: multiply band-`l` radiance coefficients
 /// by it to get irradiance coefficients.
 pub fn clamped_cosine_band(l: usize) -> f64 {
-    use std::f64::consts::PI;
+    use core::f64::consts::PI;
     match l {
         0 => PI,
         1 => 2.0 * PI / 3.0,
@@ -37,7 +40,7 @@ pub fn clamped_cosine_band(l: usize) -> f64 {
 /// coefficients `z_l` (coefficients of `Y_l0` of a kernel symmetric about +Z):
 /// band `l` of the result is `sqrt(4π/(2l+1)) · z_l` times band `l` of the input.
 pub fn zonal_band_factor(l: usize, z_l: f64) -> f64 {
-    (4.0 * std::f64::consts::PI / (2 * l + 1) as f64).sqrt() * z_l
+    (4.0 * core::f64::consts::PI / (2 * l + 1) as f64).sqrt() * z_l
 }
 
 /// Multiplies every coefficient of band `l` by `scales[l]`, in place.
@@ -91,17 +94,17 @@ pub fn irradiance(coeffs: &[Vec3], n: Vec3) -> Vec3 {
 #[inline]
 pub fn irradiance_l1(c: &[Vec3; 4], n: Vec3) -> Vec3 {
     use crate::basis::{Y00, Y1};
-    const A0: f32 = std::f32::consts::PI;
-    const A1: f32 = 2.0 * std::f32::consts::PI / 3.0;
+    const A0: f32 = core::f32::consts::PI;
+    const A1: f32 = 2.0 * core::f32::consts::PI / 3.0;
     c[0] * (A0 * Y00) + (c[1] * -n.y + c[2] * n.z + c[3] * -n.x) * (A1 * Y1)
 }
 
 /// Fast path: irradiance from L2 radiance SH (9 coefficients).
 #[inline]
 pub fn irradiance_l2(c: &[Vec3; 9], n: Vec3) -> Vec3 {
-    const A0: f32 = std::f32::consts::PI;
-    const A1: f32 = 2.0 * std::f32::consts::PI / 3.0;
-    const A2: f32 = std::f32::consts::PI / 4.0;
+    const A0: f32 = core::f32::consts::PI;
+    const A1: f32 = 2.0 * core::f32::consts::PI / 3.0;
+    const A2: f32 = core::f32::consts::PI / 4.0;
     let b = crate::basis::eval_l2(n);
     c[0] * (A0 * b[0])
         + (c[1] * b[1] + c[2] * b[2] + c[3] * b[3]) * A1

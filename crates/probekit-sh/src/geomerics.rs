@@ -30,6 +30,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::basis::Y00;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use glam::Vec3;
 
 /// Irradiance `E(n)` (not divided by π) for unit normal `n` from L1
@@ -54,7 +56,7 @@ fn geomerics_channel(c0: f32, v: Vec3, n: Vec3) -> f32 {
     if c0.is_nan() || c0 <= 0.0 || !c0.is_finite() {
         return 0.0;
     }
-    let r0 = std::f32::consts::PI * Y00 * c0;
+    let r0 = core::f32::consts::PI * Y00 * c0;
     let len = v.length();
     if len.is_nan() || len <= 0.0 || !len.is_finite() {
         return r0;

@@ -25,12 +25,14 @@
 
 use crate::convolve::irradiance;
 use crate::numeric::{fibonacci_hemisphere, solve_dense};
+use alloc::boxed::Box;
+use alloc::vec::Vec;
 use glam::{DVec3, Mat3, Vec3};
-use std::sync::OnceLock;
+use once_cell::race::OnceBox;
 
 const S23: f32 = 0.816_496_6; // sqrt(2/3)
 const S16: f32 = 0.408_248_3; // 1/sqrt(6)
-const S12: f32 = std::f32::consts::FRAC_1_SQRT_2;
+const S12: f32 = core::f32::consts::FRAC_1_SQRT_2;
 const S13: f32 = 0.577_350_26; // 1/sqrt(3)
 
 /// The three HL2 basis directions in tangent space (+Z = surface normal):
@@ -93,7 +95,7 @@ struct FitTable {
 }
 
 fn table() -> &'static FitTable {
-    static T: OnceLock<FitTable> = OnceLock::new();
+    static T: OnceBox<FitTable> = OnceBox::new();
     T.get_or_init(|| {
         let dirs = fibonacci_hemisphere(HL2_FIT_SAMPLES);
         let mut gram = [0.0f64; 9];
@@ -105,7 +107,7 @@ fn table() -> &'static FitTable {
                 }
             }
         }
-        FitTable { dirs, gram }
+        Box::new(FitTable { dirs, gram })
     })
 }
 

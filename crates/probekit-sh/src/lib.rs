@@ -3,8 +3,15 @@
 //! The math crate of probekit: real spherical harmonics (SH) of up to eight
 //! bands, projection, clamped-cosine convolution, evaluation of irradiance,
 //! and (in sibling modules) windowing, rotation, analytic lights, ZH3,
-//! Geomerics L1, the ambient cube, the HL2 basis and quantized codecs. It
-//! depends on `glam` only, so an engine's runtime can use it.
+//! Geomerics L1, the ambient cube, the HL2 basis and quantized codecs. Its
+//! dependencies (`glam`, `half`, `once_cell`; `libm` without std) are all
+//! `no_std`, so an engine's runtime can use it, with or without std.
+//!
+//! ## Features
+//! * `std` (default): std's float math and `std::error::Error`.
+//! * Without `std` the crate is `#![no_std]` + `alloc`; enable `libm` for the
+//!   float functions `core` lacks ([`math`]). Every function works the same;
+//!   float results can differ from std's in the last bit.
 //!
 //! ## Conventions (the single source; `docs/conventions.md` has worked examples)
 //!
@@ -27,6 +34,13 @@
 //!   `d = (cos lat·cos φ, sin lat, cos lat·sin φ)`.
 
 #![warn(missing_docs)]
+// Without the default `std` feature the crate is `no_std` + `alloc`.
+#![cfg_attr(not(feature = "std"), no_std)]
+
+extern crate alloc;
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("probekit-sh needs the `std` feature or, without std, the `libm` feature");
 
 pub mod ambient_cube;
 pub mod basis;
@@ -36,6 +50,7 @@ pub mod convolve;
 pub mod geomerics;
 pub mod hl2;
 pub mod lights;
+pub mod math;
 mod numeric;
 pub mod project;
 pub mod rotate;

@@ -50,8 +50,10 @@ pub use sphere::{
 };
 
 use crate::basis::{eval_basis, eval_l2, num_coeffs, MAX_COEFFS, MAX_ORDER};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use core::f64::consts::PI;
 use glam::Vec3;
-use std::f64::consts::PI;
 
 /// Checks `order` and the output length; the crate's convention is to panic on
 /// these programming errors (as [`crate::basis::eval_basis`] does).

@@ -5,6 +5,9 @@
 // Index loops over colour channels and SH coefficients read like the formulas.
 #![allow(clippy::needless_range_loop)]
 
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use alloc::vec::Vec;
 use glam::DVec3;
 
 #[cfg(test)]
@@ -19,7 +22,7 @@ pub(crate) fn fibonacci_sphere(n: usize) -> Vec<DVec3> {
 /// `n` Fibonacci points on the upper hemisphere `z > 0`, each standing for
 /// `2π/n` steradians.
 pub(crate) fn fibonacci_hemisphere(n: usize) -> Vec<DVec3> {
-    let ga = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let ga = core::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
         .map(|i| {
             let z = 1.0 - (i as f64 + 0.5) / n as f64;
@@ -36,7 +39,7 @@ pub(crate) fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         // Tricomi's initial guess for the i-th root of P_n.
-        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut x = (core::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
         let mut dp = 1.0;
         for _ in 0..100 {
             let (mut p0, mut p1) = (1.0f64, x);

@@ -15,6 +15,9 @@
 
 use crate::basis::{eval_basis_f64, num_coeffs, MAX_COEFFS};
 use crate::coeffs::ShRgb;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use alloc::vec::Vec;
 use glam::{DVec3, Vec3};
 
 /// The golden angle `π(3 − √5)` in radians.
@@ -71,7 +74,7 @@ pub fn project_fn(order: usize, f: impl Fn(Vec3) -> Vec3, samples: usize) -> ShR
             *a += v * *y;
         }
     }
-    let w = 4.0 * std::f64::consts::PI / samples as f64;
+    let w = 4.0 * core::f64::consts::PI / samples as f64;
     for (c, a) in out.coeffs_mut().iter_mut().zip(&acc[..nc]) {
         *c = (*a * w).as_vec3();
     }

@@ -22,6 +22,8 @@
 
 use crate::basis::{num_coeffs, order_from_len, MAX_ORDER, Y2_A, Y2_B, Y2_C};
 use crate::coeffs::ShRgb;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use glam::{DMat3, Mat3, Vec3};
 
 /// Offset of band `l`'s block in the packed storage: `Σ_{k<l} (2k+1)² = l(2l−1)(2l+1)/3`.
@@ -148,7 +150,7 @@ impl ShRotation {
                 }
             }
             store(&mut blocks, l, &cur);
-            std::mem::swap(&mut prev, &mut cur);
+            core::mem::swap(&mut prev, &mut cur);
         }
         Self { order, blocks }
     }

@@ -46,7 +46,10 @@
 
 use crate::basis::{eval_basis_f64, num_coeffs, order_from_len, MAX_COEFFS, MAX_ORDER};
 use crate::convolve::{clamped_cosine_band, scale_bands};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use crate::project::fibonacci_point_f64;
+use alloc::vec::Vec;
 use glam::{DVec3, Vec3};
 
 /// The family of a [`Window`]; the formulas are in the module docs.
@@ -141,7 +144,7 @@ impl Window {
     }
 
     fn factor_f64(&self, l: usize) -> f64 {
-        use std::f64::consts::PI;
+        use core::f64::consts::PI;
         if l == 0 {
             return 1.0;
         }
@@ -238,7 +241,7 @@ fn eval_f64(order: usize, c: &[f64], d: DVec3) -> f64 {
 fn refine(order: usize, c: &[f64], mut d: DVec3, mut v: f64, h0: f64) -> (f64, DVec3) {
     let mut h = h0;
     let dirs: [(f64, f64); 8] = {
-        let s = std::f64::consts::FRAC_1_SQRT_2;
+        let s = core::f64::consts::FRAC_1_SQRT_2;
         [
             (1.0, 0.0),
             (s, s),
@@ -297,7 +300,7 @@ pub fn min_over_sphere(coeffs: &[f32]) -> (f32, Vec3) {
 pub(crate) fn min_over_sphere_f64(order: usize, c: &[f64]) -> (f64, DVec3) {
     const K: usize = 6;
     let n = (64 * order * order).max(256);
-    let spacing = (4.0 * std::f64::consts::PI / n as f64).sqrt();
+    let spacing = (4.0 * core::f64::consts::PI / n as f64).sqrt();
     let cos_sep = (3.0 * spacing).cos();
     let mut cand = [(f64::INFINITY, DVec3::Z); K];
     let mut len = 0usize;

@@ -42,8 +42,12 @@
 use crate::basis::{eval_l2, Y2_A, Y2_B, Y2_C};
 use crate::coeffs::LUMINANCE;
 use crate::convolve::irradiance_l1;
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use crate::numeric::symmetric_eigen3;
 use crate::zonal::zh_to_sh;
+use alloc::vec;
+use alloc::vec::Vec;
 use glam::{DMat3, DVec3, Vec3};
 
 /// Stored ZH3 of linear-RGB **radiance** (seed 004): the L1 coefficients, one
@@ -91,7 +95,7 @@ impl Zh3 {
             self.axes[2].dot(n),
         );
         irradiance_l1(&self.l1, n)
-            + self.zonal * (3.0 * t * t - Vec3::ONE) * (std::f32::consts::FRAC_PI_4 * Y2_B)
+            + self.zonal * (3.0 * t * t - Vec3::ONE) * (core::f32::consts::FRAC_PI_4 * Y2_B)
     }
 }
 
@@ -134,7 +138,7 @@ pub fn shared_axis(l1: &[Vec3; 4]) -> Vec3 {
 pub fn zonal_projection(band2: &[f32; 5], axis: Vec3) -> f32 {
     let b = eval_l2(axis);
     let s: f32 = (0..5).map(|m| band2[m] * b[4 + m]).sum();
-    (4.0 * std::f32::consts::PI / 5.0).sqrt() * s
+    (4.0 * core::f32::consts::PI / 5.0).sqrt() * s
 }
 
 fn band2(l2: &[Vec3; 9], ch: usize) -> [f32; 5] {
@@ -200,9 +204,9 @@ impl AxisWeights {
 /// (exact by orthonormality; `Â_l = π, 2π/3, π/4`, Ramamoorthi & Hanrahan 2001).
 pub fn weighted_irradiance_error(a: &[Vec3; 9], b: &[Vec3; 9], weights: Vec3) -> f64 {
     let al = [
-        std::f64::consts::PI,
-        2.0 * std::f64::consts::PI / 3.0,
-        std::f64::consts::PI / 4.0,
+        core::f64::consts::PI,
+        2.0 * core::f64::consts::PI / 3.0,
+        core::f64::consts::PI / 4.0,
     ];
     let w = weights.as_dvec3();
     let mut e = 0.0;
@@ -232,7 +236,7 @@ pub fn zh3_axis_error(l2: &[Vec3; 9], axis: Vec3, w: AxisWeights) -> f64 {
         let z = zonal_projection_f64(&b, axis.as_dvec3());
         e += wv[ch] * (n2 - z * z);
     }
-    (std::f64::consts::PI / 4.0).powi(2) * e
+    (core::f64::consts::PI / 4.0).powi(2) * e
 }
 
 /// The band-2 function of one channel restricted to the unit sphere as a
@@ -261,7 +265,7 @@ fn zonal_projection_f64(band2: &[f32; 5], axis: DVec3) -> f64 {
     let b: [f64; 5] = band2.map(|x| x as f64);
     let m = band2_matrix(&b);
     let a = axis.normalize_or_zero();
-    (4.0 * std::f64::consts::PI / 5.0).sqrt() * a.dot(mat_vec(&m, a))
+    (4.0 * core::f64::consts::PI / 5.0).sqrt() * a.dot(mat_vec(&m, a))
 }
 
 /// Objective `F(a) = Σ w g(a)²` (g = band-2 value at a), its Euclidean
@@ -430,7 +434,7 @@ pub fn zh3_hallucinated_irradiance(l1: &[Vec3; 4], n: Vec3) -> Vec3 {
     let Some(a) = luminance_axis(l1) else {
         return e;
     };
-    let zh = y20(a.dot(n)) * std::f32::consts::FRAC_PI_4;
+    let zh = y20(a.dot(n)) * core::f32::consts::FRAC_PI_4;
     // Per-channel v·a for all three channels at once: v = (−c3, −c1, c2).
     let c0 = l1[0];
     let r = (l1[2] * a.z - l1[3] * a.x - l1[1] * a.y).abs() / c0;

@@ -4,6 +4,8 @@
 //! `c_lm = sqrt(4π/(2l+1)) · z_l · Y_lm(axis)`).
 
 use crate::basis::{eval_basis, num_coeffs, MAX_COEFFS};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
 use glam::Vec3;
 
 /// Rotates zonal coefficients `zh` (one per band, `zh.len()` bands) to unit
@@ -16,7 +18,7 @@ pub fn zh_to_sh(zh: &[f32], axis: Vec3, out: &mut [f32]) {
     let mut b = [0.0f32; MAX_COEFFS];
     eval_basis(order, axis, &mut b);
     for (l, z) in zh.iter().enumerate() {
-        let f = (4.0 * std::f32::consts::PI / (2 * l + 1) as f32).sqrt() * z;
+        let f = (4.0 * core::f32::consts::PI / (2 * l + 1) as f32).sqrt() * z;
         for i in l * l..(l + 1) * (l + 1) {
             out[i] = f * b[i];
         }
@@ -41,7 +43,7 @@ pub fn eval_zonal(zh: &[f32], cos_theta: f32) -> f32 {
                 p2
             }
         };
-        let k = ((2 * l + 1) as f64 / (4.0 * std::f64::consts::PI)).sqrt();
+        let k = ((2 * l + 1) as f64 / (4.0 * core::f64::consts::PI)).sqrt();
         sum += *z as f64 * k * p;
     }
     sum as f32

@@ -66,7 +66,7 @@ pub fn eval_basis_tangent_gradient(order: usize, d: Vec3, values: &mut [f32], gr
         cm[m] = x * cm[m - 1] - y * sm[m - 1];
         sm[m] = x * sm[m - 1] + y * cm[m - 1];
     }
-    let sqrt2 = std::f64::consts::SQRT_2;
+    let sqrt2 = core::f64::consts::SQRT_2;
     let mut vals = [0.0f64; MAX_COEFFS];
     let mut grd = [glam::DVec3::ZERO; MAX_COEFFS];
     for m in 0..order {

@@ -32,9 +32,13 @@
 
 use super::{basis_fast, check_order, zero};
 use crate::basis::{num_coeffs, MAX_COEFFS};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use alloc::boxed::Box;
+use alloc::vec::Vec;
+use core::f64::consts::PI;
 use glam::{DVec3, Vec3};
-use std::f64::consts::PI;
-use std::sync::OnceLock;
+use once_cell::race::OnceBox;
 
 /// Azimuth nodes (periodic trapezoid) when the foot of `p` is inside the disk.
 pub const N_PHI: usize = 48;
@@ -49,13 +53,13 @@ fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
 }
 
 fn gl_theta() -> &'static [(f64, f64)] {
-    static T: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
-    T.get_or_init(|| gauss_legendre(N_THETA))
+    static T: OnceBox<Vec<(f64, f64)>> = OnceBox::new();
+    T.get_or_init(|| Box::new(gauss_legendre(N_THETA)))
 }
 
 fn gl_t() -> &'static [(f64, f64)] {
-    static T: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
-    T.get_or_init(|| gauss_legendre(N_T))
+    static T: OnceBox<Vec<(f64, f64)>> = OnceBox::new();
+    T.get_or_init(|| Box::new(gauss_legendre(N_T)))
 }
 
 /// Radiance SH at `p` of a one-sided Lambertian disk light: centre `center`,

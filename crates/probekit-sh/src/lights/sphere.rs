@@ -32,8 +32,12 @@
 
 use super::{basis_fast, cap_band_factors, check_order, eval_basis_tangent_gradient, zero};
 use crate::basis::{num_coeffs, MAX_COEFFS, MAX_ORDER, Y00};
+#[cfg(not(feature = "std"))]
+use crate::math::FloatMath;
+use alloc::vec;
+use alloc::vec::Vec;
+use core::f64::consts::PI;
 use glam::{DVec3, Vec3};
-use std::f64::consts::PI;
 
 /// Zonal-harmonic coefficients (this crate's convention: coefficient of
 /// `Y_l0` about the light axis, as taken by [`crate::zonal::zh_to_sh`]) of a
@@ -95,7 +99,7 @@ fn view(order: usize, p: Vec3, center: Vec3, radius: f32, intensity: Vec3, grad:
     }
     if d <= r {
         if r > 0.0 {
-            return View::Inside(intensity / (std::f32::consts::PI * (r * r) as f32));
+            return View::Inside(intensity / (core::f32::consts::PI * (r * r) as f32));
         }
         return View::Nothing; // p at a zero-radius light: undefined
     }
@@ -181,7 +185,7 @@ pub fn sphere_light_sh(
         View::Nothing => zero(order, out),
         View::Inside(l) => {
             zero(order, out);
-            out[0] = l * (4.0 * std::f32::consts::PI * Y00);
+            out[0] = l * (4.0 * core::f32::consts::PI * Y00);
         }
         View::Outside { axis, f, .. } => {
             let mut b = [0.0f32; MAX_COEFFS];
@@ -229,7 +233,7 @@ pub fn sphere_light_sh_and_gradient(
         }
         View::Inside(l) => {
             zero(order, value);
-            value[0] = l * (4.0 * std::f32::consts::PI * Y00);
+            value[0] = l * (4.0 * core::f32::consts::PI * Y00);
             grad[..n].fill([Vec3::ZERO; 3]);
         }
         View::Outside { axis, d, f, df } => {
