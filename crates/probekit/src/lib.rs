@@ -13,6 +13,7 @@ pub mod format;
 pub mod inspect;
 pub mod placement;
 pub mod plot;
+pub mod recipe;
 pub mod render;
 pub mod rig;
 pub mod scene;
