@@ -19,7 +19,10 @@
 //! moments `∫ b_k Y_lm` are computed once (for all 64 coefficients of 8
 //! bands) by a product Gauss–Legendre (12 nodes in `cos θ` about the face axis)
 //! × uniform (32 nodes in φ) rule over the face's hemisphere, which is exact
-//! for these polynomials (degree ≤ 9).
+//! for these polynomials (degree ≤ 9). The same problem restricted to
+//! non-negative faces (for unsigned texture formats) is solved exactly as a
+//! small non-negative least-squares problem
+//! ([`AmbientCube::fit_from_sh_nonnegative`]).
 
 // Index loops over colour channels and SH coefficients read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -131,26 +134,40 @@ impl AmbientCube {
     /// ignored), minimising `∫_S² |E_cube − E_sh|²` over the whole sphere with
     /// the closed-form Gram matrix and exact moments of the module docs.
     pub fn fit_from_sh(radiance_sh: &[Vec3]) -> AmbientCube {
-        let mut order = 0;
-        while order < MAX_ORDER && num_coeffs(order + 1) <= radiance_sh.len() {
-            order += 1;
-        }
-        let m = moments();
+        let r = sh_moments(radiance_sh);
         let mut faces = [Vec3::ZERO; 6];
-        for ch in 0..3 {
-            let mut r = [0.0f64; 6];
-            for (k, rk) in r.iter_mut().enumerate() {
-                for l in 0..order {
-                    let a = clamped_cosine_band(l);
-                    for j in l * l..(l + 1) * (l + 1) {
-                        *rk += a * radiance_sh[j][ch] as f64 * m[k][j];
-                    }
-                }
-            }
+        for (ch, mut rc) in r.into_iter().enumerate() {
             let mut g = gram();
-            solve_dense(6, &mut g, &mut r);
+            solve_dense(6, &mut g, &mut rc);
             for k in 0..6 {
-                faces[k][ch] = r[k] as f32;
+                faces[k][ch] = rc[k] as f32;
+            }
+        }
+        AmbientCube { faces }
+    }
+
+    /// The least-squares ambient cube of [`Self::fit_from_sh`] under the
+    /// constraint that every face is ≥ 0 (what an unsigned texture format
+    /// such as RGB9E5 can hold): per channel, minimises `∫_S² |E_cube −
+    /// E_sh|²` over non-negative faces. The unconstrained fit goes negative
+    /// opposite a strong light (its overshoot on the side faces is paid back
+    /// there); clamping it to 0 is feasible but no longer optimal, this is.
+    /// Equal to [`Self::fit_from_sh`] when that has no negative face.
+    ///
+    /// Solved exactly as a 6-variable non-negative least-squares problem
+    /// (Lawson & Hanson, *Solving Least Squares Problems*, 1974, ch. 23):
+    /// the optimum is the unique point satisfying the KKT conditions — the
+    /// free faces solve the Gram system restricted to them and are ≥ 0, the
+    /// faces held at 0 have a gradient `G·F − r ≥ 0` — found by trying the
+    /// 64 sets of held faces, fewest first.
+    pub fn fit_from_sh_nonnegative(radiance_sh: &[Vec3]) -> AmbientCube {
+        let r = sh_moments(radiance_sh);
+        let g = gram();
+        let mut faces = [Vec3::ZERO; 6];
+        for (ch, rc) in r.iter().enumerate() {
+            let f = nonnegative_solve(&g, rc);
+            for k in 0..6 {
+                faces[k][ch] = f[k] as f32;
             }
         }
         AmbientCube { faces }
@@ -195,9 +212,87 @@ impl AmbientCube {
     }
 }
 
+/// `r_k = ∫ b_k E_sh` per channel (module docs) for radiance SH `radiance_sh`
+/// (its largest square number of coefficients, at most 64).
+fn sh_moments(radiance_sh: &[Vec3]) -> [[f64; 6]; 3] {
+    let mut order = 0;
+    while order < MAX_ORDER && num_coeffs(order + 1) <= radiance_sh.len() {
+        order += 1;
+    }
+    let m = moments();
+    let mut r = [[0.0f64; 6]; 3];
+    for (ch, rc) in r.iter_mut().enumerate() {
+        for (k, rk) in rc.iter_mut().enumerate() {
+            for l in 0..order {
+                let a = clamped_cosine_band(l);
+                for j in l * l..(l + 1) * (l + 1) {
+                    *rk += a * radiance_sh[j][ch] as f64 * m[k][j];
+                }
+            }
+        }
+    }
+    r
+}
+
+/// The sets of held (zero) faces as bit masks, fewest held first.
+fn held_sets() -> &'static [u8; 64] {
+    static S: OnceLock<[u8; 64]> = OnceLock::new();
+    S.get_or_init(|| {
+        let mut s: [u8; 64] = std::array::from_fn(|i| i as u8);
+        s.sort_by_key(|m| (m.count_ones(), *m));
+        s
+    })
+}
+
+/// `argmin_{F ≥ 0} Fᵀ G F − 2 rᵀ F` for the 6×6 Gram matrix `g`
+/// ([`AmbientCube::fit_from_sh_nonnegative`]): the first set of held faces
+/// whose restricted solution is feasible and whose held faces have a
+/// non-negative gradient. Zero if rounding defeats every set (not seen).
+fn nonnegative_solve(g: &[f64; 36], r: &[f64; 6]) -> [f64; 6] {
+    let scale = r.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
+    let tol = 1e-12 * scale;
+    for &held in held_sets() {
+        let mut free = [0usize; 6];
+        let mut m = 0;
+        for k in (0..6).filter(|k| held >> k & 1 == 0) {
+            free[m] = k;
+            m += 1;
+        }
+        let mut a = [0.0f64; 36];
+        let mut b = [0.0f64; 6];
+        for i in 0..m {
+            b[i] = r[free[i]];
+            for j in 0..m {
+                a[i * m + j] = g[free[i] * 6 + free[j]];
+            }
+        }
+        solve_dense(m, &mut a[..m * m], &mut b[..m]);
+        if b[..m].iter().any(|&x| x < -tol) {
+            continue;
+        }
+        let mut f = [0.0f64; 6];
+        for i in 0..m {
+            f[free[i]] = b[i].max(0.0);
+        }
+        let kkt = (0..6).filter(|k| held >> k & 1 == 1).all(|k| {
+            let grad: f64 = (0..6).map(|j| g[k * 6 + j] * f[j]).sum::<f64>() - r[k];
+            grad >= -tol
+        });
+        if kkt {
+            return f;
+        }
+    }
+    [0.0; 6]
+}
+
 /// Free-function form of [`AmbientCube::fit_from_sh`].
 pub fn fit_from_sh(radiance_sh: &[Vec3]) -> AmbientCube {
     AmbientCube::fit_from_sh(radiance_sh)
+}
+
+/// Free-function form of [`AmbientCube::fit_from_sh_nonnegative`].
+pub fn fit_from_sh_nonnegative(radiance_sh: &[Vec3]) -> AmbientCube {
+    AmbientCube::fit_from_sh_nonnegative(radiance_sh)
 }
 
 /// Free-function form of [`AmbientCube::fit_from_samples`].
@@ -348,5 +443,88 @@ mod tests {
         assert!(c.faces[1..].iter().all(|f| f.is_finite()));
         let c = AmbientCube::fit_from_sh(&[Vec3::ONE; 5]);
         assert!(c.faces.iter().all(|f| f.is_finite()));
+    }
+    /// Radiance SH (3 bands) of a small bright light along `d` over a dim
+    /// uniform sky: the unconstrained fit goes negative opposite it.
+    fn light_sh(d: Vec3) -> Vec<Vec3> {
+        let mut y = [0.0f32; 9];
+        crate::basis::eval_basis(3, d.normalize(), &mut y);
+        let mut sh: Vec<Vec3> = y.iter().map(|&v| Vec3::new(8.0, 6.0, 4.0) * v).collect();
+        sh[0] += Vec3::splat(0.05) / Y00;
+        sh
+    }
+
+    /// The non-negative fit equals projected coordinate descent on a dense
+    /// sphere sampling of the same objective (an independent solver), has
+    /// no negative face, and beats the clamped unconstrained fit; with no
+    /// negative face to fix it is the unconstrained fit.
+    #[test]
+    fn nonnegative_fit_matches_dense_projected_descent() {
+        let normals: Vec<Vec3> = fibonacci_sphere(20_000)
+            .iter()
+            .map(|d| d.as_vec3())
+            .collect();
+        let b: Vec<[f64; 6]> = normals.iter().map(|n| weights_f64(n.as_dvec3())).collect();
+        for d in [
+            Vec3::new(1.0, 0.3, -0.2),
+            Vec3::new(-0.1, -1.0, 0.05),
+            Vec3::ONE,
+        ] {
+            let sh = light_sh(d);
+            let ls = AmbientCube::fit_from_sh(&sh);
+            assert!(
+                ls.faces.iter().any(|f| f.min_element() < 0.0),
+                "{d}: {ls:?}"
+            );
+            let nn = AmbientCube::fit_from_sh_nonnegative(&sh);
+            let e: Vec<Vec3> = normals.iter().map(|n| irradiance(&sh, *n)).collect();
+            let cost = |c: &AmbientCube| -> f64 {
+                normals
+                    .iter()
+                    .zip(&e)
+                    .map(|(n, ei)| (c.irradiance(*n) - *ei).as_dvec3().length_squared())
+                    .sum()
+            };
+            for ch in 0..3 {
+                // Projected coordinate descent from 0 on Σ_i (Σ_k F_k b_k(n_i) − E_i)².
+                let mut h = [0.0f64; 36];
+                let mut rhs = [0.0f64; 6];
+                for (bi, ei) in b.iter().zip(&e) {
+                    for k in 0..6 {
+                        rhs[k] += bi[k] * ei[ch] as f64;
+                        for j in 0..6 {
+                            h[k * 6 + j] += bi[k] * bi[j];
+                        }
+                    }
+                }
+                let mut f = [0.0f64; 6];
+                for _ in 0..2000 {
+                    for k in 0..6 {
+                        let grad: f64 = (0..6).map(|j| h[k * 6 + j] * f[j]).sum::<f64>() - rhs[k];
+                        f[k] = (f[k] - grad / h[k * 6 + k]).max(0.0);
+                    }
+                }
+                let top = f.iter().fold(0.0f64, |a, x| a.max(*x));
+                for k in 0..6 {
+                    assert!(nn.faces[k][ch] >= 0.0);
+                    assert!(
+                        (nn.faces[k][ch] as f64 - f[k]).abs() < 3e-3 * top,
+                        "{d} ch {ch} face {k}: {} vs {}",
+                        nn.faces[k][ch],
+                        f[k]
+                    );
+                }
+            }
+            let clamped = AmbientCube {
+                faces: ls.faces.map(|f| f.max(Vec3::ZERO)),
+            };
+            assert!(cost(&nn) < cost(&clamped), "{d}");
+        }
+        let sh = test_sh();
+        let ls = AmbientCube::fit_from_sh(&sh);
+        assert!(ls.faces.iter().all(|f| f.min_element() > 0.0));
+        assert_eq!(AmbientCube::fit_from_sh_nonnegative(&sh), ls);
+        let dark = AmbientCube::fit_from_sh_nonnegative(&[-Vec3::ONE]);
+        assert_eq!(dark, AmbientCube::default());
     }
 }

@@ -4,7 +4,8 @@
 //! `ktx2`: a directory of KTX2 3D textures plus `volume.json`
 //! (`probekit::volume::export`); an octree exports as a brick atlas when
 //! that is smaller than its dense finest-level lattice. `bevy`: one `.ktx2` for Bevy's
-//! `IrradianceVolume` plus `OUT.json` with the `LightProbe` transform.
+//! `IrradianceVolume` plus `OUT.json` with the `LightProbe` transform and the
+//! intensity for Bevy's default exposure (docs/bevy.md).
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -35,8 +36,9 @@ pub struct ExportArgs {
     /// dense); ktx2 only.
     #[arg(long)]
     pub layout: Option<String>,
-    /// Voxels per axis `X,Y,Z` (bevy only; default the grid's probe
-    /// counts, or 2^depth for an octree).
+    /// Voxels per axis `X,Y,Z`, at least 2 each (bevy only; default one
+    /// voxel per probe of a uniform volume, or an octree's finest lattice,
+    /// `roots·2^depth + 1`, within 2^21 voxels).
     #[arg(long, value_delimiter = ',')]
     pub resolution: Option<Vec<u32>>,
 }
@@ -88,20 +90,22 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         }
         "bevy" => {
             let res = match &a.resolution {
-                Some(r) if r.len() == 3 => [r[0], r[1], r[2]],
+                Some(r) if r.len() == 3 => Some([r[0], r[1], r[2]]),
                 Some(_) => bail!("{name}: --resolution needs 3 numbers X,Y,Z"),
-                None => v
-                    .grid_resolution()
-                    .unwrap_or([1u32 << v.max_depth().min(8); 3]),
+                None => None,
             };
-            let (tex, json) = export_bevy(&v, res).with_context(|| name.clone())?;
+            let ex = export_bevy(&v, res).with_context(|| name.clone())?;
             let out = a.output.display().to_string();
-            write_atomic(&a.output, &tex.to_bytes()).with_context(|| out.clone())?;
+            write_atomic(&a.output, &ex.texture.to_bytes()).with_context(|| out.clone())?;
             let side = a.output.with_extension("json");
-            let text = serde_json::to_string_pretty(&json).expect("JSON value");
+            let text = serde_json::to_string_pretty(&ex.sidecar).expect("JSON value");
             write_atomic(&side, text.as_bytes()).with_context(|| side.display().to_string())?;
             println!(
-                "{out}: Bevy irradiance volume {res:?} voxels; transform in {}",
+                "{out}: Bevy irradiance volume {:?} voxels on {}; LightProbe transform and \
+                 intensity ({} at Bevy's default exposure) in {}",
+                ex.resolution,
+                ex.lattice.describe(),
+                ex.sidecar["intensity_for_bevy_default_exposure"],
                 side.display()
             );
         }

@@ -632,44 +632,150 @@ fn ktx2_export_parses_back_and_matches_the_query() {
     assert!(Ktx2::from_bytes(&bytes).is_err());
 }
 
+/// Bevy's voxel centre `i` (`(i + ½)/R` of the unit cube, mapped through
+/// the sidecar's `light_probe_transform`: scale, then rotate, then translate).
+fn bevy_voxel_centre(json: &serde_json::Value, res: [u32; 3], voxel: [u32; 3]) -> Vec3 {
+    let t = &json["light_probe_transform"];
+    let v3 = |k: &str| Vec3::from_array(std::array::from_fn(|a| t[k][a].as_f64().unwrap() as f32));
+    let q = t["rotation"].as_array().unwrap();
+    let q = glam::Quat::from_xyzw(
+        q[0].as_f64().unwrap() as f32,
+        q[1].as_f64().unwrap() as f32,
+        q[2].as_f64().unwrap() as f32,
+        q[3].as_f64().unwrap() as f32,
+    );
+    let unit = Vec3::from_array(std::array::from_fn(|a| {
+        (voxel[a] as f32 + 0.5) / res[a] as f32 - 0.5
+    }));
+    v3("translation") + q * (v3("scale") * unit)
+}
+
+/// A uniform volume at its own resolution: voxel `i` is probe `i` — Bevy's
+/// voxel centre, through the sidecar's transform, lands on the probe's
+/// position, and its faces are E/π of the non-negative least-squares
+/// ambient cube of the probe's stored SH (read from the file, not through
+/// the query).
 #[test]
-fn bevy_export_texels_are_ambient_cube_irradiance_over_pi_at_voxel_centres() {
+fn bevy_export_of_a_uniform_volume_puts_each_probes_ambient_cube_on_a_voxel_centre() {
     use super::export::*;
     let demo = LightsDemo::demo(3);
-    let (file, _) = adaptive(&demo, GradientMode::None);
+    let (min, max) = LightsDemo::demo_box();
+    let res = [4, 3, 5];
+    let (file, _) = build_uniform(&demo, &common(min, max, GradientMode::None), res).unwrap();
     let v = Volume::from_file(&file).unwrap();
-    let res = [4, 3, 2];
-    let (tex, json) = export_bevy(&v, res).unwrap();
-    let tex = Ktx2::from_bytes(&tex.to_bytes()).unwrap();
-    assert_eq!(tex.size, [4, 6, 6]);
-    assert_eq!(
-        json["light_probe_transform"]["scale"][0].as_f64().unwrap(),
-        4.0
-    );
-    let (min, max) = v.bounds();
-    for z in 0..2u32 {
-        for y in 0..3u32 {
-            for x in 0..4u32 {
-                let f = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) / Vec3::new(4.0, 3.0, 2.0);
-                let p = min + f * (max - min);
-                // Bevy evaluates Σ N_a² face(a, sign) and multiplies by albedo:
-                // along an axis that is face(axis) = E(axis)/π. Compare with
-                // the runtime query's irradiance along each axis, through the
-                // ambient-cube fit.
-                let sh = sh_at(&v, p, Interp::Trilinear);
-                let cube = crate::sh::ambient_cube::fit_from_sh(&sh);
+    let ex = export_bevy(&v, None).unwrap();
+    assert_eq!(ex.resolution, res);
+    assert_eq!(ex.lattice, BevyLattice::Probes);
+    let tex = Ktx2::from_bytes(&ex.texture.to_bytes()).unwrap();
+    assert_eq!(tex.size, [4, 6, 15]);
+    let coeffs = file.coefficients.to_f32().unwrap();
+    let n = v.coeffs_per_sample();
+    let size = (max - min).max_element();
+    for z in 0..res[2] {
+        for y in 0..res[1] {
+            for x in 0..res[0] {
+                let s = (x + res[0] * (y + res[1] * z)) as usize;
+                let centre = bevy_voxel_centre(&ex.sidecar, res, [x, y, z]);
+                assert!(
+                    (centre - file.positions[s]).abs().max_element() < 1e-5 * size,
+                    "voxel {x} {y} {z}: centre {centre} vs probe {}",
+                    file.positions[s]
+                );
+                let cube =
+                    crate::sh::ambient_cube::fit_from_sh_nonnegative(&coeffs[s * n..(s + 1) * n]);
                 for face in 0..6 {
                     let got = bevy_texel(&tex, [x, y, z], face).unwrap();
                     let want = cube.faces[face] / std::f32::consts::PI;
                     assert!(
-                        (got - want.max(Vec3::ZERO)).abs().max_element()
-                            <= 0.01 * want.abs().max_element() + 1e-6,
+                        (got - want).abs().max_element() <= 0.005 * want.max_element() + 1e-7,
                         "{x} {y} {z} face {face}: {got} vs {want}"
                     );
                 }
             }
         }
     }
+    // A single voxel on an axis cannot reach both faces of the box.
+    assert!(matches!(
+        export_bevy(&v, Some([1, 3, 3])),
+        Err(ExportError::BevyResolution(_))
+    ));
+}
+
+/// An octree exports on its finest lattice (`2^depth + 1` voxels per axis
+/// for one root): Bevy's voxel centres on the lattice points, each holding
+/// the ambient cube of the runtime's query there; an explicit resolution
+/// off any octree level is reported as resampled.
+#[test]
+fn bevy_export_of_an_octree_uses_its_finest_lattice() {
+    use super::export::*;
+    let demo = LightsDemo::demo(3);
+    let (file, _) = adaptive(&demo, GradientMode::None);
+    let v = Volume::from_file(&file).unwrap();
+    let d = v.max_depth();
+    let ex = export_bevy(&v, None).unwrap();
+    let r = (1u32 << d) + 1;
+    assert_eq!(ex.resolution, [r; 3]);
+    assert_eq!(
+        ex.lattice,
+        BevyLattice::OctreeLevel {
+            depth: d,
+            finest: true
+        }
+    );
+    let (min, max) = v.bounds();
+    for (x, y, z) in [
+        (0, 0, 0),
+        (r - 1, 1, 2),
+        (3, r - 1, r / 2),
+        (r / 2, 5, r - 1),
+    ] {
+        let p = min + Vec3::new(x as f32, y as f32, z as f32) / (r - 1) as f32 * (max - min);
+        let centre = bevy_voxel_centre(&ex.sidecar, [r; 3], [x, y, z]);
+        assert!((centre - p).abs().max_element() < 1e-5, "{centre} vs {p}");
+        let cube =
+            crate::sh::ambient_cube::fit_from_sh_nonnegative(&sh_at(&v, p, Interp::Trilinear));
+        for face in 0..6 {
+            let got = bevy_texel(&ex.texture, [x, y, z], face).unwrap();
+            let want = cube.faces[face] / std::f32::consts::PI;
+            assert!(
+                (got - want).abs().max_element() <= 0.005 * want.max_element() + 1e-7,
+                "{x} {y} {z} face {face}: {got} vs {want}"
+            );
+        }
+    }
+    let other = export_bevy(&v, Some([4, 3, 2])).unwrap();
+    assert_eq!(other.lattice, BevyLattice::Resampled);
+    assert_eq!(other.texture.size, [4, 6, 6]);
+}
+
+/// The recommended intensity undoes Bevy's exposure: Bevy's
+/// `Exposure::exposure()` is `2^−EV100 / 1.2` (bevy_camera `camera.rs`),
+/// computed here in f64, and the sidecar's number for the default EV100 9.7
+/// times it is 1 (1.2 · 2^9.7 = 998.1).
+#[test]
+fn bevy_intensity_for_the_default_exposure_undoes_bevys_exposure() {
+    use super::export::*;
+    let exposure = |ev100: f64| (-ev100).exp2() / 1.2;
+    for ev in [-0.263, 0.0, 7.0, 9.7, 15.0] {
+        let i = bevy_intensity_for_exposure(ev as f32) as f64;
+        assert!((i * exposure(ev) - 1.0).abs() < 1e-6, "EV100 {ev}: {i}");
+        assert!((bevy_exposure(ev as f32) as f64 / exposure(ev) - 1.0).abs() < 1e-6);
+    }
+    let demo = LightsDemo::demo(3);
+    let (min, max) = LightsDemo::demo_box();
+    let (file, _) = build_uniform(&demo, &common(min, max, GradientMode::None), [2, 2, 2]).unwrap();
+    let ex = export_bevy(&Volume::from_file(&file).unwrap(), None).unwrap();
+    let at_default = ex.sidecar["intensity_for_bevy_default_exposure"]
+        .as_f64()
+        .unwrap();
+    assert!((at_default - 998.1).abs() < 0.01, "{at_default}");
+    assert!((at_default * exposure(9.7) - 1.0).abs() < 1e-4);
+    assert_eq!(ex.sidecar["intensity_in_scene_units"], 1.0);
+    assert_eq!(
+        ex.sidecar["bevy_default_exposure_ev100"].as_f64().unwrap() as f32,
+        9.7
+    );
+    assert!(ex.sidecar.get("intensity").is_none());
 }
 
 /// Constant radiance with a geometric slab at x ∈ [0.3, 0.35]: the octree
