@@ -234,14 +234,10 @@ fn sh_moments(radiance_sh: &[Vec3]) -> [[f64; 6]; 3] {
     r
 }
 
-/// The sets of held (zero) faces as bit masks, fewest held first.
-fn held_sets() -> &'static [u8; 64] {
-    static S: OnceLock<[u8; 64]> = OnceLock::new();
-    S.get_or_init(|| {
-        let mut s: [u8; 64] = std::array::from_fn(|i| i as u8);
-        s.sort_by_key(|m| (m.count_ones(), *m));
-        s
-    })
+/// The sets of held (zero) faces as bit masks, fewest held first (then by
+/// mask value).
+fn held_sets() -> impl Iterator<Item = u8> {
+    (0..=6u32).flat_map(|held| (0u8..64).filter(move |m| m.count_ones() == held))
 }
 
 /// `argmin_{F ≥ 0} Fᵀ G F − 2 rᵀ F` for the 6×6 Gram matrix `g`
@@ -251,7 +247,7 @@ fn held_sets() -> &'static [u8; 64] {
 fn nonnegative_solve(g: &[f64; 36], r: &[f64; 6]) -> [f64; 6] {
     let scale = r.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-300);
     let tol = 1e-12 * scale;
-    for &held in held_sets() {
+    for held in held_sets() {
         let mut free = [0usize; 6];
         let mut m = 0;
         for k in (0..6).filter(|k| held >> k & 1 == 0) {

@@ -57,6 +57,17 @@ impl Recipe {
         }
     }
 
+    /// The box a resolved recipe holds ([`Aabb::EMPTY`] when it holds none).
+    pub fn recorded_box(&self) -> Aabb {
+        match self.bake_box {
+            Some([lo, hi]) => Aabb {
+                min: Vec3::from(lo),
+                max: Vec3::from(hi),
+            },
+            None => Aabb::EMPTY,
+        }
+    }
+
     /// The recipe with the box it bakes `scene` in written out, so that it
     /// says everything the bake read.
     pub fn resolved_for(&self, scene: &Scene) -> Recipe {

@@ -74,6 +74,19 @@ impl BakeRecord {
         }
     }
 
+    /// A record of a bake from a source that is no scene (an analytic one,
+    /// `builtin:lights-demo`): no lighting hash to check against.
+    pub fn without_scene(source_name: &str, recipe: Recipe) -> Self {
+        BakeRecord {
+            tool_version: env!("CARGO_PKG_VERSION").to_string(),
+            scene: source_name.to_string(),
+            scene_hash: String::new(),
+            recipe,
+            placed: None,
+            part: None,
+        }
+    }
+
     /// Compact JSON for the file's `META` section (keys in a fixed order,
     /// floats as their shortest decimal: equal records give equal bytes).
     pub fn to_json(&self) -> String {

@@ -54,7 +54,7 @@ pub struct BakerSource<'s> {
     dirs: Vec<Vec3>,
     requested: AtomicUsize,
     done: AtomicUsize,
-    progress: Option<Box<Progress>>,
+    progress: Option<Box<dyn Fn(usize, usize) + Sync + 's>>,
     error: Mutex<Option<BakeError>>,
     max_offset: f32,
 }
@@ -101,7 +101,7 @@ impl<'s> BakerSource<'s> {
     }
 
     /// Calls `f(done, requested)` after every capture (from worker threads).
-    pub fn with_progress(mut self, f: Box<Progress>) -> Self {
+    pub fn with_progress(mut self, f: Box<dyn Fn(usize, usize) + Sync + 's>) -> Self {
         self.progress = Some(f);
         self
     }

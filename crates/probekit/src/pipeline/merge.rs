@@ -1,0 +1,199 @@
+//! Joining shard parts into the file a single machine writes.
+
+use super::{PipelineError, Progress};
+use crate::cloud::cell_visibility::{bake_file_cell_planes, bake_file_cell_visibility};
+use crate::cloud::file::{cloud_file, decode_light_groups, light_groups};
+use crate::format::ProbeFile;
+use crate::recipe::{check_scene, BakeRecord};
+use crate::scene::Scene;
+use probekit_sh::ShRgb;
+
+/// One part, read.
+struct Part<'a> {
+    name: &'a str,
+    record: BakeRecord,
+    first: usize,
+    count: usize,
+    total: usize,
+    file: &'a ProbeFile,
+}
+
+/// Joins shard parts (`(name, file)`, in any order) into the cloud file the
+/// unsharded bake writes, byte for byte. Checks that the parts come from
+/// scenes of the same lighting and the same recipe (nodes may name the
+/// scene by different paths), and cover every probe once. Cell visibility,
+/// occluder planes and probe weights depend on every probe, so they are
+/// baked here, with `scene` (as named), which must light the probes as the
+/// parts' scene did; a recipe without them needs no scene.
+pub fn merge(
+    parts: &[(String, ProbeFile)],
+    scene: Option<(&Scene, &str)>,
+    progress: Progress<'_>,
+) -> Result<ProbeFile, PipelineError> {
+    let bad = PipelineError::Parts;
+    let mut read = Vec::with_capacity(parts.len());
+    for (name, file) in parts {
+        let record = BakeRecord::from_json(&file.metadata)
+            .ok_or_else(|| bad(format!("{name}: not a shard part (no bake record)")))?;
+        let Some(p) = record.part else {
+            return Err(bad(format!("{name}: not a shard part (a whole bake)")));
+        };
+        if p.count != file.positions.len() {
+            return Err(bad(format!(
+                "{name}: part says {} probes but holds {}",
+                p.count,
+                file.positions.len()
+            )));
+        }
+        read.push(Part {
+            name,
+            first: p.first_index,
+            count: p.count,
+            total: p.total,
+            record,
+            file,
+        });
+    }
+    read.sort_by_key(|p| p.first);
+    let Some(head) = read.first() else {
+        return Err(bad("no parts to merge".into()));
+    };
+    // Everything but the slice and the scene's name must match.
+    let same = |r: &BakeRecord| BakeRecord {
+        part: None,
+        scene: String::new(),
+        ..r.clone()
+    };
+    for p in &read[1..] {
+        if p.record.scene_hash != head.record.scene_hash {
+            return Err(bad(format!(
+                "{} and {}: baked from scenes of different lighting (hashes {} and {})",
+                head.name, p.name, head.record.scene_hash, p.record.scene_hash
+            )));
+        }
+        if same(&p.record) != same(&head.record) || p.total != head.total {
+            return Err(bad(format!(
+                "{} and {}: different bake settings",
+                head.name, p.name
+            )));
+        }
+    }
+    let mut end = 0;
+    for p in &read {
+        if p.first < end {
+            return Err(bad(format!(
+                "{}: overlaps the previous part (starts at probe {}, expected {end})",
+                p.name, p.first
+            )));
+        }
+        if p.first > end {
+            return Err(bad(format!(
+                "{}: gap before this part (probes {end}..{} missing)",
+                p.name, p.first
+            )));
+        }
+        end = p.first + p.count;
+    }
+    if end != head.total {
+        return Err(bad(format!(
+            "{}: gap after this part (probes {end}..{} missing)",
+            read[read.len() - 1].name,
+            head.total
+        )));
+    }
+    let recipe = &head.record.recipe;
+    let codec = recipe.codec.codec();
+    let mut positions = Vec::new();
+    let mut sh = Vec::new();
+    let mut validity = Vec::new();
+    // Distance moments: every part has them (same recipe) or none does.
+    let mut moments = head.file.visibility.clone().map(|mut v| {
+        v.data.clear();
+        v
+    });
+    let mut groups: Vec<(String, Vec<ShRgb>)> = Vec::new();
+    for (k, p) in read.iter().enumerate() {
+        let g = decode_light_groups(p.file)?;
+        if k == 0 {
+            groups = g;
+        } else if g.iter().map(|x| &x.0).ne(groups.iter().map(|x| &x.0)) {
+            return Err(bad(format!(
+                "{} and {}: different light groups",
+                head.name, p.name
+            )));
+        } else {
+            for ((_, dst), (_, src)) in groups.iter_mut().zip(g) {
+                dst.extend(src);
+            }
+        }
+        let c = p.file.coefficients.to_f32()?;
+        let n = p.file.coefficients.coeffs_per_probe().max(1);
+        positions.extend_from_slice(&p.file.positions);
+        for ch in c.chunks(n) {
+            sh.push(ShRgb::from_coeffs(ch.to_vec()).ok_or_else(|| {
+                bad(format!("{}: coefficients of no SH order", p.name))
+            })?);
+        }
+        validity.extend(p.file.validity.clone().unwrap_or_default());
+        match (&mut moments, &p.file.visibility) {
+            (None, None) => {}
+            (Some(m), Some(v))
+                if m.resolution == v.resolution && m.max_distance == v.max_distance =>
+            {
+                m.data.extend_from_slice(&v.data)
+            }
+            _ => {
+                return Err(bad(format!(
+                    "{} and {}: different visibility maps",
+                    head.name, p.name
+                )))
+            }
+        }
+    }
+    let mut file = cloud_file(&positions, &sh, &validity, codec, &super::no_metadata())?;
+    let order = head.file.coefficients.order as usize;
+    file.groups = light_groups(&groups, order, codec)?;
+    file.visibility = moments;
+    let mut record = head.record.clone();
+    record.part = None;
+    file.metadata = record.to_json();
+    let Some(first) = read.first() else {
+        return Err(bad("no parts to merge".into()));
+    };
+    let kinds = recipe.visibility_bake(&recipe.recorded_box(), true);
+    if kinds.cell_subdivision.is_some() || kinds.probe_weights.is_some() {
+        let Some((scene, scene_name)) = scene else {
+            return Err(bad(format!(
+                "{}: baked with cell visibility or probe weights, which merge bakes over all \
+                 probes: give the scene",
+                first.name
+            )));
+        };
+        check_scene(
+            &head.file.metadata,
+            head.name,
+            &scene.lighting_hash_hex(),
+            scene_name,
+        )?;
+        let baker = crate::bake::Baker::new(scene)?;
+        if let Some(lattice) = kinds.cell_subdivision {
+            file.cell_visibility = Some(
+                bake_file_cell_visibility(baker.tracer(), &file, lattice, &|d, t| {
+                    progress("cell visibility", d, t)
+                })
+                .map_err(crate::cloud::visibility_bake::VisibilityBakeError::from)?,
+            );
+            if kinds.cell_planes {
+                file.cell_planes = bake_file_cell_planes(baker.tracer(), &file, &|d, t| {
+                    progress("occluder planes", d, t)
+                })
+                .map_err(crate::cloud::visibility_bake::VisibilityBakeError::from)?;
+            }
+        }
+        kinds.fit_weights_into(&baker, &recipe.capture_settings(), &mut file, &|d, t| {
+            progress("probe weights", d, t)
+        })?;
+    }
+    file.validate()?;
+    Ok(file)
+}

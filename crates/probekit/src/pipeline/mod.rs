@@ -1,0 +1,458 @@
+//! # The bake pipeline: place → capture → blend data → assemble
+//!
+//! One way to bake, for every caller (`probekit bake`, `merge`, `eval
+//! --compare`, the sweeps, the examples): a [`Bake`] holds a scene, the
+//! resolved [`Recipe`] and the ray tracer; its stages run in order —
+//!
+//! 1. [`Bake::place`]: the probe positions (grid, manual, adaptive,
+//!    spawn-and-merge, gradient ascent; one grid sizing rule,
+//!    [`crate::placement::grid_resolution`]);
+//! 2. [`Bake::capture`]: each probe's radiance SH and validity by the path
+//!    tracer, all probes or one shard's slice;
+//! 3. [`Bake::assemble`]: the file — Delaunay tetrahedra, coefficients in
+//!    the recipe's codec, light groups, the [`BakeRecord`] — or a shard part;
+//! 4. [`Bake::blend_data`]: distance moments, cell visibility, occluder
+//!    planes and fitted probe weights, per the recipe's `[blend]`.
+//!
+//! [`Bake::run`] runs them all; [`Bake::run_part`] bakes one shard into a
+//! part file and [`merge`] joins the parts into the file a single machine
+//! writes, byte for byte. [`bake_volume`] is the pipeline of an irradiance
+//! volume. Each stage reports progress as `(phase, done, total)` and its
+//! wall time in the [`BakeReport`].
+
+mod merge;
+mod positions;
+mod volume;
+
+pub use merge::merge;
+pub use positions::read_positions;
+pub use volume::{bake_volume, bake_volume_from, VolumeReport};
+
+use crate::bake::{BakeError, BakeOutput, Baker, CaptureSettings};
+use crate::cloud::file::{cloud_file, file_validity, light_groups, CloudFileError};
+use crate::cloud::visibility_bake::VisibilityBakeError;
+use crate::format::{BakeMetadata, Codec, FormatError, Placement as OldPlacement, ProbeFile};
+use crate::placement::{grid_points, PlacementError};
+use crate::recipe::{BakeRecord, Part, Placement, PlacementReport, Recipe, RecipeError};
+use crate::scene::{Aabb, BakeBoxError, Scene};
+use glam::Vec3;
+use probekit_sh::ShRgb;
+use serde::Serialize;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Progress of a long step: `(phase, done, total)`.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+/// Why a bake failed. Each names what it could (a file, a key, a stage).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum PipelineError {
+    /// The recipe is invalid.
+    #[error(transparent)]
+    Recipe(#[from] RecipeError),
+    /// The bake box cannot hold probes.
+    #[error(transparent)]
+    BakeBox(#[from] BakeBoxError),
+    /// Placement failed.
+    #[error(transparent)]
+    Placement(#[from] PlacementError),
+    /// The capture failed.
+    #[error(transparent)]
+    Capture(#[from] BakeError),
+    /// The file could not be assembled.
+    #[error(transparent)]
+    File(#[from] CloudFileError),
+    /// The blend data could not be baked.
+    #[error("visibility data and probe weights: {0}")]
+    Blend(#[from] VisibilityBakeError),
+    /// A file could not be encoded or checked.
+    #[error(transparent)]
+    Format(#[from] FormatError),
+    /// The volume could not be built.
+    #[error(transparent)]
+    Volume(#[from] crate::volume::VolumeBuildError),
+    /// A positions file cannot be read or has a bad row.
+    #[error("{path}: {message}")]
+    Positions {
+        /// The file.
+        path: String,
+        /// What is wrong (with the line).
+        message: String,
+    },
+    /// Shard parts that do not make one bake.
+    #[error("{0}")]
+    Parts(String),
+    /// A scene other than the one the parts were baked from.
+    #[error(transparent)]
+    SceneMismatch(#[from] crate::recipe::SceneMismatch),
+}
+
+/// Placed positions and what placement did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placed {
+    /// Probe positions, metres.
+    pub positions: Vec<Vec3>,
+    /// The report the file records.
+    pub report: PlacementReport,
+}
+
+/// The wall time of one stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PhaseTime {
+    /// `placement`, `capture`, `blend data`, `assembly`.
+    pub phase: String,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+}
+
+/// What a bake produced, in numbers (serialised by `probekit bake --json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BakeReport {
+    /// Probes in the file (a part: in the part).
+    pub probes: usize,
+    /// Tetrahedra (0 for a part).
+    pub tetrahedra: usize,
+    /// Probes the capture flagged invalid.
+    pub invalid: usize,
+    /// File size in bytes.
+    pub bytes: u64,
+    /// Light group names.
+    pub groups: Vec<String>,
+    /// `[shard, shards]` of a part.
+    pub shard: Option<[usize; 2]>,
+    /// What placement did.
+    pub placement: PlacementReport,
+    /// Wall time per stage, in order.
+    pub phases: Vec<PhaseTime>,
+}
+
+/// A finished bake: the file and its report.
+#[derive(Clone, Debug)]
+pub struct Baked {
+    /// The probe file (or part), ready to write.
+    pub file: ProbeFile,
+    /// Its numbers.
+    pub report: BakeReport,
+}
+
+/// One scene baked with one recipe (see the module docs).
+pub struct Bake<'s> {
+    scene: &'s Scene,
+    scene_name: String,
+    recipe: Recipe,
+    bake_box: Aabb,
+    baker: Baker<'s>,
+}
+
+impl<'s> Bake<'s> {
+    /// Checks the recipe and the box it bakes in (before any work) and
+    /// builds the ray tracer. `scene_name` is the scene as named, which
+    /// the file records.
+    pub fn new(scene: &'s Scene, scene_name: &str, recipe: &Recipe) -> Result<Self, PipelineError> {
+        recipe.validate()?;
+        let bake_box = recipe.bake_box_in(scene);
+        bake_box.check_bake_box()?;
+        recipe.placement_method(None).check_size(&bake_box)?;
+        Ok(Bake {
+            scene,
+            scene_name: scene_name.to_string(),
+            recipe: recipe.resolved_for(scene),
+            bake_box,
+            baker: Baker::new(scene)?,
+        })
+    }
+
+    /// The resolved recipe (its box written out).
+    pub fn recipe(&self) -> &Recipe {
+        &self.recipe
+    }
+
+    /// The box probes go in.
+    pub fn bake_box(&self) -> Aabb {
+        self.bake_box
+    }
+
+    /// The ray tracer and capture over the scene.
+    pub fn baker(&self) -> &Baker<'s> {
+        &self.baker
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// The record a file of this bake stores.
+    pub fn record(&self) -> BakeRecord {
+        BakeRecord::new(&self.scene_name, self.scene, self.recipe.clone())
+    }
+
+    /// Stage 1: where the probes go. A manual placement's positions are
+    /// checked where the capture will put them (the virtual offset moves
+    /// probes out of geometry and lamps), before the capture: a set that
+    /// spans no volume there is refused now rather than after the capture.
+    pub fn place(&self, progress: Progress<'_>) -> Result<Placed, PipelineError> {
+        let capture = self.recipe.placement_capture();
+        let mut report = PlacementReport {
+            count: 0,
+            held_out_error: None,
+            light_shells: None,
+        };
+        let positions = match &self.recipe.placement {
+            Placement::Grid { budget, cell } => {
+                let n = budget.or(cell.is_none().then_some(Placement::DEFAULT_BUDGET));
+                grid_points(&self.bake_box, *cell, n)?
+            }
+            Placement::Manual { positions } => {
+                let pts = read_positions(positions)?;
+                let flat = |e: crate::cloud::DelaunayError, why: &str| PipelineError::Positions {
+                    path: positions.clone(),
+                    message: format!("the probe positions cannot be tetrahedralized{why}: {e}"),
+                };
+                crate::cloud::tetrahedralize(&pts).map_err(|e| flat(e, ""))?;
+                let captured = self.baker.capture_positions(&pts, 0, &capture)?;
+                crate::cloud::tetrahedralize(&captured).map_err(|e| {
+                    flat(
+                        e,
+                        " once the virtual offset has moved the probes in geometry or in \
+                         sphere lights out of them",
+                    )
+                })?;
+                pts
+            }
+            _ => {
+                let method = self.recipe.placement_method(None);
+                let placed = crate::placement::place(
+                    &self.baker,
+                    self.bake_box,
+                    &method,
+                    &capture,
+                    &|phase, d, t| progress(&format!("placing: {phase}"), d, t),
+                )?;
+                if let Placement::Adaptive { .. } = self.recipe.placement {
+                    report.held_out_error = placed.stats.held_out_error;
+                    report.light_shells = Some(placed.stats.light_shells);
+                }
+                placed.positions
+            }
+        };
+        report.count = positions.len();
+        Ok(Placed { positions, report })
+    }
+
+    /// Stage 2: captures shard `shard` of `shards` of `positions` (`0, 1`:
+    /// all of them). Each probe's random numbers depend on the seed and its
+    /// global index only, so a shard's probes equal the whole bake's.
+    pub fn capture(
+        &self,
+        positions: &[Vec3],
+        shard: usize,
+        shards: usize,
+        progress: Progress<'_>,
+    ) -> Result<BakeOutput, PipelineError> {
+        let range = crate::bake::shard_range(positions.len(), shard, shards)?;
+        Ok(self.baker.bake_shard(
+            positions,
+            shard,
+            shards,
+            &self.recipe.capture_settings(),
+            &|done, _| progress("capture", done, range.len()),
+        )?)
+    }
+
+    /// Stage 3: the cloud file of a whole capture — tetrahedra,
+    /// coefficients in the recipe's codec, light groups, validity — with
+    /// `record` as its metadata.
+    pub fn assemble(&self, out: &BakeOutput, record: &BakeRecord) -> Result<ProbeFile, PipelineError> {
+        let (sh, groups) = stored(out, self.recipe.capture.indirect_only);
+        let validity: Vec<_> = out.validity.iter().map(file_validity).collect();
+        let codec = self.recipe.codec.codec();
+        let mut f = cloud_file(&out.captured_positions, &sh, &validity, codec, &no_metadata())?;
+        f.groups = light_groups(&groups, out.settings.order, codec)?;
+        f.metadata = record.to_json();
+        Ok(f)
+    }
+
+    /// Stage 3 of a shard: a part file without tetrahedra — the shard's
+    /// captured positions, f32 SH, validity and light groups — whose record
+    /// says which slice of `total` probes it holds.
+    pub fn assemble_part(
+        &self,
+        out: &BakeOutput,
+        record: &BakeRecord,
+        shard: usize,
+        shards: usize,
+        total: usize,
+    ) -> Result<ProbeFile, PipelineError> {
+        let (sh, groups) = stored(out, self.recipe.capture.indirect_only);
+        let order = sh.first().map_or(out.settings.order, |s| s.order()) as u32;
+        let flat: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().iter().copied()).collect();
+        let mut f = ProbeFile::cloud(out.captured_positions.clone(), order, &flat)?;
+        f.validity = Some(out.validity.iter().map(file_validity).collect());
+        f.groups = light_groups(&groups, out.settings.order, Codec::F32)?;
+        let mut record = record.clone();
+        record.part = Some(Part {
+            shard,
+            shards,
+            first_index: out.first_index,
+            count: out.positions.len(),
+            total,
+        });
+        f.metadata = record.to_json();
+        Ok(f)
+    }
+
+    /// Stage 4: the blend data the recipe asks for, baked into `file`.
+    /// `whole`: false for a part, which gets only its probes' distance
+    /// moments (the rest depends on every probe; `merge` bakes it).
+    pub fn blend_data(
+        &self,
+        file: &mut ProbeFile,
+        whole: bool,
+        progress: Progress<'_>,
+    ) -> Result<(), PipelineError> {
+        let kinds = self.recipe.visibility_bake(&self.bake_box, whole);
+        kinds.bake_into(
+            self.baker.tracer(),
+            file,
+            &|d, t| progress("visibility", d, t),
+            &|d, t| progress("cell visibility", d, t),
+        )?;
+        kinds.fit_weights_into(&self.baker, &self.recipe.capture_settings(), file, &|d, t| {
+            progress("probe weights", d, t)
+        })?;
+        Ok(())
+    }
+
+    /// The whole pipeline: the file a single machine writes.
+    pub fn run(&self, progress: Progress<'_>) -> Result<Baked, PipelineError> {
+        let mut clock = Clock::new();
+        let placed = self.place(progress)?;
+        clock.lap("placement");
+        self.finish(&placed, progress, clock)
+    }
+
+    /// The stages after placement for `placed` positions (the sweeps place
+    /// once and bake here).
+    pub fn finish(
+        &self,
+        placed: &Placed,
+        progress: Progress<'_>,
+        mut clock: Clock,
+    ) -> Result<Baked, PipelineError> {
+        let out = self.capture(&placed.positions, 0, 1, progress)?;
+        clock.lap("capture");
+        let mut record = self.record();
+        record.placed = Some(placed.report.clone());
+        let mut file = self.assemble(&out, &record)?;
+        clock.lap("assembly");
+        self.blend_data(&mut file, true, progress)?;
+        clock.lap("blend data");
+        file.validate()?;
+        let report = report(&file, &out, None, placed.report.clone(), clock)?;
+        Ok(Baked { file, report })
+    }
+
+    /// Shard `shard` of `shards` as a part file for [`merge`]. Placement is
+    /// deterministic, so every shard places the same probes and captures
+    /// its slice.
+    pub fn run_part(
+        &self,
+        shard: usize,
+        shards: usize,
+        progress: Progress<'_>,
+    ) -> Result<Baked, PipelineError> {
+        let mut clock = Clock::new();
+        let placed = self.place(progress)?;
+        clock.lap("placement");
+        let out = self.capture(&placed.positions, shard, shards, progress)?;
+        clock.lap("capture");
+        let mut record = self.record();
+        record.placed = Some(placed.report.clone());
+        let mut file =
+            self.assemble_part(&out, &record, shard, shards, placed.positions.len())?;
+        clock.lap("assembly");
+        self.blend_data(&mut file, false, progress)?;
+        clock.lap("blend data");
+        file.validate()?;
+        let report = report(&file, &out, Some([shard, shards]), placed.report.clone(), clock)?;
+        Ok(Baked { file, report })
+    }
+}
+
+/// Wall time per stage, for the [`BakeReport`].
+#[derive(Clone, Debug)]
+pub struct Clock {
+    last: Instant,
+    phases: Vec<PhaseTime>,
+}
+
+impl Clock {
+    /// Starts timing now.
+    pub fn new() -> Self {
+        Clock {
+            last: Instant::now(),
+            phases: Vec::new(),
+        }
+    }
+
+    /// Ends `phase` now and starts the next.
+    pub fn lap(&mut self, phase: &str) {
+        let now = Instant::now();
+        self.phases.push(PhaseTime {
+            phase: phase.to_string(),
+            wall_seconds: (now - self.last).as_secs_f64(),
+        });
+        self.last = now;
+    }
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The SH and light groups a bake stores: all light, or indirect only.
+fn stored(out: &BakeOutput, indirect_only: bool) -> (Vec<ShRgb>, Vec<(String, Vec<ShRgb>)>) {
+    if indirect_only {
+        (
+            out.indirect.clone().unwrap_or_else(|| out.sh.clone()),
+            out.groups_indirect.clone(),
+        )
+    } else {
+        (out.sh.clone(), out.groups.clone())
+    }
+}
+
+/// Placeholder metadata for [`cloud_file`]; the record replaces it.
+fn no_metadata() -> BakeMetadata {
+    BakeMetadata::new(String::new(), OldPlacement::default(), serde_json::Value::Null)
+}
+
+/// The report of a finished file.
+fn report(
+    file: &ProbeFile,
+    out: &BakeOutput,
+    shard: Option<[usize; 2]>,
+    placement: PlacementReport,
+    clock: Clock,
+) -> Result<BakeReport, PipelineError> {
+    Ok(BakeReport {
+        probes: file.positions.len(),
+        tetrahedra: file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
+        invalid: out.validity.iter().filter(|v| !v.valid).count(),
+        bytes: file.bytes_by_section()?.values().sum(),
+        groups: file.group_names().map(str::to_string).collect(),
+        shard,
+        placement,
+        phases: clock.phases,
+    })
+}
+
+/// The capture settings a file's record says it was baked with (`None`
+/// for a file without a record).
+pub fn recorded_capture(file: &ProbeFile) -> Option<CaptureSettings> {
+    BakeRecord::from_json(&file.metadata).map(|r| r.recipe.capture_settings())
+}

@@ -1,0 +1,98 @@
+//! The pipeline of an irradiance volume: a uniform grid or an octree of
+//! captured samples, with gradients, as the recipe's `[volume]` says.
+
+use super::{Clock, PhaseTime, PipelineError, Progress};
+use crate::format::ProbeFile;
+use crate::recipe::{BakeRecord, GradientModeName, Recipe, VolumeSettings};
+use crate::scene::{Aabb, Scene};
+use crate::volume::{
+    build_adaptive, build_uniform, truncate_gradients, BakerSource, BuildStats, VolumeSource,
+};
+use serde::Serialize;
+
+/// What a volume bake produced, in numbers.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VolumeReport {
+    /// Samples stored.
+    pub samples: usize,
+    /// Leaves (cells).
+    pub leaves: usize,
+    /// Points captured (samples, prediction and gradient probes).
+    pub captures: usize,
+    /// Samples replaced by dilation.
+    pub dilated: usize,
+    /// Wall time per stage.
+    pub phases: Vec<PhaseTime>,
+}
+
+/// Bakes the volume `recipe` describes over `scene` (named `scene_name`,
+/// which the file records): captured by the path tracer with the same
+/// capture, validity and virtual offset as a cloud's probes; a virtual
+/// offset may move a sample at most a quarter of the finest cell, so it
+/// stays in its cell.
+pub fn bake_volume(
+    scene: &Scene,
+    scene_name: &str,
+    recipe: &Recipe,
+    progress: Progress<'_>,
+) -> Result<(ProbeFile, VolumeReport), PipelineError> {
+    recipe.validate()?;
+    if recipe.volume.gradients.mode == GradientModeName::Analytic {
+        return Err(PipelineError::Recipe(crate::recipe::RecipeError::Value {
+            layer: String::new(),
+            key: "volume.gradients.mode".into(),
+            message: "\"analytic\" needs a source with closed-form lights (builtin:lights-demo); \
+                      path-traced scenes use \"central\""
+                .into(),
+        }));
+    }
+    let bake_box = recipe.bake_box_in(scene);
+    bake_box.check_bake_box()?;
+    let recipe = recipe.resolved_for(scene);
+    let src = BakerSource::new(scene, recipe.capture_settings())?
+        .with_progress(Box::new(|done, requested| progress("capture", done, requested)))
+        .with_max_offset(0.25 * recipe.finest_volume_cell(&bake_box));
+    let record = BakeRecord::new(scene_name, scene, recipe.clone());
+    let threshold = src.validity_threshold();
+    let built = bake_volume_from(&src, &bake_box, &recipe, threshold, record);
+    if let Some(e) = src.take_error() {
+        return Err(e.into());
+    }
+    built
+}
+
+/// Bakes the volume `recipe` describes from any source (an analytic one,
+/// `builtin:lights-demo`, or a [`BakerSource`]) over `bake_box`, samples
+/// below `validity_threshold` dilated; `record` becomes the file's
+/// metadata.
+pub fn bake_volume_from(
+    src: &dyn VolumeSource,
+    bake_box: &Aabb,
+    recipe: &Recipe,
+    validity_threshold: f32,
+    record: BakeRecord,
+) -> Result<(ProbeFile, VolumeReport), PipelineError> {
+    bake_box.check_bake_box()?;
+    let mut clock = Clock::new();
+    let (mut file, stats): (ProbeFile, BuildStats) =
+        match recipe.volume_settings(bake_box, validity_threshold)? {
+            VolumeSettings::Uniform { common, resolution } => build_uniform(src, &common, resolution)?,
+            VolumeSettings::Octree(s) => build_adaptive(src, &s)?,
+        };
+    clock.lap("build");
+    if let Some(g) = recipe.volume.gradients.order {
+        truncate_gradients(&mut file, g)?;
+    }
+    file.metadata = record.to_json();
+    file.validate()?;
+    Ok((
+        file,
+        VolumeReport {
+            samples: stats.samples,
+            leaves: stats.leaves,
+            captures: stats.captures,
+            dilated: stats.dilated,
+            phases: clock.phases,
+        },
+    ))
+}
