@@ -82,9 +82,14 @@ fn staticlib_name() -> &'static str {
 fn staticlib() -> PathBuf {
     let dir = profile_dir();
     let lib = dir.join(staticlib_name());
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs");
-    let stale = |lib: &Path| match (lib.metadata(), src.metadata()) {
-        (Ok(l), Ok(s)) => l.modified().unwrap() < s.modified().unwrap(),
+    // The newest modification time of the crate's source files.
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let newest = std::fs::read_dir(&src).ok().and_then(|d| {
+        d.filter_map(|e| e.ok()?.metadata().ok()?.modified().ok())
+            .max()
+    });
+    let stale = |lib: &Path| match (lib.metadata(), newest) {
+        (Ok(l), Some(s)) => l.modified().unwrap() < s,
         _ => true,
     };
     if stale(&lib) {

@@ -1,13 +1,33 @@
 //! The hand-written header `include/probekit.h` against the Rust source:
-//! every `#[no_mangle] extern "C"` function of `src/lib.rs` is declared in
+//! every `#[no_mangle] extern "C"` function of `src/` is declared in
 //! the header with the same return type and the same parameter types (Rust
 //! types mapped to their C spellings), no other function is declared, and
 //! the enum values and constants agree.
 
 use std::collections::BTreeMap;
+use std::sync::OnceLock;
 
-const LIB: &str = include_str!("../src/lib.rs");
 const HEADER: &str = include_str!("../include/probekit.h");
+
+/// The library's Rust source: every `.rs` file of `src/`, in name order.
+fn lib() -> &'static str {
+    static SOURCE: OnceLock<String> = OnceLock::new();
+    SOURCE.get_or_init(|| {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
+        let mut files: Vec<_> = std::fs::read_dir(dir)
+            .expect("read src/")
+            .map(|e| e.expect("src/ entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+            .collect();
+        files.sort();
+        assert!(!files.is_empty(), "no source files in {dir}");
+        files
+            .iter()
+            .map(|p| std::fs::read_to_string(p).expect("read a source file"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    })
+}
 
 /// A signature as C spells it: return type and parameter types.
 #[derive(Debug, PartialEq, Eq)]
@@ -57,7 +77,7 @@ fn split_params(s: &str) -> Vec<&str> {
 /// Exported functions of the Rust source.
 fn rust_functions() -> BTreeMap<String, Sig> {
     let mut out = BTreeMap::new();
-    let mut rest = LIB;
+    let mut rest = lib();
     while let Some(i) = rest.find("#[no_mangle]") {
         rest = &rest[i + 12..];
         let fn_at = rest.find("fn ").expect("fn after #[no_mangle]");
@@ -155,8 +175,9 @@ fn every_exported_function_is_declared_with_matching_types() {
 
 /// `Variant = value` pairs of `pub enum name` in the Rust source.
 fn rust_enum(name: &str) -> Vec<(String, i64)> {
-    let start = LIB.find(&format!("pub enum {name} {{")).unwrap();
-    let body = &LIB[start..start + LIB[start..].find('}').unwrap()];
+    let lib = lib();
+    let start = lib.find(&format!("pub enum {name} {{")).unwrap();
+    let body = &lib[start..start + lib[start..].find('}').unwrap()];
     body.lines()
         .filter_map(|l| l.trim().strip_suffix(','))
         .filter_map(|l| l.split_once(" = "))
@@ -226,8 +247,9 @@ fn enum_values_and_constants_agree() {
         probekit_capi::PK_ABI_VERSION
     );
     // PK_INTERP_* values are the positions in the INTERPS table.
-    let table = LIB.find("const INTERPS").unwrap();
-    let table = &LIB[table..table + LIB[table..].find("];").unwrap()];
+    let lib = lib();
+    let table = lib.find("const INTERPS").unwrap();
+    let table = &lib[table..table + lib[table..].find("];").unwrap()];
     let names: Vec<&str> = table
         .lines()
         .filter_map(|l| l.trim().strip_prefix("Interp::"))

@@ -2,14 +2,14 @@
 //!
 //! A [`TetMesh`] holds the probe positions and their Delaunay tetrahedra (as
 //! produced by the baker's `probekit::cloud::tetrahedralize`), each with its
-//! four neighbours and a precomputed [`BaryMatrix`] (seed 003, after Cupisz,
+//! four neighbours and a precomputed [`BaryMatrix`] (after Cupisz,
 //! GDC 2012: "a 3×3 matrix … 9 extra floats per tetrahedron").
 //!
 //! # Point location
 //! [`TetMesh::locate`] walks from the tetrahedron cached in a per-object
 //! [`WalkState`]: compute the barycentric coordinates of `p`; if none is below
 //! `-INSIDE_TOLERANCE` the point is inside, otherwise step through the face
-//! opposite the most negative coordinate (seed 003, "traversal"). Guards
+//! opposite the most negative coordinate (Cupisz, "traversal"). Guards
 //! against cycles (possible on faces/edges under rounding):
 //!
 //! 1. a warm walk longer than [`JUMP_AFTER_STEPS`] restarts from the coarse
@@ -50,19 +50,24 @@
 //! start grid once (`O(n)`).
 
 use crate::collections::map_with_capacity;
-use crate::math;
 use crate::prelude::*;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use thiserror::Error;
+use walk::StartGrid;
 
 pub mod cell_visibility;
 pub mod directional;
+mod hull;
 pub mod probes;
+mod topology;
 pub mod visibility;
+mod walk;
+
 pub use cell_visibility::{CellPlanes, CellVisibility};
 pub use probes::{
     ProbeCloud, ProbeCloudError, HIDDEN_MASS_FLOOR, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE,
 };
+pub use topology::{face_neighbors, lattice_tets};
 pub use visibility::VisibilityMaps;
 
 /// Neighbour marker for a face on the convex hull, as in the baker's output.
@@ -84,9 +89,6 @@ pub const JUMP_AFTER_STEPS: u32 = 48;
 /// Steps of the deterministic (most-negative-coordinate) walk before it is
 /// considered cycling and replaced by the remembering stochastic walk.
 pub const CYCLE_GUARD_STEPS: u32 = 4096;
-
-/// Largest fan (hull faces around one hull vertex) visited by the hull descent.
-const MAX_FAN: u32 = 1024;
 
 /// Why a [`TetMesh`] cannot be built.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -188,26 +190,6 @@ struct HullFace {
     tet: u32,
 }
 
-/// Uniform grid of start tetrahedra over the probes' bounding box.
-#[derive(Clone, Debug, PartialEq)]
-struct StartGrid {
-    origin: Vec3,
-    cells_per_metre: Vec3,
-    dims: [u32; 3],
-    tets: Vec<u32>,
-}
-
-impl StartGrid {
-    #[inline]
-    fn start(&self, p: Vec3) -> u32 {
-        let c = ((p - self.origin) * self.cells_per_metre).floor();
-        let ix = (c.x.max(0.0) as u32).min(self.dims[0] - 1);
-        let iy = (c.y.max(0.0) as u32).min(self.dims[1] - 1);
-        let iz = (c.z.max(0.0) as u32).min(self.dims[2] - 1);
-        self.tets[((iz * self.dims[1] + iy) * self.dims[0] + ix) as usize]
-    }
-}
-
 /// Per-object walk cache: the last tetrahedron (and hull face) found, plus
 /// the state of the stochastic fallback. Start with [`WalkState::new`] (cold).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -297,82 +279,6 @@ pub struct TetMesh {
     walk: Vec<WalkRecord>,
     hull: Vec<HullFace>,
     grid: StartGrid,
-}
-
-/// Neighbour table of a tetrahedralization given only its tetrahedra (as in
-/// the JSON export): `result[t][i]` is the tetrahedron sharing the face
-/// opposite vertex `i` of `tets[t]`, or [`HULL`]. Error if a face is shared by
-/// more than two tetrahedra.
-pub fn face_neighbors(tets: &[[u32; 4]]) -> Result<Vec<[u32; 4]>, CloudError> {
-    let mut faces = map_with_capacity(tets.len() * 2);
-    let mut n = vec![[HULL; 4]; tets.len()];
-    for (t, v) in tets.iter().enumerate() {
-        for i in 0..4 {
-            let mut f = [v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]];
-            f.sort_unstable();
-            match faces.get_mut(&f) {
-                None => {
-                    faces.insert(f, Some((t, i)));
-                }
-                Some(slot) => match slot.take() {
-                    Some((u, j)) => {
-                        n[t][i] = u as u32;
-                        n[u][j] = t as u32;
-                    }
-                    None => return Err(CloudError::NeighborMismatch { tet: t, face: i }),
-                },
-            }
-        }
-    }
-    Ok(n)
-}
-
-/// The Kuhn (Freudenthal) tetrahedralization of a regular lattice of
-/// `dims[0] × dims[1] × dims[2]` points, indexed `x + dims[0]·(y + dims[1]·z)`
-/// (x fastest, z slowest): every cube of the
-/// lattice is split into the 6 tetrahedra around its main diagonal, one per
-/// order of the three axes, each the path from the cube's lowest corner to
-/// its highest that steps along one axis at a time. Every cube is split the
-/// same way, so the faces match across cubes and the result is a
-/// conforming mesh of the lattice's box (6·∏(dims − 1) tetrahedra, each of
-/// a sixth of a cube's volume, in either orientation, which [`TetMesh::new`]
-/// accepts). Each tetrahedron's circumsphere is its cube's, which holds no
-/// other lattice point, so this is one of the lattice's many Delaunay
-/// tetrahedralizations (every cube's corners are co-spherical; the baker's
-/// symbolic perturbation may choose another): an engine with a uniform grid
-/// of probes can query it as a cloud. Empty when a dimension is below 2.
-pub fn lattice_tets(dims: [u32; 3]) -> Vec<[u32; 4]> {
-    let [nx, ny, nz] = dims;
-    if nx < 2 || ny < 2 || nz < 2 {
-        return Vec::new();
-    }
-    const AXIS_ORDERS: [[usize; 3]; 6] = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    let id = |c: [u32; 3]| c[0] + nx * (c[1] + ny * c[2]);
-    let cubes = (nx - 1) as usize * (ny - 1) as usize * (nz - 1) as usize;
-    let mut tets = Vec::with_capacity(6 * cubes);
-    for z in 0..nz - 1 {
-        for y in 0..ny - 1 {
-            for x in 0..nx - 1 {
-                for order in AXIS_ORDERS {
-                    let mut c = [x, y, z];
-                    let mut t = [id(c); 4];
-                    for (j, &axis) in order.iter().enumerate() {
-                        c[axis] += 1;
-                        t[j + 1] = id(c);
-                    }
-                    tets.push(t);
-                }
-            }
-        }
-    }
-    tets
 }
 
 /// `FACE[k]`: local vertices of the face opposite `k`, wound so that vertex
@@ -521,46 +427,6 @@ impl TetMesh {
         Ok(mesh)
     }
 
-    /// About one start cell per 4 probes, at most 64³ cells; each cell holds
-    /// the tetrahedron found at its centre (walking cell to cell).
-    fn build_start_grid(&self) -> StartGrid {
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for t in &self.tets {
-            for &v in t {
-                lo = lo.min(self.positions[v as usize]);
-                hi = hi.max(self.positions[v as usize]);
-            }
-        }
-        let ext = (hi - lo).max(Vec3::splat(1e-6));
-        let target = (self.positions.len() as f32 / 4.0).clamp(1.0, 64.0 * 64.0 * 64.0);
-        let cell = math::cbrt(ext.x * ext.y * ext.z / target);
-        let dims = (ext / cell).ceil().clamp(Vec3::ONE, Vec3::splat(64.0));
-        let dims = [dims.x as u32, dims.y as u32, dims.z as u32];
-        let cells_per_metre = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) / ext;
-        let mut grid = StartGrid {
-            origin: lo,
-            cells_per_metre,
-            dims,
-            tets: Vec::new(),
-        };
-        let mut state = WalkState {
-            tet: 0,
-            ..WalkState::new()
-        };
-        for iz in 0..dims[2] {
-            for iy in 0..dims[1] {
-                for ix in 0..dims[0] {
-                    let c =
-                        lo + (Vec3::new(ix as f32, iy as f32, iz as f32) + 0.5) / cells_per_metre;
-                    let tet = self.walk(c, state.tet, false, &mut state).0;
-                    state.tet = tet;
-                    grid.tets.push(tet);
-                }
-            }
-        }
-        grid
-    }
-
     /// Probe positions.
     pub fn positions(&self) -> &[Vec3] {
         &self.positions
@@ -600,97 +466,6 @@ impl TetMesh {
     /// [`Location::Outside`] gives for it), `None` if out of range.
     pub fn hull_face_probes(&self, face: u32) -> Option<[u32; 3]> {
         self.hull.get(face as usize).map(|h| h.probes)
-    }
-
-    /// The tetrahedron walk. Returns `(tet, coords, exit_face)`: `exit_face`
-    /// is the local face through which `p` left the hull (`None` if inside).
-    fn walk(
-        &self,
-        p: Vec3,
-        start: u32,
-        warm: bool,
-        state: &mut WalkState,
-    ) -> (u32, [f32; 4], Option<usize>) {
-        let mut t = start;
-        let mut budget = if warm {
-            JUMP_AFTER_STEPS
-        } else {
-            CYCLE_GUARD_STEPS
-        };
-        let mut jumped = !warm;
-        loop {
-            let l = self.walk[t as usize].bary.coords(p);
-            let mut i = 0;
-            for k in 1..4 {
-                if l[k] < l[i] {
-                    i = k;
-                }
-            }
-            if l[i] >= -INSIDE_TOLERANCE {
-                return (t, l, None);
-            }
-            let n = self.walk[t as usize].links[i];
-            if n & HULL_BIT != 0 {
-                return (t, l, Some(i));
-            }
-            t = n;
-            budget -= 1;
-            if budget == 0 {
-                if !jumped {
-                    jumped = true;
-                    t = self.grid.start(p);
-                    budget = CYCLE_GUARD_STEPS;
-                } else {
-                    return self.stochastic_walk(p, t, state);
-                }
-            }
-        }
-    }
-
-    /// Remembering stochastic walk (Devillers, Pion & Teillaud 2002): a random
-    /// face among those with a negative coordinate, never the one just crossed.
-    #[cold]
-    fn stochastic_walk(
-        &self,
-        p: Vec3,
-        start: u32,
-        state: &mut WalkState,
-    ) -> (u32, [f32; 4], Option<usize>) {
-        let mut t = start;
-        let mut prev = u32::MAX;
-        let mut best = (t, self.walk[t as usize].bary.coords(p));
-        let budget = 4 * self.tets.len() as u64 + 64;
-        for _ in 0..budget {
-            let l = self.walk[t as usize].bary.coords(p);
-            let min = l.iter().copied().fold(f32::INFINITY, f32::min);
-            if min > best.1.iter().copied().fold(f32::INFINITY, f32::min) {
-                best = (t, l);
-            }
-            if min >= -INSIDE_TOLERANCE {
-                return (t, l, None);
-            }
-            let r = state.next_random() as usize;
-            let mut moved = false;
-            for j in 0..4 {
-                let i = (r + j) & 3;
-                let n = self.walk[t as usize].links[i];
-                if l[i] >= -INSIDE_TOLERANCE || n == prev {
-                    continue;
-                }
-                if n & HULL_BIT != 0 {
-                    return (t, l, Some(i));
-                }
-                prev = t;
-                t = n;
-                moved = true;
-                break;
-            }
-            if !moved {
-                // Only the face we came through is negative: p is on it up to rounding.
-                return (t, l, None);
-            }
-        }
-        (best.0, best.1, None)
     }
 
     /// Locates `p` (metres) starting from the tetrahedron cached in `state`
@@ -738,132 +513,6 @@ impl TetMesh {
             ),
         }
     }
-
-    /// Closest point of the hull to `p` (outside), by descent over hull faces
-    /// from face `h`. Returns the face, barycentric weights in it, and the point.
-    fn closest_on_hull(&self, p: Vec3, mut h: u32) -> (u32, [f32; 3], Vec3) {
-        let pd = p.as_dvec3();
-        let mut cur = self.closest_in_face(p, h);
-        // Distances in f64: neighbouring hull faces are often co-planar, where
-        // moving the closest point by δ changes the distance only by O(δ²).
-        let dist = |c: &([f32; 3], DVec3, Feature)| (pd - c.1).length_squared();
-        for _ in 0..self.hull.len() + 8 {
-            let d = dist(&cur);
-            // Strictly closer (beyond f64 rounding), so the descent terminates.
-            let closer = |d2: f64| d2 < d * (1.0 - 1e-12);
-            let next = match cur.2 {
-                Feature::Face => None,
-                Feature::Edge(k) => {
-                    let g = self.hull[h as usize].adjacent[k];
-                    let cand = self.closest_in_face(p, g);
-                    closer(dist(&cand)).then_some((g, cand))
-                }
-                Feature::Vertex(k) => {
-                    // Rotate around the vertex: the edge opposite local vertex
-                    // k + 1 contains it, and consistent winding keeps turning
-                    // the same way.
-                    let v = self.hull[h as usize].probes[k];
-                    let mut best = None;
-                    let mut best_d = d;
-                    let (mut g, mut kg) = (h, k);
-                    for _ in 0..MAX_FAN {
-                        g = self.hull[g as usize].adjacent[(kg + 1) % 3];
-                        let Some(k2) = self.hull[g as usize].probes.iter().position(|&x| x == v)
-                        else {
-                            break;
-                        };
-                        if g == h {
-                            break;
-                        }
-                        kg = k2;
-                        let cand = self.closest_in_face(p, g);
-                        let d2 = dist(&cand);
-                        if closer(d2) && d2 < best_d {
-                            best_d = d2;
-                            best = Some((g, cand));
-                        }
-                    }
-                    best
-                }
-            };
-            match next {
-                Some((g, cand)) => {
-                    h = g;
-                    cur = cand;
-                }
-                None => break,
-            }
-        }
-        (h, cur.0, cur.1.as_vec3())
-    }
-
-    fn closest_in_face(&self, p: Vec3, h: u32) -> ([f32; 3], DVec3, Feature) {
-        let f = self.hull[h as usize]
-            .probes
-            .map(|v| self.positions[v as usize]);
-        closest_point_on_triangle(p, f[0], f[1], f[2])
-    }
-}
-
-/// Which feature of a triangle holds the closest point.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Feature {
-    Face,
-    /// The edge opposite local vertex `k`.
-    Edge(usize),
-    /// Local vertex `k`.
-    Vertex(usize),
-}
-
-/// Closest point of triangle `abc` to `p` with its barycentric weights, by
-/// classifying `p` into the triangle's Voronoi regions (vertex, edge, face)
-/// — the standard construction, e.g. Ericson, "Real-Time Collision
-/// Detection" §5.1.5. Computed in `f64` for robustness on thin triangles.
-fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> ([f32; 3], DVec3, Feature) {
-    let (p, a, b, c) = (p.as_dvec3(), a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
-    let out = |w: [f64; 3], f: Feature| {
-        let q: DVec3 = a * w[0] + b * w[1] + c * w[2];
-        (w.map(|x| x as f32), q, f)
-    };
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return out([1.0, 0.0, 0.0], Feature::Vertex(0));
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return out([0.0, 1.0, 0.0], Feature::Vertex(1));
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return out([1.0 - v, v, 0.0], Feature::Edge(2));
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return out([0.0, 0.0, 1.0], Feature::Vertex(2));
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return out([1.0 - w, 0.0, w], Feature::Edge(1));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return out([0.0, 1.0 - w, w], Feature::Edge(0));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let v = vb * denom;
-    let w = vc * denom;
-    out([1.0 - v - w, v, w], Feature::Face)
 }
 
 #[cfg(test)]

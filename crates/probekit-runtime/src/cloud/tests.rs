@@ -3,6 +3,7 @@
 //! the baker. Random Delaunay clouds are tested in `probekit/tests/cloud_query.rs`.
 
 use super::*;
+use glam::DVec3;
 use std::collections::HashMap;
 
 #[test]
