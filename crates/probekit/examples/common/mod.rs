@@ -140,8 +140,8 @@ impl NearLights {
         radius: f32,
         seed: u64,
     ) -> Result<Self, Box<dyn Error>> {
-        use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
         use probekit::placement::eval::is_evaluation_point;
+        use probekit::sampling::{sample_uniform_sphere, SampleRng};
         use probekit::scene::LightKind;
         let bbox = scene.bake_box();
         let free = |p: Vec3| bbox.contains(p) && is_evaluation_point(baker.tracer(), p);

@@ -44,13 +44,13 @@
 //! bit-identical for any thread count and any sharding.
 
 use super::emitters::Emitters;
-use super::sampling::{
-    power_heuristic, r2_point, sample_cosine_hemisphere, sample_uniform_sphere, Frame, SampleRng,
-    INV_FOUR_PI,
-};
 use super::validity::{HitStats, Validity, ValiditySettings};
 use super::BakeError;
 use crate::env::EnvMap;
+use crate::sampling::{
+    power_heuristic, r2_point, sample_cosine_hemisphere, sample_uniform_sphere, Frame, SampleRng,
+    INV_FOUR_PI,
+};
 use crate::scene::Scene;
 use crate::trace::{offset_ray_origin, Hit, Ray, Tracer, SHADOW_EPSILON};
 use glam::{DVec3, Vec2, Vec3};

@@ -6,12 +6,12 @@
 //! Units (scene format, issue 4): 1 cd = 1 W/sr of radiant intensity, lux =
 //! W/m²; sphere and disk lights have uniform radiance `I/(π r²)`.
 
-use super::sampling::{
+use super::BakeError;
+use crate::env::{EnvMap, EnvSampler};
+use crate::sampling::{
     cone_one_minus_cos, sample_uniform_cone, sample_uniform_disk_concentric,
     sample_uniform_triangle, uniform_cone_pdf, Frame,
 };
-use super::BakeError;
-use crate::env::{EnvMap, EnvSampler};
 use crate::scene::{LightKind, Scene};
 use glam::{Quat, Vec2, Vec3};
 use probekit_sh::LUMINANCE;

@@ -8,11 +8,10 @@
 //! [`Baker::capture`] (one probe, `capture`), [`Baker::reference_irradiance`]
 //! (`reference`), [`shard_range`] (`bake --shard I/N`). The estimator is
 //! described in [`capture`]; validity in [`validity`]; samplers in
-//! [`sampling`].
+//! [`crate::sampling`].
 
 pub mod capture;
 pub(crate) mod emitters;
-pub mod sampling;
 pub mod validity;
 
 #[cfg(test)]

@@ -65,10 +65,10 @@
 //! Measured in BENCHMARKS.md ("Fitted probe weights", "The brightness
 //! exponent, fitted with the probe weights").
 
-use crate::bake::sampling::SampleRng;
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::placement::eval::{sample_points, SURFACE_CLEARANCE};
 use crate::placement::is_free;
+use crate::sampling::SampleRng;
 use crate::scene::Aabb;
 use glam::Vec3;
 use probekit_runtime::cloud::{
@@ -746,10 +746,10 @@ mod tests {
     use crate::cloud::tetrahedralize;
 
     /// Seeded uniform points in `[lo, hi]³` (the crate's sampler).
-    struct Lcg(crate::bake::sampling::SampleRng);
+    struct Lcg(crate::sampling::SampleRng);
     impl Lcg {
         fn new(seed: u64) -> Self {
-            Self(crate::bake::sampling::SampleRng::new(seed, 0, 0))
+            Self(crate::sampling::SampleRng::new(seed, 0, 0))
         }
         fn v(&mut self, lo: f32, hi: f32) -> Vec3 {
             let r = &mut self.0;

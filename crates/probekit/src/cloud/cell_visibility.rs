@@ -14,7 +14,7 @@
 //! Deterministic: each cell's record depends only on the mesh and the scene,
 //! and cells are baked in parallel into their own slots.
 
-use crate::bake::sampling::SampleRng;
+use crate::sampling::SampleRng;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::{
@@ -486,7 +486,7 @@ mod tests {
     #[test]
     fn typical_cell_edge_is_the_cell_size_at_a_random_point() {
         // Jittered probes, denser near one corner, like a cloud crowding a light.
-        let mut rng = crate::bake::sampling::SampleRng::new(11, 0, 0);
+        let mut rng = crate::sampling::SampleRng::new(11, 0, 0);
         let mut pos = Vec::new();
         for i in 0..6 {
             for j in 0..4 {

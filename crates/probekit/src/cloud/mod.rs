@@ -40,7 +40,7 @@ pub mod predicates;
 pub mod visibility;
 pub mod visibility_bake;
 
-use crate::bake::sampling::SampleRng;
+use crate::sampling::SampleRng;
 use glam::Vec3;
 use predicates::{InSphere, Kernel, Orientation, P3};
 use thiserror::Error;
@@ -1061,7 +1061,7 @@ impl Tetrahedralization {
 /// Deterministic point sets shared by the benchmark, the Qhull peer script's
 /// point writer (`examples/delaunay_peer.rs`) and the tests.
 pub mod bench_points {
-    use crate::bake::sampling::SampleRng;
+    use crate::sampling::SampleRng;
     use glam::Vec3;
 
     /// `n` points uniform in the unit cube `[0, 1)³` from `seed`.

@@ -21,7 +21,7 @@
 //! bytes depend neither on the thread count nor on how the probes are split
 //! into shards.
 
-use crate::bake::sampling::{hash3, SampleRng};
+use crate::sampling::{hash3, SampleRng};
 use crate::trace::{Ray, Tracer};
 use glam::{Vec2, Vec3};
 use probekit_runtime::cloud::visibility::{oct_decode, oct_texel_center};

@@ -78,9 +78,10 @@
 
 use super::eval::blend_sh;
 use super::{LeakSettings, PlacementError, State};
-use crate::bake::sampling::SampleRng;
 use crate::cloud::cell_visibility::segment_clear;
 use crate::cloud::tetrahedralize;
+use crate::progress::Progress;
+use crate::sampling::SampleRng;
 use crate::scene::{Aabb, Light, LightKind, Scene};
 use crate::trace::Ray;
 use glam::Vec3;
@@ -849,7 +850,7 @@ impl Adaptive<'_, '_, '_> {
         &mut self,
         target: usize,
         tolerance: f32,
-        progress: &(dyn Fn(&str, usize, usize) + Sync),
+        progress: Progress<'_>,
         budget: usize,
     ) -> Result<bool, PlacementError> {
         while self.st.positions.len() < target {
@@ -1107,7 +1108,7 @@ pub(super) fn adaptive(
     tolerance: f32,
     shells: bool,
     ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<(), PlacementError> {
     st.stats.light_shells = shells;
     let tracer = st.baker.tracer();

@@ -22,8 +22,8 @@
 //!   the leaks among them (counted in `leaks` too).
 
 use super::{inside_geometry, is_open};
-use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
 use crate::bake::{BakeError, Baker, ReferenceSettings};
+use crate::sampling::{sample_uniform_sphere, SampleRng};
 use crate::scene::{Aabb, Region};
 use crate::trace::Tracer;
 use glam::{Vec2, Vec3};

@@ -36,7 +36,8 @@
 
 use super::spawn_merge::{sampled_irradiance, Directions};
 use super::{crossing_extent, grid_points, LeakSettings, PlacementError, State};
-use crate::bake::sampling::SampleRng;
+use crate::progress::Progress;
+use crate::sampling::SampleRng;
 use crate::scene::Aabb;
 use glam::Vec3;
 use probekit_sh::ShRgb;
@@ -293,7 +294,7 @@ pub(super) fn gradient_ascent(
     bbox: &Aabb,
     p: &GradientAscentParams,
     ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<Vec<AscentMove>, PlacementError> {
     p.validate()?;
     let dirs = Directions::TwentySix.vectors();

@@ -36,6 +36,7 @@ pub use adaptive::PROBE_CLEARANCE;
 
 use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
+use crate::progress::Progress;
 use crate::scene::{Aabb, BakeBoxError};
 use crate::trace::{Hit, Ray, Tracer};
 use glam::Vec3;
@@ -917,7 +918,7 @@ pub fn place(
     bake_box: Aabb,
     method: &PlacementMethod,
     settings: &CaptureSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<Placement, PlacementError> {
     settings.validate()?;
     // Before any work: a box that can hold probes, and a request that

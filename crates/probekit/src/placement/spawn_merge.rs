@@ -34,6 +34,7 @@
 
 use super::{crossing_extent, grid_points, tet_edges, LeakSettings, PlacementError, State};
 use crate::cloud::tetrahedralize;
+use crate::progress::Progress;
 use crate::scene::Aabb;
 use crate::trace::Ray;
 use glam::Vec3;
@@ -218,7 +219,7 @@ pub(super) fn spawn_merge(
     bbox: &Aabb,
     p: &SpawnMergeParams,
     ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<(), PlacementError> {
     p.validate()?;
     let (merge_d, spawn_d, min_d) = p.distances(bbox);

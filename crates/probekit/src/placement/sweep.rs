@@ -28,16 +28,12 @@ use crate::cloud::file::{cloud_file, file_validity, settings_json, CloudFileErro
 use crate::cloud::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
 use crate::plot::{line_chart_log, PlotError};
+use crate::progress::Progress;
 use crate::scene::Aabb;
 use glam::Vec3;
 use probekit_runtime::Interp;
 use std::path::Path;
 use thiserror::Error;
-
-/// Progress of a long step: `(phase, done, total)`, as
-/// [`place`] reports it; `phase` names what is running
-/// (`"capture"`, `"visibility"`, a sweep's `"adaptive 100: capture"`).
-pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 
 /// The methods a sweep runs, in plot order.
 pub const SWEEP_METHODS: [&str; 4] = ["grid", "adaptive", "spawn-merge", "gradient-ascent"];

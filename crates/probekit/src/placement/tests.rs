@@ -471,7 +471,7 @@ fn snap_to_layer_moves_only_points_near_or_beyond_a_face() {
 /// Points of the demo's closet (x 0..1.2, z 0..1.0, reached through a gap
 /// at x < 0.5 in its front wall), jittered, 5 cm off its walls.
 fn closet_points(n: usize) -> Vec<Vec3> {
-    let mut rng = crate::bake::sampling::SampleRng::new(7, 0x434c, 0);
+    let mut rng = crate::sampling::SampleRng::new(7, 0x434c, 0);
     (0..n)
         .map(|_| {
             Vec3::new(
@@ -719,7 +719,7 @@ fn leaks_through_geometry_are_the_leaks_whose_blend_reaches_behind_a_wall() {
         .unwrap();
     let cloud =
         probekit_runtime::ProbeCloud::new(mesh.clone(), 1, vec![Vec3::ONE; probes.len()]).unwrap();
-    let mut rng = crate::bake::sampling::SampleRng::new(3, 0x4854, 0);
+    let mut rng = crate::sampling::SampleRng::new(3, 0x4854, 0);
     let pts: Vec<EvalPoint> = (0..400)
         .map(|_| EvalPoint {
             position: Vec3::new(
@@ -765,7 +765,7 @@ fn outside_hull_flags_the_points_beyond_a_lattice_of_probes() {
         .to_tet_mesh(&probes)
         .unwrap();
     let cloud = probekit_runtime::ProbeCloud::new(mesh, 1, vec![Vec3::ONE; probes.len()]).unwrap();
-    let mut rng = crate::bake::sampling::SampleRng::new(5, 0x4855, 0);
+    let mut rng = crate::sampling::SampleRng::new(5, 0x4855, 0);
     let pts: Vec<EvalPoint> = (0..600)
         .map(|_| EvalPoint {
             position: Vec3::new(

@@ -162,8 +162,8 @@ pub fn rig_file(rigs: &[FittedRig]) -> ProbeFile {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::sampling::SampleRng;
     use crate::rig::mesh;
+    use crate::sampling::SampleRng;
 
     /// A uniform draw in `[-0.5, 0.5)` from the baking library's generator.
     fn centred(rng: &mut SampleRng) -> f32 {

@@ -10,7 +10,7 @@
 //! so the result does not depend on the thread count.
 
 use super::mesh::Mesh;
-use crate::bake::sampling::SampleRng;
+use crate::sampling::SampleRng;
 use glam::Vec3;
 
 /// Candidates drawn per requested sample.

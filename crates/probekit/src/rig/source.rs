@@ -195,7 +195,7 @@ mod tests {
                 )
             })
             .collect();
-        let mut rng = crate::bake::sampling::SampleRng::from_state(11);
+        let mut rng = crate::sampling::SampleRng::from_state(11);
         for _ in 0..40 {
             let t = Vec3::new(
                 rng.next_f64() as f32,

@@ -62,7 +62,7 @@ pub struct BakerSource<'s> {
 /// A 64-bit key of a position's bits (SplitMix64 finaliser over x, y, z):
 /// the probe index the baker keys its random numbers with.
 pub fn position_key(p: Vec3) -> u64 {
-    use crate::bake::sampling::{mix64, SPLITMIX_GAMMA};
+    use crate::sampling::{mix64, SPLITMIX_GAMMA};
     let mut h = SPLITMIX_GAMMA;
     for v in p.to_array() {
         // +0.0 folds −0.0 into +0.0: the same point, the same key.

@@ -1,4 +1,6 @@
-//! Sampling routines for the path tracer, in pbrt's style: each sampler comes
+//! The crate's one random number generator ([`SampleRng`]) and its samplers,
+//! used by the path tracer, placement, Delaunay insertion order and the
+//! blend-data bakes. Samplers are in pbrt's style: each sampler comes
 //! in threes — `sample_x(u)` maps uniform random numbers `u ∈ [0,1)²` to a
 //! sample, `x_pdf` is its density (per steradian for directions, per unit
 //! area for points), and the random numbers are always passed in so the
