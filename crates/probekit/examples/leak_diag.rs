@@ -19,9 +19,9 @@
 
 use glam::Vec3;
 use probekit::bake::{Baker, CaptureSettings};
-use probekit::cloud::cell_visibility::segment_clear;
 use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
 use probekit::scene::Scene;
+use probekit::trace::free_space::segment_clear;
 use probekit::trace::Ray;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::{Interp, ProbeFile};

@@ -105,10 +105,9 @@ use probekit::placement::eval::{
     blends_hidden_probes, interpolate_cloud, leaks_at, metrics, outside_hull, region_leaks_at,
     region_metrics, unlit_points, worst_points,
 };
-use probekit::placement::{
-    grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
-};
+use probekit::placement::{grid_points, place, LightShells, PlacementMethod, PROBE_CLEARANCE};
 use probekit::scene::{LightKind, Scene};
+use probekit::trace::free_space::inside_geometry;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
 use std::error::Error;
@@ -226,7 +225,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             nl.uniform_weight
         );
     }
-    let all_pts: Vec<probekit::placement::eval::EvalPoint> = pts
+    let all_pts: Vec<probekit::trace::free_space::EvalPoint> = pts
         .iter()
         .chain(strata.iter().flat_map(|nl| nl.set.points.iter()))
         .copied()
@@ -496,7 +495,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                         w4[k],
                         c.probe_weights().map_or(1.0, |s| s[j]),
                         probekit_sh::LUMINANCE.dot(e),
-                        probekit::cloud::cell_visibility::segment_clear(baker.tracer(), p.position, pos[j])
+                        probekit::trace::free_space::segment_clear(baker.tracer(), p.position, pos[j])
                     );
                 }
             }

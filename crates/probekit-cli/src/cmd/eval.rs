@@ -24,13 +24,14 @@ use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
-    sample_points, unlit_points, worst_points, EvalPoint, Metrics, Predictor,
+    unlit_points, worst_points, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
     bake_blend_data, place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};
+use probekit::trace::free_space::{sample_points, EvalPoint};
 use probekit::trace::Tracer;
 use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;

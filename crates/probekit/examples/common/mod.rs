@@ -4,10 +4,9 @@
 
 use glam::Vec3;
 use probekit::bake::Baker;
-use probekit::placement::eval::{
-    mean_luminance, reference_cache_path, reference_cached, sample_points, EvalPoint,
-};
+use probekit::placement::eval::{mean_luminance, reference_cache_path, reference_cached};
 use probekit::scene::Scene;
+use probekit::trace::free_space::{sample_points, EvalPoint};
 use std::error::Error;
 
 /// The value after `name` in `args`, parsed, or `default` when it is
@@ -140,9 +139,9 @@ impl NearLights {
         radius: f32,
         seed: u64,
     ) -> Result<Self, Box<dyn Error>> {
-        use probekit::placement::eval::is_evaluation_point;
         use probekit::sampling::{sample_uniform_sphere, SampleRng};
         use probekit::scene::LightKind;
+        use probekit::trace::free_space::is_evaluation_point;
         let bbox = scene.bake_box();
         let free = |p: Vec3| bbox.contains(p) && is_evaluation_point(baker.tracer(), p);
         let centres: Vec<Vec3> = scene

@@ -66,10 +66,9 @@
 //! exponent, fitted with the probe weights").
 
 use crate::bake::{BakeError, Baker, CaptureSettings};
-use crate::placement::eval::{sample_points, SURFACE_CLEARANCE};
-use crate::placement::is_free;
 use crate::sampling::SampleRng;
 use crate::scene::Aabb;
+use crate::trace::free_space::{is_free, sample_points, SURFACE_CLEARANCE};
 use glam::Vec3;
 use probekit_runtime::cloud::{
     ProbeCloud, ProbeCloudError, TetMesh, WalkState, MAX_BRIGHTNESS_EXPONENT,
@@ -1077,7 +1076,7 @@ mod tests {
                     let t = Vec3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5)
                         / Vec3::new(4.0, 3.0, 3.0);
                     let p = b.min + t * (b.max - b.min);
-                    if !crate::placement::inside_geometry(baker.tracer(), p) {
+                    if !crate::trace::free_space::inside_geometry(baker.tracer(), p) {
                         pos.push(p);
                     }
                 }

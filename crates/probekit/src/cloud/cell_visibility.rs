@@ -15,6 +15,7 @@
 //! and cells are baked in parallel into their own slots.
 
 use crate::sampling::SampleRng;
+use crate::trace::free_space::segment_clear;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::{
@@ -38,17 +39,6 @@ pub enum CellVisibilityError {
     /// they do not form a valid mesh.
     #[error(transparent)]
     Mesh(#[from] probekit_runtime::cloud::ProbeCloudError),
-}
-
-/// True when the segment from `a` to `b` crosses no surface (any surface,
-/// whatever its opacity, as the distance moments count them).
-pub fn segment_clear(tracer: &Tracer<'_>, a: Vec3, b: Vec3) -> bool {
-    let d = b - a;
-    let len = d.length();
-    if len.is_nan() || len <= 1e-6 {
-        return true;
-    }
-    tracer.closest_hit(&Ray::new(a, d / len), len).is_none()
 }
 
 /// Lattice spacing, metres, that [`auto_subdivision`] aims for along the

@@ -78,11 +78,11 @@
 
 use super::eval::blend_sh;
 use super::{LeakSettings, PlacementError, State};
-use crate::cloud::cell_visibility::segment_clear;
 use crate::cloud::tetrahedralize;
 use crate::progress::Progress;
 use crate::sampling::SampleRng;
 use crate::scene::{Aabb, Light, LightKind, Scene};
+use crate::trace::free_space::segment_clear;
 use crate::trace::Ray;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
@@ -125,7 +125,7 @@ pub const EMITTER_CLEARANCE: f32 = 0.02;
 /// an emitter (the ceiling a light hangs under) is not seen.
 fn has_clearance(tracer: &crate::trace::Tracer, p: Vec3) -> bool {
     let scene = tracer.scene();
-    super::is_free_of(tracer, p, PROBE_CLEARANCE - CLEARANCE_TOLERANCE, |h| {
+    crate::trace::free_space::is_free_of(tracer, p, PROBE_CLEARANCE - CLEARANCE_TOLERANCE, |h| {
         h.t < EMITTER_CLEARANCE - CLEARANCE_TOLERANCE
             || scene.emission(h.material, h.uv).max_element() <= 0.0
     })

@@ -21,73 +21,15 @@
 //!   floor slabs, which the free-space test cannot tell from rooms — and
 //!   the leaks among them (counted in `leaks` too).
 
-use super::{inside_geometry, is_open};
 use crate::bake::{BakeError, Baker, ReferenceSettings};
-use crate::sampling::{sample_uniform_sphere, SampleRng};
-use crate::scene::{Aabb, Region};
+use crate::scene::Region;
+use crate::trace::free_space::{segment_clear, EvalPoint};
 use crate::trace::Tracer;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use probekit_runtime::cloud::{TetMesh, WalkState};
 use probekit_runtime::{Interp, ProbeCloud, ProbeCloudError, ProbeFile, Volume, VolumeError};
 use probekit_sh::ShRgb;
 use thiserror::Error;
-
-/// Minimum distance of an evaluation point from any surface, metres.
-pub const SURFACE_CLEARANCE: f32 = 0.01;
-
-/// One evaluation point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct EvalPoint {
-    /// Position, metres.
-    pub position: Vec3,
-    /// Unit normal of the receiver.
-    pub normal: Vec3,
-}
-
-/// `n` deterministic points (seeded) in free space of `b`
-/// ([`is_evaluation_point`]): rejected when
-/// [`inside_geometry`] (seven rays, a majority of back faces), or when
-/// [`is_open`] fails (a surface within [`SURFACE_CLEARANCE`] along any of 26
-/// rays, or a quarter of them first hitting a back face: that catches points
-/// inside a wall whose faces coincide with another mesh's, which the seven
-/// rays let through — on `builtin:demo` 5 of 10 000 points were inside its
-/// dividing wall, all with zero reference irradiance), or within
-/// [`SURFACE_CLEARANCE`] of a sphere light's surface or inside it
-/// ([`crate::scene::Scene::sphere_light_at`]: a lamp is a surface too,
-/// though no ray hits it; on the duplex apartment 5 points in balls of 1 m
-/// around its four 10 cm lamps, inside them, held 72 % of the squared
-/// irradiance of a stratified estimate). Gives up after `200·n` tries.
-pub fn sample_points(tracer: &Tracer, b: &Aabb, n: usize, seed: u64) -> Vec<EvalPoint> {
-    let mut out = Vec::with_capacity(n);
-    let size = b.size();
-    let mut tries = 0u64;
-    while out.len() < n && tries < 200 * n as u64 + 1000 {
-        let mut rng = SampleRng::new(seed, 0x4556_414c, tries);
-        tries += 1;
-        let p = b.min + Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * size;
-        let normal = sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32()));
-        if is_evaluation_point(tracer, p) {
-            out.push(EvalPoint {
-                position: p,
-                normal,
-            });
-        }
-    }
-    out
-}
-
-/// Whether `p` may be an evaluation point (the test of [`sample_points`]):
-/// not within [`SURFACE_CLEARANCE`] of a sphere light or inside it, no
-/// surface within it along [`is_open`]'s rays, and not [`inside_geometry`].
-/// `p` may lie anywhere; the caller keeps it in its box.
-pub fn is_evaluation_point(tracer: &Tracer, p: Vec3) -> bool {
-    tracer
-        .scene()
-        .sphere_light_at(p, SURFACE_CLEARANCE)
-        .is_none()
-        && is_open(tracer, p, SURFACE_CLEARANCE)
-        && !inside_geometry(tracer, p)
-}
 
 /// Reference irradiance at each point (index = row number).
 pub fn reference(
@@ -156,7 +98,8 @@ pub fn reference_cached(
 /// A cache file for [`reference_cached`] in the system's temporary
 /// directory, keyed by the scene's content hash and a hash of the points
 /// themselves (positions and normals, bit for bit) and of the reference
-/// version ([`REFERENCE_VERSION`]): a change to how [`sample_points`] picks
+/// version ([`REFERENCE_VERSION`]): a change to how
+/// [`sample_points`](crate::trace::free_space::sample_points) picks
 /// points, or to the reference, gets a new file instead of another point
 /// set's truth (a count and a seed alone do not tell).
 pub fn reference_cache_path(scene_hash: u64, points: &[EvalPoint]) -> std::path::PathBuf {
@@ -344,7 +287,7 @@ pub fn unlit_points(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> (usiz
 
 /// Whether each point's blend in `cloud` gives weight to a probe that
 /// geometry hides from it (the segment from the point to the probe is
-/// blocked, [`crate::cloud::cell_visibility::segment_clear`]; the weights of
+/// blocked, [`crate::trace::free_space::segment_clear`]; the weights of
 /// [`ProbeCloud::weights_at`], whose positive ones the directional blend
 /// keeps), in order: a leak at such a point is light from behind a wall; one
 /// elsewhere is an error of interpolating light in sight (a gradient next to
@@ -360,14 +303,7 @@ pub fn blends_hidden_probes(
         .iter()
         .map(|p| {
             let (idx, w) = cloud.weights_at(p.position, &mut st);
-            (0..4).any(|k| {
-                w[k] > 0.0
-                    && !crate::cloud::cell_visibility::segment_clear(
-                        tracer,
-                        p.position,
-                        pos[idx[k] as usize],
-                    )
-            })
+            (0..4).any(|k| w[k] > 0.0 && !segment_clear(tracer, p.position, pos[idx[k] as usize]))
         })
         .collect()
 }

@@ -270,7 +270,7 @@ fn capture_field(
     Ok(res
         .into_iter()
         .map(|r| {
-            if r.validity.valid && !super::inside_geometry(tracer, r.position) {
+            if r.validity.valid && !crate::trace::free_space::inside_geometry(tracer, r.position) {
                 let field = if indirect_only {
                     r.indirect.clone().unwrap_or_else(|| r.sh.clone())
                 } else {
@@ -349,7 +349,7 @@ pub(super) fn gradient_ascent(
             .map(|q| {
                 q.cmpge(bbox.min).all()
                     && q.cmple(bbox.max).all()
-                    && !super::inside_geometry(tracer, *q)
+                    && !crate::trace::free_space::inside_geometry(tracer, *q)
             })
             .collect();
         let to_capture: Vec<Vec3> = props

@@ -38,7 +38,8 @@ use crate::bake::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
 use crate::progress::Progress;
 use crate::scene::{Aabb, BakeBoxError};
-use crate::trace::{Hit, Ray, Tracer};
+use crate::trace::free_space::{inside_geometry, is_open, push_off_surfaces, segment_clear};
+use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::ShRgb;
 use rayon::prelude::*;
@@ -279,82 +280,6 @@ impl Default for LeakSettings {
             min_distance_fraction: 0.8,
         }
     }
-}
-
-/// True when `p` is inside closed geometry: of 7 fixed, well-spread rays, a
-/// majority first hit a back face (the scenes' meshes are closed and
-/// outward-facing). A ray that hits nothing votes "outside".
-pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
-    const DIRS: [[f32; 3]; 7] = [
-        [0.577, 0.577, 0.577],
-        [-0.577, 0.577, -0.577],
-        [0.577, -0.577, -0.577],
-        [-0.577, -0.577, 0.577],
-        [0.267, 0.802, -0.535],
-        [-0.802, 0.267, 0.535],
-        [0.535, -0.267, 0.802],
-    ];
-    let mut back = 0;
-    for d in DIRS {
-        let ray = Ray::new(p, Vec3::from(d).normalize());
-        if let Some(h) = tracer.closest_hit(&ray, f32::INFINITY) {
-            if !h.front_face {
-                back += 1;
-            }
-        }
-    }
-    back * 2 > DIRS.len()
-}
-
-/// The 26 unit directions towards the faces, edges and corners of a cube
-/// around a point (the axes, face diagonals and cube diagonals), in a fixed
-/// order: the rays of [`is_free`], [`is_open`] and [`push_off_surfaces`].
-fn cube_directions() -> impl Iterator<Item = Vec3> {
-    (0..27).filter(|&i| i != 13).map(|i: i32| {
-        Vec3::new(
-            (i / 9 - 1) as f32,
-            (i / 3 % 3 - 1) as f32,
-            (i % 3 - 1) as f32,
-        )
-        .normalize()
-    })
-}
-
-/// True when `p` is in free space: not [`inside_geometry`] and no surface
-/// within `clearance` metres along any of 26 directions (the axes, face
-/// diagonals and cube diagonals).
-pub fn is_free(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    is_free_of(tracer, p, clearance, |_| true)
-}
-
-/// [`is_free`], counting only the hits within `clearance` for which
-/// `blocks` holds (adaptive placement lets probes nearer to emitters).
-fn is_free_of(tracer: &Tracer, p: Vec3, clearance: f32, blocks: impl Fn(&Hit) -> bool) -> bool {
-    !cube_directions().any(|d| {
-        tracer
-            .closest_hit(&Ray::new(p, d), clearance)
-            .is_some_and(|h| blocks(&h))
-    }) && !inside_geometry(tracer, p)
-}
-
-/// A stricter [`is_free`]: no surface within `clearance` metres along any of
-/// its 26 directions, and fewer than a quarter of them first see a back
-/// face. In a scene of closed, outward-facing meshes a point of free
-/// space sees front faces first, but for a ray through an edge where two
-/// meshes meet; one inside geometry whose rays leave through faces that
-/// coincide with another mesh's (a wall's top under the ceiling) can outvote
-/// [`inside_geometry`]'s seven rays, but not 26.
-pub fn is_open(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    let mut back = 0;
-    for d in cube_directions() {
-        if let Some(h) = tracer.closest_hit(&Ray::new(p, d), f32::INFINITY) {
-            if h.t < clearance {
-                return false;
-            }
-            back += usize::from(!h.front_face);
-        }
-    }
-    4 * back < 26
 }
 
 /// The smallest grid: 2 cells per axis.
@@ -782,7 +707,6 @@ pub fn orphan_points(
     points: &[Vec3],
     clearance: f32,
 ) -> Result<Vec<Vec3>, PlacementError> {
-    use crate::cloud::cell_visibility::segment_clear;
     use probekit_runtime::cloud::cell_visibility::{lattice_numerators, lattice_position};
     let tri = tetrahedralize(points)?;
     // The tetrahedra, and the hull's faces: outside the hull a point blends
@@ -839,7 +763,6 @@ pub const ORPHAN_COVER_RADIUS: f32 = 1.0;
 /// largest pockets first — a closet's floor rather than a sliver beside a
 /// pillar — instead of to whichever cell came first.
 fn by_pocket_coverage(tracer: &Tracer, cands: Vec<Vec3>, orphans: &[Vec3]) -> Vec<Vec3> {
-    use crate::cloud::cell_visibility::segment_clear;
     let r2 = ORPHAN_COVER_RADIUS * ORPHAN_COVER_RADIUS;
     let sees: Vec<Vec<u32>> = cands
         .par_iter()
@@ -882,31 +805,6 @@ fn by_pocket_coverage(tracer: &Tracer, cands: Vec<Vec3>, orphans: &[Vec3]) -> Ve
     }
     out.extend((0..cands.len()).filter(|&k| !taken[k]).map(|k| cands[k]));
     out
-}
-
-/// `p` moved off the surfaces within `clearance` of it (along the 26
-/// directions of [`is_free`], each hit pushing it back by the clearance it
-/// lacks, a few rounds) until it is in open space ([`is_open`]) at
-/// `clearance`; `None` when it does not get there.
-pub fn push_off_surfaces(tracer: &Tracer, mut p: Vec3, clearance: f32) -> Option<Vec3> {
-    for _ in 0..4 {
-        if is_open(tracer, p, clearance) {
-            return Some(p);
-        }
-        let mut shift = Vec3::ZERO;
-        for d in cube_directions() {
-            if let Some(h) = tracer.closest_hit(&Ray::new(p, d), clearance) {
-                shift -= d * (clearance - h.t);
-            }
-        }
-        let len = shift.length();
-        if len.is_nan() || len <= 0.0 {
-            return None;
-        }
-        // At most the clearance per round, a little past it to converge.
-        p += shift * (1.1 * len.min(clearance) / len);
-    }
-    is_open(tracer, p, clearance).then_some(p)
 }
 
 /// Places probes in `bake_box` with `method`. Captures during placement use

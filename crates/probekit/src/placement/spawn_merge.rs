@@ -282,7 +282,7 @@ pub(super) fn spawn_merge(
                 continue;
             }
             let mid = 0.5 * (pa + pb);
-            if super::inside_geometry(tracer, mid) {
+            if crate::trace::free_space::inside_geometry(tracer, mid) {
                 continue;
             }
             used[a] = true;

@@ -19,7 +19,7 @@
 //! file has) and its predictor the caller's query settings, so the curves
 //! blend as the evaluated file does.
 
-use super::eval::{mean_luminance, metrics, EvalPoint, Metrics, PredictError, Predictor};
+use super::eval::{mean_luminance, metrics, Metrics, PredictError, Predictor};
 use super::gradient_ascent::GradientAscentParams;
 use super::spawn_merge::SpawnMergeParams;
 use super::{place, LightShells, PlacementError, PlacementMethod};
@@ -30,6 +30,7 @@ use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
 use crate::plot::{line_chart_log, PlotError};
 use crate::progress::Progress;
 use crate::scene::Aabb;
+use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
 use probekit_runtime::Interp;
 use std::path::Path;
@@ -313,12 +314,13 @@ pub fn plot_sweep(path: impl AsRef<Path>, title: &str, rows: &[SweepRow]) -> Res
 
 #[cfg(test)]
 mod tests {
-    use super::super::eval::{reference, sample_points};
+    use super::super::eval::reference;
     use super::super::{grid_points, inside_geometry};
     use super::*;
     use crate::bake::ReferenceSettings;
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
+    use crate::trace::free_space::sample_points;
 
     /// A sun-lit room corner: floor slab and one wall, sky light.
     fn scene() -> Scene {

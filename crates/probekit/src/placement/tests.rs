@@ -2,6 +2,7 @@ use super::eval::*;
 use super::*;
 use crate::bake::ReferenceSettings;
 use crate::scene::Scene;
+use crate::trace::free_space::*;
 
 fn fast_settings() -> CaptureSettings {
     CaptureSettings {
@@ -487,7 +488,7 @@ fn closet_points(n: usize) -> Vec<Vec3> {
 /// by geometry (segment tests), counted independently of `orphan_points`'
 /// lattice: by locating each point with the run time's walk.
 fn orphaned_share(tracer: &Tracer, probes: &[Vec3], pts: &[Vec3]) -> f32 {
-    use crate::cloud::cell_visibility::segment_clear;
+    use crate::trace::free_space::segment_clear;
     let mesh = tetrahedralize(probes).unwrap().to_tet_mesh(probes).unwrap();
     let mut ws = probekit_runtime::cloud::WalkState::new();
     let mut orphaned = 0;

@@ -19,8 +19,8 @@
 
 use super::RenderError;
 use crate::bake::{Baker, ReferenceSettings};
-use crate::placement::inside_geometry;
 use crate::scene::{Aabb, Scene};
+use crate::trace::free_space::inside_geometry;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::project::fibonacci_point;

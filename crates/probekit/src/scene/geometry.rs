@@ -60,7 +60,7 @@ impl Aabb {
     }
 
     /// Checks that the box can hold a bake: finite, and longer than 0 along
-    /// every axis. [`Aabb::EMPTY`] (what [`Scene::bake_box`] gives for a
+    /// every axis. [`Aabb::EMPTY`] (what [`Scene::bake_box`](super::Scene::bake_box) gives for a
     /// scene without geometry and without a `[bake] box`) is refused as
     /// [`BakeBoxError::NoGeometry`]. Every placement, volume and evaluation
     /// checks its box with this before any work, so a flat scene (one floor
@@ -116,7 +116,7 @@ pub struct Triangle {
     /// Per-vertex texture coordinates in the glTF convention (`(0,0)` = top-left of the image);
     /// zero when the source has none.
     pub uvs: [Vec2; 3],
-    /// Index into [`Scene::materials`].
+    /// Index into [`Scene::materials`](super::Scene::materials).
     pub material: u32,
 }
 
@@ -150,7 +150,7 @@ impl Triangle {
     }
 }
 
-/// A contiguous range of [`Scene::triangles`] that came from one source object (an OBJ `o`/`g`
+/// A contiguous range of [`Scene::triangles`](super::Scene::triangles) that came from one source object (an OBJ `o`/`g`
 /// group, a glTF mesh primitive, a demo-scene box). Winding is checked per object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshObject {

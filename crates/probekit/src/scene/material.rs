@@ -25,7 +25,7 @@ pub struct Material {
     pub name: String,
     /// Linear RGB diffuse albedo factor (glTF `baseColorFactor.rgb`, OBJ `Kd`).
     pub base_color: Vec3,
-    /// Index into [`Scene::textures`] of the base-colour texture (already linear RGB + alpha),
+    /// Index into [`Scene::textures`](super::Scene::textures) of the base-colour texture (already linear RGB + alpha),
     /// multiplied with `base_color` and `alpha`.
     pub base_color_texture: Option<u32>,
     /// Alpha factor (glTF `baseColorFactor.a`, OBJ `d` or `1 − Tr`).
@@ -35,7 +35,7 @@ pub struct Material {
     /// Emitted radiance factor, linear RGB (glTF `emissiveFactor` × `KHR_materials_emissive_strength`,
     /// OBJ `Ke`). Radiance in the scene's units (W/(sr·m²) with 1 cd = 1 W/sr).
     pub emissive: Vec3,
-    /// Index into [`Scene::textures`] of the emissive texture (linear RGB), multiplied with `emissive`.
+    /// Index into [`Scene::textures`](super::Scene::textures) of the emissive texture (linear RGB), multiplied with `emissive`.
     pub emissive_texture: Option<u32>,
     /// glTF `doubleSided` (OBJ: false). Informational: the tracer never culls back faces.
     pub double_sided: bool,
