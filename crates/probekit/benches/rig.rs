@@ -6,8 +6,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
+use probekit::lights::SphereTable;
 use probekit::rig::fit::FittedRig;
-use probekit::rig::lights::{paper_cost_lights, SphereTable};
+use probekit::rig::lights::paper_cost_lights;
 use probekit::rig::mesh;
 use probekit::rig::split::{self, Frame};
 use probekit::rig::RigSpec;

@@ -77,7 +77,7 @@
 //! own), each probe records the fraction of each light it sees (its captured
 //! direct DC over the light's unshadowed SH DC), and a point's irradiance is
 //! the blend of the probes' SH plus, per light, its exact unshadowed
-//! irradiance (`rig::lights::Light::irradiance`) times the probes'
+//! irradiance (`lights::Light::irradiance`) times the probes'
 //! fractions blended with the same weights (fitted probe weights, when on, are
 //! fitted to the light the probes hold). The ground truth is unchanged.
 //! `--analytic-sun`: the same, and directional lights too.
@@ -172,14 +172,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         return Err("--analytic-lights needs --visibility".into());
     }
     // Only then: a second copy of the scene and its BVH.
-    let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
+    let mut near: Vec<(String, probekit::lights::Light)> = Vec::new();
     let grouped = analytic.then(|| {
         let mut grouped = scene.clone();
         for (i, l) in grouped.lights.iter_mut().enumerate() {
             let positional =
                 matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position);
             if positional || (analytic_sun && l.kind == LightKind::Directional) {
-                if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
+                if let Some(rl) = probekit::lights::from_scene_light(l) {
                     l.group = Some(format!("near{i:02}"));
                     near.push((format!("near{i:02}"), rl));
                 }

@@ -11,6 +11,7 @@ pub mod cloud;
 pub mod env;
 pub mod format;
 pub mod inspect;
+pub mod lights;
 pub mod placement;
 pub mod plot;
 pub mod progress;

@@ -262,7 +262,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
 fn render(
     out: &Path,
     mesh: &probekit::rig::mesh::Mesh,
-    lights: &[probekit::rig::lights::Light],
+    lights: &[probekit::lights::Light],
     probes: Option<&ProbeSource>,
     cfg: &RunConfig,
     report: &RunReport,

@@ -997,7 +997,7 @@ fn two_group_room(b_scale: Vec3) -> Scene {
 /// `exclude_direct` leaves one group's direct light out of `sh` and nothing
 /// else: the excluded capture is the full one less that group's direct SH
 /// (same random numbers, so to rounding); what it leaves out matches the
-/// sphere light's closed-form SH (`rig::lights::Light::add_sh`, an
+/// sphere light's closed-form SH (`lights::Light::add_sh`, an
 /// independent computation) at a probe that sees the whole light; with no
 /// bounces and every group excluded nothing is left; an unknown group is an
 /// error, not a silent no-op.
@@ -1043,7 +1043,7 @@ fn exclude_direct_leaves_out_one_groups_direct_light() {
     // Probe 3 at (0.1, 1.9, -0.2) sees the whole sphere light "a": the
     // light left out is its unshadowed SH.
     let a = &scene.lights[0];
-    let rl = crate::rig::lights::from_scene_light(a).unwrap();
+    let rl = crate::lights::from_scene_light(a).unwrap();
     let mut analytic = vec![Vec3::ZERO; 9];
     rl.add_sh(3, full[3].position, 1.0, &mut analytic);
     let left_out = full[3].sh.coeffs()[0] - ex[3].sh.coeffs()[0];

@@ -4,13 +4,12 @@
 //! time a frame.
 
 use super::fit::FittedRig;
-use super::lights::{
-    lights_from_scene, paper_cost_lights, rig_demo_lights, Light, SceneLights, SphereTable,
-};
+use super::lights::{lights_from_scene, paper_cost_lights, rig_demo_lights, SceneLights};
 use super::mesh::{self, Mesh};
 use super::source::ProbeSource;
 use super::split::{self, Frame, Zone};
 use super::{RigSetupError, RigSpec};
+use crate::lights::{Light, SphereTable};
 use crate::scene::Scene;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;

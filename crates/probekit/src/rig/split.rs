@@ -27,9 +27,9 @@
 //! the rig.
 
 use super::fit::FittedRig;
-use super::lights::{Light, SphereTable};
 use super::mesh::Mesh;
 use super::source::ProbeSource;
+use crate::lights::{Light, SphereTable};
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::Transition;
