@@ -17,7 +17,7 @@
 //! seed's own `rel_rmse` follows in brackets: one 2000-point set can be
 //! decided by a handful of points next to a light.
 
-use probekit::bake::Baker;
+use probekit::capture::Baker;
 use probekit::format::ProbeFile;
 use probekit::placement::eval::{metrics, Predictor};
 use probekit::scene::Scene;

@@ -18,7 +18,7 @@
 //! counts the leaks shown and those (e) leaves.
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings};
+use probekit::capture::{Baker, CaptureSettings};
 use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
 use probekit::scene::Scene;
 use probekit::trace::free_space::segment_clear;

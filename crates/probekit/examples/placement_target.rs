@@ -92,7 +92,7 @@
 //! `probekit eval` figures).
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings};
+use probekit::capture::{Baker, CaptureSettings};
 use probekit::cloud::blend_fit::{
     capture_training_set, fit_blend, BlendFitSettings, BRIGHTNESS_CHOICES,
 };

@@ -6,7 +6,7 @@
 
 #![warn(missing_docs)]
 
-pub mod bake;
+pub mod capture;
 pub mod cloud;
 pub mod env;
 pub mod format;

@@ -23,7 +23,7 @@ use super::util::{check_outputs, first_given, load_probes, load_scene, read_csv}
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{shard_range, BakeOutput, CaptureSettings};
+use probekit::capture::{shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::blend_fit::BlendFitSettings;
 use probekit::cloud::cell_visibility::CellLattice;
 use probekit::cloud::file::{
@@ -365,7 +365,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         placement_settings.order = o;
     }
     // One baker (and BVH) for placement, the probes and the blend data.
-    let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
+    let baker = probekit::capture::Baker::new(&scene).with_context(|| a.scene.clone())?;
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
         a.seed003.place(
             &baker,
@@ -806,7 +806,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             &scene_name,
         )?;
         let scene_name = &scene_name;
-        let baker = probekit::bake::Baker::new(&scene).with_context(|| scene_name.clone())?;
+        let baker = probekit::capture::Baker::new(&scene).with_context(|| scene_name.clone())?;
         if let Some(lattice) = cells {
             let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
                 baker.tracer(),
@@ -829,7 +829,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             // The parts' capture settings, as the bake recorded them.
             let (capture, _) = probekit::placement::sweep::settings_from_json(
                 &head.meta.settings,
-                &probekit::bake::CaptureSettings::from_scene(&scene),
+                &probekit::capture::CaptureSettings::from_scene(&scene),
             );
             let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));
             let fitted = probekit::cloud::blend_fit::fit_file_probe_weights(
@@ -966,7 +966,7 @@ impl Seed003Args {
     /// parameters plus the probe `count`).
     pub fn place(
         &self,
-        baker: &probekit::bake::Baker,
+        baker: &probekit::capture::Baker,
         scene_name: &str,
         name: &str,
         budget: usize,

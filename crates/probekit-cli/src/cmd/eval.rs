@@ -20,7 +20,7 @@ use super::util::{load_probes, parse_interp, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::placement::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use probekit::bake::Baker;
+use probekit::capture::Baker;
 use probekit::placement::eval::{mean_luminance, reference_cache_path, reference_cached};
 use probekit::scene::Scene;
 use probekit::trace::free_space::{sample_points, EvalPoint};

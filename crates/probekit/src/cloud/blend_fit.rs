@@ -65,7 +65,7 @@
 //! Measured in BENCHMARKS.md ("Fitted probe weights", "The brightness
 //! exponent, fitted with the probe weights").
 
-use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::sampling::SampleRng;
 use crate::scene::Aabb;
 use crate::trace::free_space::{is_free, sample_points, SURFACE_CLEARANCE};

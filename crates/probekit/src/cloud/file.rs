@@ -3,7 +3,7 @@
 //! SH, validity and `META` JSON.
 
 use super::{tetrahedralize, DelaunayError};
-use crate::bake::{CaptureSettings, Validity};
+use crate::capture::{CaptureSettings, Validity};
 use crate::format::{encode_coefficients, BakeMetadata, FormatError, ProbeFile};
 use glam::{DMat3, DVec3, Vec3};
 use probekit_runtime::format::layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
@@ -128,7 +128,7 @@ pub fn cloud_file(
 }
 
 /// The `LGRP` light groups of a bake: each `(name, radiance SH per probe)`
-/// (e.g. [`crate::bake::BakeOutput::groups`]), every SH of `order` bands,
+/// (e.g. [`crate::capture::BakeOutput::groups`]), every SH of `order` bands,
 /// encoded in `codec`, in the order given. Set them as [`ProbeFile::groups`]; the file's validation then
 /// checks probe counts, orders and names. Deterministic like [`cloud_file`].
 pub fn light_groups(

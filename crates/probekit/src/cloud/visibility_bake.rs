@@ -15,7 +15,7 @@ use super::cell_visibility::{
     bake_file_cell_planes, bake_file_cell_visibility, CellLattice, CellVisibilityError,
 };
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
-use crate::bake::{Baker, CaptureSettings};
+use crate::capture::{Baker, CaptureSettings};
 use crate::trace::Tracer;
 use probekit_runtime::format::ProbeFile;
 use thiserror::Error;

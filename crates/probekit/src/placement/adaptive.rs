@@ -1500,10 +1500,10 @@ mod tests {
     /// afterwards).
     fn constructed_leak(origin: Vec3) -> (usize, usize, usize, bool) {
         let scene = crate::scene::Scene::builtin_demo();
-        let baker = crate::bake::Baker::new(&scene).unwrap();
+        let baker = crate::capture::Baker::new(&scene).unwrap();
         let mut st = State {
             baker: &baker,
-            settings: crate::bake::CaptureSettings::default(),
+            settings: crate::capture::CaptureSettings::default(),
             positions: Vec::new(),
             sh: Vec::new(),
             next_index: 0,
@@ -1558,10 +1558,10 @@ mod tests {
     #[test]
     fn spawned_candidates_stay_in_box_and_in_sight() {
         let scene = crate::scene::Scene::builtin_demo();
-        let baker = crate::bake::Baker::new(&scene).unwrap();
+        let baker = crate::capture::Baker::new(&scene).unwrap();
         let mut st = State {
             baker: &baker,
-            settings: crate::bake::CaptureSettings {
+            settings: crate::capture::CaptureSettings {
                 samples: 16,
                 bounces: 1,
                 ..Default::default()

@@ -21,7 +21,7 @@
 //!   floor slabs, which the free-space test cannot tell from rooms — and
 //!   the leaks among them (counted in `leaks` too).
 
-use crate::bake::{BakeError, Baker, ReferenceSettings};
+use crate::capture::{BakeError, Baker, ReferenceSettings};
 use crate::scene::Region;
 use crate::trace::free_space::{segment_clear, EvalPoint};
 use crate::trace::Tracer;

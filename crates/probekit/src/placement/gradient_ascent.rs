@@ -22,7 +22,7 @@
 //!    stops when no probe moves or after `max_iterations`.
 //! 4. With `indirect_only` (seed §3.1.2 "Light decoupling") the gradient and
 //!    the dark/brighter tests use the indirect part of the capture
-//!    ([`crate::bake::CaptureSettings::split_direct`]); the probes still store all light.
+//!    ([`crate::capture::CaptureSettings::split_direct`]); the probes still store all light.
 //! 5. Probes that converged onto each other (closer than `merge_fraction` ×
 //!    cell) are merged, keeping the first (Chajdas et al.'s "potential
 //!    probes" that traced to one point).
@@ -447,7 +447,7 @@ pub(super) fn gradient_ascent(
 mod tests {
     use super::super::{place, PlacementMethod, PlacementStats};
     use super::*;
-    use crate::bake::{Baker, CaptureSettings};
+    use crate::capture::{Baker, CaptureSettings};
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
 

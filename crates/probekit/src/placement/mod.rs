@@ -34,7 +34,7 @@ pub mod sweep;
 
 pub use adaptive::PROBE_CLEARANCE;
 
-use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::cloud::{tetrahedralize, DelaunayError};
 use crate::progress::Progress;
 use crate::scene::{Aabb, BakeBoxError};

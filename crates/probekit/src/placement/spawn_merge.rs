@@ -352,7 +352,7 @@ pub(super) fn spawn_merge(
 mod tests {
     use super::super::{inside_geometry, place, PlacementMethod};
     use super::*;
-    use crate::bake::{Baker, CaptureSettings};
+    use crate::capture::{Baker, CaptureSettings};
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
 

@@ -23,7 +23,7 @@ use super::eval::{mean_luminance, metrics, Metrics, PredictError, Predictor};
 use super::gradient_ascent::GradientAscentParams;
 use super::spawn_merge::SpawnMergeParams;
 use super::{place, LightShells, PlacementError, PlacementMethod};
-use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::cloud::file::{cloud_file, file_validity, settings_json, CloudFileError};
 use crate::cloud::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
@@ -317,7 +317,7 @@ mod tests {
     use super::super::eval::reference;
     use super::super::{grid_points, inside_geometry};
     use super::*;
-    use crate::bake::ReferenceSettings;
+    use crate::capture::ReferenceSettings;
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
     use crate::trace::free_space::sample_points;

@@ -1,6 +1,6 @@
 use super::eval::*;
 use super::*;
-use crate::bake::ReferenceSettings;
+use crate::capture::ReferenceSettings;
 use crate::scene::Scene;
 use crate::trace::free_space::*;
 

@@ -48,7 +48,7 @@ mod tests;
 pub use camera::Camera;
 pub use objects::{place_spheres, Sphere, TestObject};
 
-use crate::bake::{BakeError, Baker, ReferenceSettings};
+use crate::capture::{BakeError, Baker, ReferenceSettings};
 use crate::env::{EnvError, EnvMap};
 use crate::plot::{draw_text, heat, save_png, to_srgb, PlotError};
 use crate::scene::{Scene, SceneError};

@@ -1,6 +1,6 @@
 use super::objects::{eval_fit, fit_order, fit_sh};
 use super::*;
-use crate::bake::{bake_points, CaptureSettings};
+use crate::capture::{bake_points, CaptureSettings};
 use crate::cloud::file::{cloud_file, file_validity};
 use crate::format::{BakeMetadata, Codec, Placement};
 use crate::scene::{Aabb, Material, Triangle};

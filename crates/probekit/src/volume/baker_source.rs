@@ -25,7 +25,7 @@
 //!   "Harmonic Mean of Scene Depth"; misses count `1/∞ = 0`).
 
 use super::source::{central_difference, central_points, Captured, VolumeSource};
-use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::scene::{Aabb, LightKind, Scene};
 use crate::sh::compare::spherical_fibonacci;
 use crate::trace::Ray;

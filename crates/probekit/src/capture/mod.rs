@@ -10,17 +10,15 @@
 //! described in [`capture`]; validity in [`validity`]; samplers in
 //! [`crate::sampling`].
 
-pub mod capture;
 pub(crate) mod emitters;
+pub mod probe;
 pub mod validity;
 
 #[cfg(test)]
 mod tests;
 
-pub use capture::{
-    Baker, CaptureResult, CaptureSettings, ReferenceResult, ReferenceSettings, CHUNK,
-};
 pub use emitters::{DEFAULT_GROUP, EMISSIVE_GROUP, ENVIRONMENT_GROUP};
+pub use probe::{Baker, CaptureResult, CaptureSettings, ReferenceResult, ReferenceSettings, CHUNK};
 pub use validity::{Validity, ValiditySettings};
 
 use crate::env::EnvError;
