@@ -1,28 +1,76 @@
 //! # Probe capture
 //!
 //! Monte Carlo path tracing of the incoming radiance at points, projected
-//! into radiance SH (issue 4, "Capture"); probe validity and virtual offset;
-//! ground-truth irradiance; deterministic parallel and sharded bakes.
+//! into radiance SH; probe validity and virtual offset; ground-truth
+//! irradiance; deterministic parallel and sharded bakes.
 //!
 //! Entry points: [`bake_points`] (many probes, the CLI's `bake`),
 //! [`Baker::capture`] (one probe, `capture`), [`Baker::reference_irradiance`]
-//! (`reference`), [`shard_range`] (`bake --shard I/N`). The estimator is
-//! described in [`capture`]; validity in [`validity`]; samplers in
-//! [`crate::sampling`].
+//! (`reference`), [`shard_range`] (`bake --shard I/N`). Validity is described
+//! in [`validity`]; samplers in [`crate::sampling`]. The estimator is
+//! in the `integrator` module, probe capture in `probe`, ground truth in
+//! `reference`.
+//!
+//! ## Estimator
+//! For a receiver at `x` (a probe: the whole sphere; a reference point: the
+//! hemisphere about its normal) we estimate `∫ L(x, ω) K(ω) dω` with the
+//! kernel `K = Y_lm` (SH projection) or `K = max(0, n·ω)` (irradiance).
+//! Three kinds of samples, combined without double counting:
+//! - **Delta lights** (point, spot, directional) are added once, exactly:
+//!   the radiance of a delta light is `E δ(ω − ω_l)`, so its SH is
+//!   `E·T·Y_lm(ω_l)` with `E = I/d²` (× the glTF spot ramp) or lux, and `T`
+//!   the shadow ray's transmittance.
+//! - **Receiver directions** `ω_i` (uniform sphere for probes, cosine
+//!   hemisphere for the reference; R2 low-discrepancy with a per-receiver
+//!   Cranley–Patterson rotation) start a path. What the path returns is
+//!   `L(x, ω_i)/p(ω_i)`; emitters it hits are weighted by the power heuristic
+//!   against light sampling (Veach & Guibas 1995).
+//! - **Light samples** at `x` (sphere and disk lights, emissive triangles, an
+//!   environment map) with the complementary MIS weight.
+//!
+//! At every surface vertex (Lambertian, albedo `ρ`) the path does next-event
+//! estimation to every light (delta lights exactly, area lights and the
+//! environment map with MIS against the cosine BSDF sample), then continues
+//! by cosine sampling (throughput × ρ). A *bounce* is one scattering event:
+//! with `bounces = B` the last vertex that scatters is the B-th, so a furnace
+//! of emission `Le` and albedo `a` gives `Le·Σ_{k=0..B} a^k`. Russian
+//! roulette (survival = max throughput component, ≤ 0.95, unbiased) starts
+//! after [`CaptureSettings::russian_roulette_depth`] scattering events.
+//! A surface of opacity `α < 1` is crossed straight with probability `1 − α`
+//! (path rays) and attenuates shadow rays by `1 − α` (the tracer's
+//! transmittance), so in expectation both pass `1 − α` of the light.
+//! Emissive triangles emit on both sides (as [`Scene::emission`] says);
+//! disk lights on the side their `direction` points to.
+//!
+//! **Direct** light is what reaches `x` from an emitter with no scattering
+//! in between (crossing glass is not scattering); **indirect** is the rest
+//! (Sukys 2014, §3.1.2 "Light decoupling"). Every contribution is also
+//! attributed to the light group of the emitter it came from.
+//!
+//! ## Determinism
+//! Sample `i` of receiver `k` draws its random numbers from
+//! `SampleRng::new(seed, k, i)` and its direction from R2 point `i`; samples
+//! are summed in f64 in chunks of [`CHUNK`] in a fixed order, so results are
+//! bit-identical for any thread count and any sharding.
 
 pub(crate) mod emitters;
-pub mod probe;
+mod integrator;
+mod probe;
+mod reference;
 pub mod validity;
 
 #[cfg(test)]
 mod tests;
 
 pub use emitters::{DEFAULT_GROUP, EMISSIVE_GROUP, ENVIRONMENT_GROUP};
-pub use probe::{Baker, CaptureResult, CaptureSettings, ReferenceResult, ReferenceSettings, CHUNK};
+pub use probe::{CaptureResult, CaptureSettings, CHUNK};
+pub use reference::{ReferenceResult, ReferenceSettings};
 pub use validity::{Validity, ValiditySettings};
 
-use crate::env::EnvError;
+use crate::env::{EnvError, EnvMap};
 use crate::scene::Scene;
+use crate::trace::Tracer;
+use emitters::Emitters;
 use glam::Vec3;
 use probekit_sh::ShRgb;
 use std::ops::Range;
@@ -64,6 +112,89 @@ pub enum BakeError {
         /// Shard count.
         shards: usize,
     },
+}
+
+/// Path-tracing context for one scene: its tracer and prepared lights.
+pub struct Baker<'s> {
+    scene: &'s Scene,
+    tracer: Tracer<'s>,
+    emitters: Emitters,
+}
+
+impl<'s> Baker<'s> {
+    /// Builds the BVH, prepares the lights and loads the environment map.
+    pub fn new(scene: &'s Scene) -> Result<Self, BakeError> {
+        Self::with_tracer(scene, Tracer::new(scene))
+    }
+
+    /// Uses an already built tracer over `scene`.
+    pub fn with_tracer(scene: &'s Scene, tracer: Tracer<'s>) -> Result<Self, BakeError> {
+        Ok(Self {
+            scene,
+            tracer,
+            emitters: Emitters::new(scene)?,
+        })
+    }
+
+    /// Replaces the scene's environment by `map` × `intensity`, rotated by
+    /// `rotation_y_degrees` about +Y (counter-clockwise seen from above), for
+    /// callers that already hold the map in memory.
+    pub fn set_environment_map(&mut self, map: &EnvMap, intensity: f32, rotation_y_degrees: f32) {
+        self.emitters.env = Emitters::map_environment(map, intensity, rotation_y_degrees);
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// The tracer.
+    pub fn tracer(&self) -> &Tracer<'s> {
+        &self.tracer
+    }
+
+    /// Names of the light groups that hold at least one light, sorted: each
+    /// light's `group` (or `"default"`), `"emissive"` for emissive triangles,
+    /// `"environment"` for a non-black environment.
+    pub fn group_names(&self) -> Vec<String> {
+        self.present_groups()
+            .into_iter()
+            .map(|g| self.emitters.groups[g].clone())
+            .collect()
+    }
+
+    /// Every name of `s.exclude_direct` is a light group of the scene.
+    fn check_excluded(&self, s: &CaptureSettings) -> Result<(), BakeError> {
+        if s.exclude_direct.is_empty() {
+            return Ok(());
+        }
+        let names = self.group_names();
+        match s.exclude_direct.iter().find(|n| !names.contains(n)) {
+            None => Ok(()),
+            Some(n) => Err(BakeError::BadSettings(format!(
+                "exclude_direct: no light group `{n}` in the scene (groups: {})",
+                names.join(", ")
+            ))),
+        }
+    }
+
+    fn present_groups(&self) -> Vec<usize> {
+        let e = &self.emitters;
+        let mut present = vec![false; e.groups.len()];
+        for d in &e.delta {
+            present[d.group() as usize] = true;
+        }
+        for s in &e.shapes {
+            present[s.group as usize] = true;
+        }
+        if e.has_emissive_triangles() {
+            present[e.emissive_group as usize] = true;
+        }
+        if !e.env.is_black() {
+            present[e.env_group as usize] = true;
+        }
+        (0..present.len()).filter(|&g| present[g]).collect()
+    }
 }
 
 /// Everything a bake of a list of positions produces. Per-probe vectors are

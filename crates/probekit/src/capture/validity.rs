@@ -22,7 +22,10 @@
 //! [`ValiditySettings::max_offset_steps`] moves), then captured there and
 //! flagged.
 
-use super::BakeError;
+use super::probe::STREAM_ROTATION;
+use super::{BakeError, Baker};
+use crate::sampling::{r2_point, sample_uniform_sphere, SampleRng};
+use crate::trace::{Hit, Ray};
 use glam::Vec3;
 
 /// Most surface crossings the parity test follows before giving up.
@@ -183,5 +186,50 @@ impl Validity {
             offset,
             offset_applied: pushed,
         }
+    }
+}
+
+impl Baker<'_> {
+    /// Validity bookkeeping for the first surface a receiver ray meets.
+    pub(super) fn record_first_hit(&self, st: &mut HitStats, dir: Vec3, hit: Option<&Hit>) {
+        st.rays += 1;
+        let Some(h) = hit else { return };
+        let back = if h.winding_consistent {
+            !h.front_face
+        } else {
+            self.parity_inside(h, dir)
+        };
+        st.add_hit(h.t, dir, back);
+    }
+
+    /// Winding-free inside test for a ray whose first hit is on an
+    /// inconsistently wound triangle: counts every surface crossing out to
+    /// infinity; an odd count means the ray started inside a closed surface.
+    /// Gives up (says "outside") after [`super::validity::MAX_PARITY_CROSSINGS`].
+    fn parity_inside(&self, first: &Hit, dir: Vec3) -> bool {
+        let mut count = 1u32;
+        let mut h = *first;
+        for _ in 0..super::validity::MAX_PARITY_CROSSINGS {
+            match self.tracer.closest_hit(&h.continue_ray(dir), f32::INFINITY) {
+                Some(next) => {
+                    count += 1;
+                    h = next;
+                }
+                None => return count % 2 == 1,
+            }
+        }
+        false
+    }
+
+    /// First-hit statistics of `rays` R2 directions from `x` (validity pre-pass).
+    pub(crate) fn hit_stats(&self, x: Vec3, probe_index: u64, seed: u64, rays: u32) -> HitStats {
+        let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
+        let mut st = HitStats::default();
+        for i in 0..rays {
+            let d = sample_uniform_sphere(r2_point(i as u64, rot));
+            let hit = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY);
+            self.record_first_hit(&mut st, d, hit.as_ref());
+        }
+        st
     }
 }
