@@ -26,11 +26,10 @@ use glam::Vec3;
 use probekit::capture::{shard_range, BakeOutput, CaptureSettings};
 use probekit::cloud::blend_fit::BlendFitSettings;
 use probekit::cloud::cell_visibility::CellLattice;
-use probekit::cloud::file::{
-    cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
-};
 use probekit::cloud::visibility::VisibilitySettings;
 use probekit::cloud::visibility_bake::VisibilityBake;
+use probekit::format::cloud::{cloud_file, decode_light_groups, file_validity, light_groups};
+use probekit::format::settings::settings_json;
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::placement::LightShells;
 use probekit::scene::Scene;
@@ -827,7 +826,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         }
         if weights.is_object() {
             // The parts' capture settings, as the bake recorded them.
-            let (capture, _) = probekit::placement::sweep::settings_from_json(
+            let (capture, _) = probekit::format::settings::settings_from_json(
                 &head.meta.settings,
                 &probekit::capture::CaptureSettings::from_scene(&scene),
             );

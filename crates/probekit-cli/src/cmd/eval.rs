@@ -22,12 +22,13 @@ use clap::Args;
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
 use probekit::cloud::visibility_bake::VisibilityBake;
+use probekit::format::settings::settings_from_metadata;
 use probekit::placement::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
     unlit_points, worst_points, Metrics, Predictor,
 };
 use probekit::placement::sweep::{
-    bake_blend_data, place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
+    bake_blend_data, place_and_bake, plot_sweep, sweep, SWEEP_METHODS,
 };
 use probekit::placement::PlacementMethod;
 use probekit::scene::{Aabb, Scene};

@@ -60,7 +60,7 @@ mod reference;
 pub mod validity;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 pub use emitters::{DEFAULT_GROUP, EMISSIVE_GROUP, ENVIRONMENT_GROUP};
 pub use probe::{CaptureResult, CaptureSettings, CHUNK};

@@ -124,7 +124,7 @@ fn lone_sphere_light(c: Vec3, r: f32, intensity: f32) -> Scene {
     )
 }
 
-fn mean_se(runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn mean_se(runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
     let k = runs.len() as f64;
     let n = runs[0].len();
     let mut m = vec![0.0; n];
@@ -137,7 +137,7 @@ fn mean_se(runs: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
     (m, se)
 }
 
-fn assert_close(got: &[f64], se: &[f64], want: &[f64], floor: f64, what: &str) {
+pub(crate) fn assert_close(got: &[f64], se: &[f64], want: &[f64], floor: f64, what: &str) {
     for i in 0..want.len() {
         let tol = 5.0 * se[i] + floor;
         assert!(
@@ -149,7 +149,7 @@ fn assert_close(got: &[f64], se: &[f64], want: &[f64], floor: f64, what: &str) {
     }
 }
 
-fn red(sh: &ShRgb) -> Vec<f64> {
+pub(crate) fn red(sh: &ShRgb) -> Vec<f64> {
     sh.coeffs().iter().map(|c| c.x as f64).collect()
 }
 
@@ -193,7 +193,7 @@ fn sphere_light_zonal(l_rad: f64, cos_alpha: f64, order: usize) -> Vec<f32> {
         .collect()
 }
 
-fn quick(samples: u32, bounces: u32, order: usize, seed: u64) -> CaptureSettings {
+pub(crate) fn quick(samples: u32, bounces: u32, order: usize, seed: u64) -> CaptureSettings {
     CaptureSettings {
         samples,
         bounces,
@@ -955,7 +955,7 @@ fn disk_light_capture_matches_quadrature_of_probekit_sh_lights() {
 /// coloured point light `"b"` whose colour is multiplied by `b_scale` (0
 /// removes it). Delta lights draw no random numbers, so with the same seed
 /// every path is the same whatever `b_scale` is.
-fn two_group_room(b_scale: Vec3) -> Scene {
+pub(crate) fn two_group_room(b_scale: Vec3) -> Scene {
     let mut a = light(
         LightKind::Sphere,
         Vec3::new(-0.8, 2.0, 0.3),
@@ -1077,7 +1077,7 @@ fn exclude_direct_leaves_out_one_groups_direct_light() {
 }
 
 /// Five probes spanning a volume (two tetrahedra) and query points inside it.
-fn group_probe_points() -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
+pub(crate) fn group_probe_points() -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
     let probes = vec![
         Vec3::new(-1.0, 0.5, -1.0),
         Vec3::new(1.2, 0.6, -0.8),
@@ -1094,145 +1094,4 @@ fn group_probe_points() -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
         ),
     ];
     (probes, queries)
-}
-
-/// A stored cloud file of a bake, with its light groups (as `bake --groups`).
-fn cloud_with_groups(out: &BakeOutput) -> crate::format::ProbeFile {
-    use crate::cloud::file::{cloud_file, file_validity, light_groups, settings_json};
-    use crate::format::{BakeMetadata, Codec, Placement};
-    let meta = BakeMetadata::new(
-        "0".into(),
-        Placement {
-            method: "manual".into(),
-            parameters: serde_json::json!({}),
-        },
-        settings_json(&out.settings, Codec::F32),
-    );
-    let validity: Vec<_> = out.validity.iter().map(file_validity).collect();
-    let mut f = cloud_file(
-        &out.captured_positions,
-        &out.sh,
-        &validity,
-        Codec::F32,
-        &meta,
-    )
-    .unwrap();
-    f.groups = light_groups(&out.groups, out.settings.order, Codec::F32).unwrap();
-    f
-}
-
-fn query_cloud(f: &crate::format::ProbeFile, q: &[(Vec3, Vec3)]) -> Vec<f64> {
-    let cloud = probekit_runtime::ProbeCloud::from_file(f).unwrap();
-    let mut st = probekit_runtime::cloud::WalkState::new();
-    q.iter()
-        .flat_map(|&(p, n)| cloud.irradiance(p, n, &mut st).to_array())
-        .map(f64::from)
-        .collect()
-}
-
-/// Issue 4, `bake --groups`: (a) the groups sum to the total (and the
-/// indirect-only groups to the indirect light); (b) group `a` equals a bake
-/// of light `a` alone; (c) relighting the stored file at run time (group `b`
-/// × 0, and × an RGB factor) equals querying bakes of the scene with light
-/// `b` removed / recoloured by that factor; (d) the file round-trips. Each
-/// over several seeds, within 5 standard errors of the per-seed differences
-/// plus a float floor (delta light `b` draws no random numbers, so the
-/// differences are in fact at float-rounding level).
-#[test]
-fn light_groups_sum_to_the_total_and_relight_like_rebaked_scenes() {
-    let (pts, queries) = group_probe_points();
-    let scale = Vec3::new(2.0, 0.5, 0.0);
-    let (both, only_a, recoloured) = (
-        two_group_room(Vec3::ONE),
-        two_group_room(Vec3::ZERO),
-        two_group_room(scale),
-    );
-    let mut d_group = Vec::new();
-    let mut d_zero = Vec::new();
-    let mut d_scaled = Vec::new();
-    let mut magnitude = 0.0f64;
-    for seed in 1..=4 {
-        let s = CaptureSettings {
-            groups: true,
-            split_direct: true,
-            ..quick(256, 2, 3, seed)
-        };
-        let out = bake_points(&both, &pts, &s, &|_, _| {}).unwrap();
-        let names: Vec<&str> = out.groups.iter().map(|g| g.0.as_str()).collect();
-        assert_eq!(names, ["a", "b"]);
-        // (a) Σ groups = total, Σ indirect groups = indirect, per coefficient.
-        for i in 0..pts.len() {
-            let ind = &out.indirect.as_ref().unwrap()[i];
-            for k in 0..9 {
-                let total = out.sh[i].coeffs()[k];
-                let sum = out.groups[0].1[i].coeffs()[k] + out.groups[1].1[i].coeffs()[k];
-                assert!(
-                    (sum - total).abs().max_element() <= 1e-5 * (1.0 + total.abs().max_element())
-                );
-                let isum = out.groups_indirect[0].1[i].coeffs()[k]
-                    + out.groups_indirect[1].1[i].coeffs()[k];
-                let want = ind.coeffs()[k];
-                assert!(
-                    (isum - want).abs().max_element() <= 1e-5 * (1.0 + want.abs().max_element())
-                );
-            }
-        }
-        // (b) group a vs the bake of light a alone.
-        let alone = bake_points(&only_a, &pts, &s, &|_, _| {}).unwrap();
-        d_group.push(
-            out.groups[0]
-                .1
-                .iter()
-                .zip(&alone.sh)
-                .flat_map(|(g, t)| red(g).into_iter().zip(red(t)).map(|(x, y)| x - y))
-                .collect::<Vec<f64>>(),
-        );
-        magnitude = magnitude.max(red(&alone.sh[0])[0].abs());
-        // (d) the stored file round-trips, groups included.
-        let file = cloud_with_groups(&out);
-        let bytes = file.to_bytes().unwrap();
-        assert_eq!(crate::format::ProbeFile::from_bytes(&bytes).unwrap(), file);
-        // (c) run-time relighting vs rebaked scenes, through the runtime query.
-        let mut zero = file.clone();
-        zero.coefficients = file.relit(&[("b", Vec3::ZERO)]).unwrap();
-        let mut scaled = file.clone();
-        scaled.coefficients = file.relit(&[("b", scale)]).unwrap();
-        let s_plain = CaptureSettings {
-            ..quick(256, 2, 3, seed)
-        };
-        let alone_plain = bake_points(&only_a, &pts, &s_plain, &|_, _| {}).unwrap();
-        let recol = bake_points(&recoloured, &pts, &s_plain, &|_, _| {}).unwrap();
-        let diff = |a: Vec<f64>, b: Vec<f64>| a.iter().zip(&b).map(|(x, y)| x - y).collect();
-        d_zero.push(diff(
-            query_cloud(&zero, &queries),
-            query_cloud(&cloud_with_groups(&alone_plain), &queries),
-        ));
-        d_scaled.push(diff(
-            query_cloud(&scaled, &queries),
-            query_cloud(&cloud_with_groups(&recol), &queries),
-        ));
-    }
-    assert!(magnitude > 0.05, "the test scene is lit: {magnitude}");
-    let zeros = |n: usize| vec![0.0; n];
-    let floor = 1e-4 * magnitude.max(1.0);
-    let worst = |d: &[Vec<f64>]| d.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
-    eprintln!(
-        "light groups: largest |difference| over seeds: group a vs a alone {:.3e}, \
-         b×0 vs b removed {:.3e}, b×rgb vs b recoloured {:.3e} (DC of a alone {magnitude:.3})",
-        worst(&d_group),
-        worst(&d_zero),
-        worst(&d_scaled)
-    );
-    let (m, se) = mean_se(&d_group);
-    assert_close(&m, &se, &zeros(m.len()), floor, "group a vs light a alone");
-    let (m, se) = mean_se(&d_zero);
-    assert_close(&m, &se, &zeros(m.len()), floor, "b × 0 vs light b removed");
-    let (m, se) = mean_se(&d_scaled);
-    assert_close(
-        &m,
-        &se,
-        &zeros(m.len()),
-        floor,
-        "b × rgb vs light b recoloured",
-    );
 }

@@ -1090,7 +1090,7 @@ mod tests {
             .into_iter()
             .map(|r| r.sh)
             .collect();
-        let file = crate::cloud::file::test_cloud_file(&pos, &sh);
+        let file = crate::format::cloud::test_cloud_file(&pos, &sh);
         let fit = BlendFitSettings {
             points_per_probe: 4,
             samples: 16,

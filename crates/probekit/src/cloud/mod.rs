@@ -35,7 +35,6 @@
 
 pub mod blend_fit;
 pub mod cell_visibility;
-pub mod file;
 pub mod predicates;
 pub mod visibility;
 pub mod visibility_bake;

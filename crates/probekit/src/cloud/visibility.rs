@@ -185,7 +185,7 @@ pub fn bake_distance_moments(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::file::test_cloud_file;
+    use crate::format::cloud::test_cloud_file;
     use crate::scene::Scene;
     use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
     use probekit_runtime::format::ProbeFile;

@@ -178,7 +178,7 @@ impl VisibilityBake {
 mod tests {
     use super::*;
     use crate::cloud::cell_visibility::{bake_cell_planes, CELL_PLANE_SEED};
-    use crate::cloud::file::test_cloud_file;
+    use crate::format::cloud::test_cloud_file;
     use glam::Vec3;
     use probekit_sh::ShRgb;
 

@@ -1,5 +1,8 @@
 //! Writing `.probes` files: codec encoding, bake metadata, and atomic
-//! file replacement.
+//! file replacement. Two submodules sit above the capture and the Delaunay
+//! code, which they take their inputs from: [`cloud`] assembles a baked
+//! probe cloud, [`settings`] records the capture settings in the metadata
+//! and reads them back.
 //!
 //! The format itself (layout, reader, serializer, validation) lives in the
 //! runtime crate, [`probekit_runtime::format`], re-exported here, so the
@@ -19,7 +22,9 @@
 //! ```
 
 mod atomic;
+pub mod cloud;
 mod metadata;
+pub mod settings;
 
 pub use atomic::{check_writable, write_atomic, write_probe_file, WriteError};
 pub use metadata::{

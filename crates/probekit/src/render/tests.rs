@@ -1,7 +1,7 @@
 use super::objects::{eval_fit, fit_order, fit_sh};
 use super::*;
 use crate::capture::{bake_points, CaptureSettings};
-use crate::cloud::file::{cloud_file, file_validity};
+use crate::format::cloud::{cloud_file, file_validity};
 use crate::format::{BakeMetadata, Codec, Placement};
 use crate::scene::{Aabb, Material, Triangle};
 use glam::Vec2;

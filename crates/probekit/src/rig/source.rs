@@ -207,7 +207,7 @@ mod tests {
         let tet = crate::cloud::tetrahedralize(&pos).unwrap();
         let coeffs: Vec<Vec3> = pos.iter().flat_map(|p| f.at(*p)).collect();
         let mut file = ProbeFile::cloud(pos.clone(), ORDER as u32, &coeffs).unwrap();
-        file.tetrahedra = Some(crate::cloud::file::tet_section(
+        file.tetrahedra = Some(crate::format::cloud::tet_section(
             &pos,
             &tet.tets,
             &tet.neighbors,
