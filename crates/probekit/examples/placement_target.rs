@@ -92,15 +92,15 @@
 //! `probekit eval` figures).
 
 use glam::Vec3;
-use probekit::capture::{Baker, CaptureSettings};
-use probekit::cloud::blend_fit::{
+use probekit::blend::blend_fit::{
     capture_training_set, fit_blend, BlendFitSettings, BRIGHTNESS_CHOICES,
 };
-use probekit::cloud::cell_visibility::{
+use probekit::blend::cell_visibility::{
     bake_cell_planes, bake_cell_visibility, CellLattice, CELL_PLANE_SEED,
 };
-use probekit::cloud::tetrahedralize;
-use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
+use probekit::blend::visibility::{bake_distance_moments, VisibilitySettings};
+use probekit::capture::{Baker, CaptureSettings};
+use probekit::delaunay::tetrahedralize;
 use probekit::placement::eval::{
     blends_hidden_probes, interpolate_cloud, leaks_at, metrics, outside_hull, region_leaks_at,
     region_metrics, unlit_points, worst_points,

@@ -6,8 +6,9 @@
 
 #![warn(missing_docs)]
 
+pub mod blend;
 pub mod capture;
-pub mod cloud;
+pub mod delaunay;
 pub mod env;
 pub mod format;
 pub mod inspect;

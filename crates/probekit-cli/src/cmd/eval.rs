@@ -20,8 +20,8 @@ use super::util::{load_probes, parse_interp, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
+use probekit::blend::visibility_bake::VisibilityBake;
 use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::cloud::visibility_bake::VisibilityBake;
 use probekit::format::settings::settings_from_metadata;
 use probekit::placement::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,

@@ -5,7 +5,7 @@
 
 use super::{encode_coefficients, BakeMetadata, FormatError, ProbeFile};
 use crate::capture::Validity;
-use crate::cloud::{tetrahedralize, DelaunayError, HULL};
+use crate::delaunay::{tetrahedralize, DelaunayError, HULL};
 use glam::{DMat3, DVec3, Vec3};
 use probekit_runtime::format::layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
 use probekit_runtime::format::{Codec, LightGroup, TetSection, Validity as FileValidity};
@@ -190,7 +190,7 @@ mod tests {
 
     #[test]
     fn barycentric_matrices_reproduce_vertices() {
-        let pts = crate::cloud::bench_points::uniform(40, 3);
+        let pts = crate::delaunay::bench_points::uniform(40, 3);
         let t = tetrahedralize(&pts).unwrap();
         let s = tet_section(&pts, &t.tets, &t.neighbors);
         for (tet, m) in s.vertices.iter().zip(&s.barycentric) {

@@ -78,7 +78,7 @@
 
 use super::eval::blend_sh;
 use super::{LeakSettings, PlacementError, State};
-use crate::cloud::tetrahedralize;
+use crate::delaunay::tetrahedralize;
 use crate::progress::Progress;
 use crate::sampling::SampleRng;
 use crate::scene::{Aabb, Light, LightKind, Scene};

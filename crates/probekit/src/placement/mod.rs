@@ -35,7 +35,7 @@ pub mod sweep;
 pub use adaptive::PROBE_CLEARANCE;
 
 use crate::capture::{BakeError, Baker, CaptureSettings};
-use crate::cloud::{tetrahedralize, DelaunayError};
+use crate::delaunay::{tetrahedralize, DelaunayError};
 use crate::progress::Progress;
 use crate::scene::{Aabb, BakeBoxError};
 use crate::trace::free_space::{inside_geometry, is_open, push_off_surfaces, segment_clear};
@@ -714,7 +714,7 @@ pub fn orphan_points(
     // point that sees none of those three is orphaned there.
     let mut cells: Vec<Vec<u32>> = tri.tets.iter().map(|t| t.to_vec()).collect();
     for (t, nb) in tri.tets.iter().zip(&tri.neighbors) {
-        for i in (0..4).filter(|&i| nb[i] == crate::cloud::HULL) {
+        for i in (0..4).filter(|&i| nb[i] == crate::delaunay::HULL) {
             cells.push((0..4).filter(|&j| j != i).map(|j| t[j]).collect());
         }
     }

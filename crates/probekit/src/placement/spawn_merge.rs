@@ -33,7 +33,7 @@
 //! drops below 8. Leak prevention runs at the end, as for every method.
 
 use super::{crossing_extent, grid_points, tet_edges, LeakSettings, PlacementError, State};
-use crate::cloud::tetrahedralize;
+use crate::delaunay::tetrahedralize;
 use crate::progress::Progress;
 use crate::scene::Aabb;
 use crate::trace::Ray;

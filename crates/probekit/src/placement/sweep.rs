@@ -23,8 +23,8 @@ use super::eval::{mean_luminance, metrics, Metrics, PredictError, Predictor};
 use super::gradient_ascent::GradientAscentParams;
 use super::spawn_merge::SpawnMergeParams;
 use super::{place, LightShells, PlacementError, PlacementMethod};
+use crate::blend::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::capture::{BakeError, Baker, CaptureSettings};
-use crate::cloud::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::format::cloud::{cloud_file, file_validity, CloudFileError};
 use crate::format::settings::settings_json;
 use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
@@ -391,16 +391,16 @@ mod tests {
         // the same file gives when baked and queried that way by hand, and
         // differs from the plain row.
         let vis = VisibilityBake {
-            moments: Some(crate::cloud::visibility::VisibilitySettings {
+            moments: Some(crate::blend::visibility::VisibilitySettings {
                 resolution: 4,
-                ..crate::cloud::visibility::VisibilitySettings::new(10.0, 1)
+                ..crate::blend::visibility::VisibilitySettings::new(10.0, 1)
             }),
-            cell_subdivision: Some(crate::cloud::cell_visibility::CellLattice::Fixed(2)),
+            cell_subdivision: Some(crate::blend::cell_visibility::CellLattice::Fixed(2)),
             cell_planes: true,
-            probe_weights: Some(crate::cloud::blend_fit::BlendFitSettings {
+            probe_weights: Some(crate::blend::blend_fit::BlendFitSettings {
                 points_per_probe: 2,
                 samples: 8,
-                ..crate::cloud::blend_fit::BlendFitSettings::new(3)
+                ..crate::blend::blend_fit::BlendFitSettings::new(3)
             }),
         };
         let configure = |p: &mut Predictor| {

@@ -432,7 +432,7 @@ fn adaptive_hull_has_no_sliver_tetrahedra_along_the_layers() {
             assert!(d == 0.0 || d > LAYER_SNAP, "{p} is {d} m off a layer");
         }
     }
-    let t = crate::cloud::tetrahedralize(&a.positions).unwrap();
+    let t = crate::delaunay::tetrahedralize(&a.positions).unwrap();
     let (mut on_layers, mut slivers) = (0, 0);
     for (v, nb) in t.tets.iter().zip(&t.neighbors) {
         let q = v.map(|i| a.positions[i as usize]);
@@ -445,7 +445,7 @@ fn adaptive_hull_has_no_sliver_tetrahedra_along_the_layers() {
             let on = |&(k, c): &(usize, f32)| face.iter().all(|p| (p[k] - c).abs() < 1e-3);
             if planes.iter().any(on) {
                 on_layers += 1;
-                if crate::cloud::flatness(q) < crate::cloud::SLIVER_FLATNESS {
+                if crate::delaunay::flatness(q) < crate::delaunay::SLIVER_FLATNESS {
                     slivers += 1;
                 }
             }

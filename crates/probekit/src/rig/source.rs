@@ -204,7 +204,7 @@ mod tests {
             );
             pos.push(LO + (HI - LO) * t);
         }
-        let tet = crate::cloud::tetrahedralize(&pos).unwrap();
+        let tet = crate::delaunay::tetrahedralize(&pos).unwrap();
         let coeffs: Vec<Vec3> = pos.iter().flat_map(|p| f.at(*p)).collect();
         let mut file = ProbeFile::cloud(pos.clone(), ORDER as u32, &coeffs).unwrap();
         file.tetrahedra = Some(crate::format::cloud::tet_section(

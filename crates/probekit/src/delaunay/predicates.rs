@@ -1,4 +1,4 @@
-//! Exact geometric predicates — the only place in [`crate::cloud`] that looks at
+//! Exact geometric predicates — the only place in [`crate::delaunay`] that looks at
 //! the sign of a floating-point determinant.
 //!
 //! All predicates evaluate Shewchuk's adaptive-precision determinants

@@ -177,7 +177,7 @@ impl VisibilityBake {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::cell_visibility::{bake_cell_planes, CELL_PLANE_SEED};
+    use crate::blend::cell_visibility::{bake_cell_planes, CELL_PLANE_SEED};
     use crate::format::cloud::test_cloud_file;
     use glam::Vec3;
     use probekit_sh::ShRgb;

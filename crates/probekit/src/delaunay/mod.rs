@@ -33,11 +33,7 @@
 //! The result converts to the runtime's [`probekit_runtime::cloud::TetMesh`]
 //! with [`Tetrahedralization::to_tet_mesh`].
 
-pub mod blend_fit;
-pub mod cell_visibility;
 pub mod predicates;
-pub mod visibility;
-pub mod visibility_bake;
 
 use crate::sampling::SampleRng;
 use glam::Vec3;

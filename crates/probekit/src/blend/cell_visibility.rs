@@ -458,7 +458,7 @@ mod tests {
                 }
             }
         }
-        let tri = crate::cloud::tetrahedralize(&pos).unwrap();
+        let tri = crate::delaunay::tetrahedralize(&pos).unwrap();
         (scene(&[room, wall]), tri.to_tet_mesh(&pos).unwrap())
     }
 
@@ -489,7 +489,7 @@ mod tests {
         for _ in 0..200 {
             pos.push(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.6);
         }
-        let mesh = crate::cloud::tetrahedralize(&pos)
+        let mesh = crate::delaunay::tetrahedralize(&pos)
             .unwrap()
             .to_tet_mesh(&pos)
             .unwrap();
@@ -540,7 +540,7 @@ mod tests {
         // k = ceil(L / spacing), clamped to 4..=8; scaling the cloud scales L.
         for scale in [0.25f32, 1.0, 1.5, 3.0] {
             let p: Vec<Vec3> = pos.iter().map(|x| *x * scale).collect();
-            let m = crate::cloud::tetrahedralize(&p)
+            let m = crate::delaunay::tetrahedralize(&p)
                 .unwrap()
                 .to_tet_mesh(&p)
                 .unwrap();

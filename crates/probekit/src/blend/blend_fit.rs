@@ -742,7 +742,7 @@ pub fn fit_file_probe_weights(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::tetrahedralize;
+    use crate::delaunay::tetrahedralize;
 
     /// Seeded uniform points in `[lo, hi]³` (the crate's sampler).
     struct Lcg(crate::sampling::SampleRng);
