@@ -1,6 +1,7 @@
 //! Tests of the tetrahedralization against exact invariants (sanity_check) and
 //! independent counts (Euler characteristic, known grid/volume facts).
 
+use super::order::bucket_sort_by_key;
 use super::*;
 use proptest::prelude::*;
 
