@@ -95,9 +95,8 @@ use glam::Vec3;
 use probekit::blend::blend_fit::{
     capture_training_set, fit_blend, BlendFitSettings, BRIGHTNESS_CHOICES,
 };
-use probekit::blend::cell_visibility::{
-    bake_cell_planes, bake_cell_visibility, CellLattice, CELL_PLANE_SEED,
-};
+use probekit::blend::cell_planes::{bake_cell_planes, CELL_PLANE_SEED};
+use probekit::blend::cell_visibility::{bake_cell_visibility, CellLattice};
 use probekit::blend::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::capture::{Baker, CaptureSettings};
 use probekit::delaunay::tetrahedralize;

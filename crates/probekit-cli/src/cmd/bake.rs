@@ -816,7 +816,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             .with_context(|| out.clone())?;
             file.cell_visibility = Some(cells);
             if head.meta.settings["cell_planes"] == serde_json::json!(true) {
-                file.cell_planes = probekit::blend::cell_visibility::bake_file_cell_planes(
+                file.cell_planes = probekit::blend::cell_planes::bake_file_cell_planes(
                     baker.tracer(),
                     &file,
                     &progress.phase("occluder planes"),

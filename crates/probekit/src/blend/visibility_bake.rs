@@ -11,9 +11,8 @@
 //! probe weights.
 
 use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
-use super::cell_visibility::{
-    bake_file_cell_planes, bake_file_cell_visibility, CellLattice, CellVisibilityError,
-};
+use super::cell_planes::bake_file_cell_planes;
+use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
 use crate::capture::{Baker, CaptureSettings};
 use crate::trace::Tracer;
@@ -44,7 +43,7 @@ pub struct VisibilityBake {
     /// or from the cell size); `None`: none.
     pub cell_subdivision: Option<CellLattice>,
     /// Occluder planes (`CPLN`) for the cells one flat wall cuts, refining
-    /// the cell visibility ([`super::cell_visibility::bake_cell_planes`]);
+    /// the cell visibility ([`super::cell_planes::bake_cell_planes`]);
     /// only with `cell_subdivision`.
     pub cell_planes: bool,
     /// Fitted probe weights (`PWGT`) with these settings; `None`: none.
@@ -177,7 +176,7 @@ impl VisibilityBake {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::blend::cell_visibility::{bake_cell_planes, CELL_PLANE_SEED};
+    use crate::blend::cell_planes::{bake_cell_planes, CELL_PLANE_SEED};
     use crate::format::cloud::test_cloud_file;
     use glam::Vec3;
     use probekit_sh::ShRgb;
