@@ -18,8 +18,9 @@
 //! decided by a handful of points next to a light.
 
 use probekit::capture::Baker;
+use probekit::eval::metrics;
 use probekit::format::ProbeFile;
-use probekit::placement::eval::{metrics, Predictor};
+use probekit::query::Predictor;
 use probekit::scene::Scene;
 use probekit::volume::Interp;
 use std::error::Error;

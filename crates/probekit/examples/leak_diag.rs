@@ -19,7 +19,8 @@
 
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings};
-use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
+use probekit::eval::{is_leak, leak_threshold};
+use probekit::query::Predictor;
 use probekit::scene::Scene;
 use probekit::trace::free_space::segment_clear;
 use probekit::trace::Ray;

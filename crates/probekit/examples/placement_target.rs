@@ -100,11 +100,12 @@ use probekit::blend::cell_visibility::{bake_cell_visibility, CellLattice};
 use probekit::blend::visibility::{bake_distance_moments, VisibilitySettings};
 use probekit::capture::{Baker, CaptureSettings};
 use probekit::delaunay::tetrahedralize;
-use probekit::placement::eval::{
-    blends_hidden_probes, interpolate_cloud, leaks_at, metrics, outside_hull, region_leaks_at,
-    region_metrics, unlit_points, worst_points,
+use probekit::eval::{
+    interpolate_cloud, leaks_at, metrics, region_leaks_at, region_metrics, unlit_points,
+    worst_points,
 };
 use probekit::placement::{grid_points, place, LightShells, PlacementMethod, PROBE_CLEARANCE};
+use probekit::query::{blends_hidden_probes, outside_hull};
 use probekit::scene::{LightKind, Scene};
 use probekit::trace::free_space::inside_geometry;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
@@ -476,7 +477,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             let region = scene.regions.iter().find(|r| &r.name == rn);
             for (i, p) in pts.iter().enumerate() {
                 let inside = region.map_or(true, |r| r.aabb().contains(p.position));
-                if !inside || !probekit::placement::eval::is_leak(pred[i], truth[i], mean) {
+                if !inside || !probekit::eval::is_leak(pred[i], truth[i], mean) {
                     continue;
                 }
                 println!(

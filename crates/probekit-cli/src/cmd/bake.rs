@@ -542,7 +542,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
-        probekit::placement::sweep::bake_blend_data(
+        probekit::eval::sweep::bake_blend_data(
             &baker,
             &kinds,
             &settings,

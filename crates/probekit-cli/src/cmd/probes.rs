@@ -6,7 +6,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::placement::eval::Predictor;
+use probekit::query::Predictor;
 use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;
 

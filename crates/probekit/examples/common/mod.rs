@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use probekit::capture::Baker;
-use probekit::placement::eval::{mean_luminance, reference_cache_path, reference_cached};
+use probekit::eval::{mean_luminance, reference_cache_path, reference_cached};
 use probekit::scene::Scene;
 use probekit::trace::free_space::{sample_points, EvalPoint};
 use std::error::Error;

@@ -76,10 +76,10 @@
 //! `rel_rmse`) is below the tolerance. The captured pool is noisy (placement
 //! samples), which only limits how fine the error ranking can be.
 
-use super::eval::blend_sh;
 use super::{LeakSettings, PlacementError, State};
 use crate::delaunay::tetrahedralize;
 use crate::progress::Progress;
+use crate::query::blend_sh;
 use crate::sampling::SampleRng;
 use crate::scene::{Aabb, Light, LightKind, Scene};
 use crate::trace::free_space::segment_clear;

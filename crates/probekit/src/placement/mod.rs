@@ -27,10 +27,8 @@
 //! validity says invalid are dropped.
 
 mod adaptive;
-pub mod eval;
 pub mod gradient_ascent;
 pub mod spawn_merge;
-pub mod sweep;
 
 pub use adaptive::PROBE_CLEARANCE;
 

@@ -17,7 +17,7 @@
 //! zeros (both exact, SH bands are orthogonal).
 
 use super::RigSetupError;
-use crate::placement::eval::Predictor;
+use crate::query::Predictor;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::ProbeFile;

@@ -19,17 +19,18 @@
 //! file has) and its predictor the caller's query settings, so the curves
 //! blend as the evaluated file does.
 
-use super::eval::{mean_luminance, metrics, Metrics, PredictError, Predictor};
-use super::gradient_ascent::GradientAscentParams;
-use super::spawn_merge::SpawnMergeParams;
-use super::{place, LightShells, PlacementError, PlacementMethod};
+use super::{mean_luminance, metrics, Metrics};
 use crate::blend::visibility_bake::{VisibilityBake, VisibilityBakeError};
 use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity, CloudFileError};
 use crate::format::settings::settings_json;
 use crate::format::{BakeMetadata, Codec, Placement as PlacementMeta, ProbeFile};
+use crate::placement::gradient_ascent::GradientAscentParams;
+use crate::placement::spawn_merge::SpawnMergeParams;
+use crate::placement::{place, LightShells, PlacementError, PlacementMethod};
 use crate::plot::{line_chart_log, PlotError};
 use crate::progress::Progress;
+use crate::query::{PredictError, Predictor};
 use crate::scene::Aabb;
 use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
@@ -269,12 +270,13 @@ pub fn plot_sweep(path: impl AsRef<Path>, title: &str, rows: &[SweepRow]) -> Res
 
 #[cfg(test)]
 mod tests {
-    use super::super::eval::reference;
-    use super::super::{grid_points, inside_geometry};
+    use super::super::reference;
     use super::*;
     use crate::capture::ReferenceSettings;
+    use crate::placement::grid_points;
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
+    use crate::trace::free_space::inside_geometry;
     use crate::trace::free_space::sample_points;
 
     /// A sun-lit room corner: floor slab and one wall, sky light.

@@ -1,35 +1,40 @@
 //! # Evaluating probe sets against path-traced ground truth
 //!
 //! Sample points in free space of a bake box (not inside geometry, not within
-//! 1 cm of a surface) with random unit normals, compute reference irradiance
-//! with [`Baker::reference_irradiance`], and compare an interpolation.
+//! 1 cm of a surface) with random unit normals
+//! ([`sample_points`](crate::trace::free_space::sample_points)), compute
+//! reference irradiance with [`Baker::reference_irradiance`], and compare an
+//! interpolation (a baked file through [`crate::query::Predictor`]).
+//! Placement comparisons and budget sweeps are [`sweep`].
 //!
 //! Metrics (RGB irradiance `E`, not divided by π):
 //! * `rel_rmse = sqrt(mean |E_pred − E_true|²) / sqrt(mean |E_true|²)` (normalised RMSE);
 //! * `p95_rel_error`: 95th percentile of `|E_pred − E_true| / (|E_true| + 0.01·mean|E_true|)`;
 //! * `leaks`: points whose interpolated luminance exceeds 4× the true
-//!   luminance plus 1 % of the mean true luminance (issue 5);
+//!   luminance plus 1 % of the mean true luminance;
 //! * `leaks_through_geometry` (clouds): those leaks whose blend gives weight
 //!   to a probe that geometry hides from the point
-//!   ([`blends_hidden_probes`]) — light from behind a wall, as
+//!   ([`blends_hidden_probes`](crate::query::blends_hidden_probes)) — light from behind a wall, as
 //!   against an error of interpolating light in sight;
 //! * `points_outside_hull` and `leaks_outside_hull` (clouds,
-//!   [`outside_hull`]): the points outside the probes' convex hull, lit
+//!   [`outside_hull`](crate::query::outside_hull)): the points outside the probes' convex hull, lit
 //!   from its outer cells, and the leaks among them;
 //! * `unlit_points` and `leaks_unlit` ([`unlit_points`]): the points whose
 //!   true irradiance is exactly 0 — sealed voids inside walls and between
 //!   floor slabs, which the free-space test cannot tell from rooms — and
 //!   the leaks among them (counted in `leaks` too).
 
+pub mod sweep;
+#[cfg(test)]
+mod tests;
+
 use crate::capture::{BakeError, Baker, ReferenceSettings};
+use crate::query::blend_sh;
 use crate::scene::Region;
-use crate::trace::free_space::{segment_clear, EvalPoint};
-use crate::trace::Tracer;
+use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
 use probekit_runtime::cloud::{TetMesh, WalkState};
-use probekit_runtime::{Interp, ProbeCloud, ProbeCloudError, ProbeFile, Volume, VolumeError};
 use probekit_sh::ShRgb;
-use thiserror::Error;
 
 /// Reference irradiance at each point (index = row number).
 pub fn reference(
@@ -229,10 +234,10 @@ pub fn worst_points(pred: &[Vec3], truth: &[Vec3], k: usize) -> Vec<WorstPoint> 
 }
 
 /// Leaks ([`is_leak`]) at the points flagged in `flags`: with the flags of
-/// [`blends_hidden_probes`] (the blend gives weight to a probe that
+/// [`blends_hidden_probes`](crate::query::blends_hidden_probes) (the blend gives weight to a probe that
 /// geometry hides from the point) the leaks through geometry, light that
 /// comes through a wall, as against an error of interpolating light in
-/// sight; with those of [`outside_hull`] the leaks of points lit from the
+/// sight; with those of [`outside_hull`](crate::query::outside_hull) the leaks of points lit from the
 /// hull's outer cells.
 pub fn leaks_at(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32, flags: &[bool]) -> usize {
     pred.iter()
@@ -240,27 +245,6 @@ pub fn leaks_at(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32, flags: &[boo
         .zip(flags)
         .filter(|((&p, &t), &f)| f && is_leak(p, t, mean_truth_lum))
         .count()
-}
-
-/// Whether each point lies outside the convex hull of `cloud`'s probes, in
-/// order: it is lit from the outer cell of the closest hull face
-/// ([`probekit_runtime::cloud::Location::Outside`]). Probes keep a
-/// clearance from surfaces, so the band between a room's walls, floor or
-/// ceiling and its outermost probes is such a region; a hull face there
-/// can reach past an inner wall (a closet's floor corner lit from a face
-/// between probes in the rooms around it: BENCHMARKS.md, "Leaks in sight
-/// given a share").
-pub fn outside_hull(cloud: &ProbeCloud, points: &[EvalPoint]) -> Vec<bool> {
-    let mut st = WalkState::new();
-    points
-        .iter()
-        .map(|p| {
-            matches!(
-                cloud.mesh().locate(p.position, &mut st),
-                probekit_runtime::cloud::Location::Outside { .. }
-            )
-        })
-        .collect()
 }
 
 /// `(points, leaks)`: how many evaluation points have a true irradiance of
@@ -283,29 +267,6 @@ pub fn unlit_points(pred: &[Vec3], truth: &[Vec3], mean_truth_lum: f32) -> (usiz
         }
     }
     out
-}
-
-/// Whether each point's blend in `cloud` gives weight to a probe that
-/// geometry hides from it (the segment from the point to the probe is
-/// blocked, [`crate::trace::free_space::segment_clear`]; the weights of
-/// [`ProbeCloud::weights_at`], whose positive ones the directional blend
-/// keeps), in order: a leak at such a point is light from behind a wall; one
-/// elsewhere is an error of interpolating light in sight (a gradient next to
-/// a lamp, say).
-pub fn blends_hidden_probes(
-    cloud: &ProbeCloud,
-    tracer: &Tracer,
-    points: &[EvalPoint],
-) -> Vec<bool> {
-    let pos = cloud.mesh().positions();
-    let mut st = WalkState::new();
-    points
-        .iter()
-        .map(|p| {
-            let (idx, w) = cloud.weights_at(p.position, &mut st);
-            (0..4).any(|k| w[k] > 0.0 && !segment_clear(tracer, p.position, pos[idx[k] as usize]))
-        })
-        .collect()
 }
 
 /// [`leaks_at`] the flagged points inside each region, in the regions'
@@ -378,118 +339,4 @@ pub fn interpolate_cloud(mesh: &TetMesh, sh: &[ShRgb], points: &[EvalPoint]) -> 
             blend_sh(sh, idx, w, order).irradiance(p.normal)
         })
         .collect()
-}
-
-/// Order-`order` radiance SH blended from the probes `idx` of `sh` with the
-/// barycentric weights `w`, in vertex order; vertices of weight 0 (and
-/// indices past `sh`) are skipped.
-pub(crate) fn blend_sh(sh: &[ShRgb], idx: [u32; 4], w: [f32; 4], order: usize) -> ShRgb {
-    let mut acc = ShRgb::zeros(order);
-    for k in 0..4 {
-        if w[k] != 0.0 {
-            if let Some(s) = sh.get(idx[k] as usize) {
-                acc.add_scaled(s, w[k]);
-            }
-        }
-    }
-    acc
-}
-
-/// Why a baked file cannot be evaluated.
-#[derive(Debug, Error)]
-#[non_exhaustive]
-pub enum PredictError {
-    /// The file is a cloud whose tetrahedra or coefficients are unusable.
-    #[error(transparent)]
-    Cloud(#[from] ProbeCloudError),
-    /// The file is a volume that cannot be sampled.
-    #[error(transparent)]
-    Volume(#[from] VolumeError),
-}
-
-/// A baked file ready to answer irradiance queries, whatever its kind: a
-/// probe cloud (tetrahedral blend, outer cells outside the hull) or an
-/// irradiance volume (uniform or octree, with the chosen interpolation).
-/// `probekit query`, `probekit eval` and the renderer all go through it, so
-/// clouds and volumes are measured the same way.
-#[derive(Clone, Debug)]
-pub enum Predictor {
-    /// A probe cloud.
-    Cloud(ProbeCloud),
-    /// An irradiance volume and how to interpolate it.
-    Volume(Volume, Interp),
-}
-
-impl Predictor {
-    /// A cloud when the file has tetrahedra, otherwise a volume sampled with
-    /// `interp` (ignored for clouds).
-    pub fn from_file(file: &ProbeFile, interp: Interp) -> Result<Self, PredictError> {
-        Ok(if file.tetrahedra.is_some() {
-            Predictor::Cloud(ProbeCloud::from_file(file)?)
-        } else {
-            Predictor::Volume(Volume::from_file(file)?, interp)
-        })
-    }
-
-    /// Irradiance `E(n)` (not divided by π) at `p` for unit normal `n`;
-    /// `state` caches the cloud walk between coherent queries.
-    pub fn irradiance(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        state: &mut WalkState,
-    ) -> Result<Vec3, PredictError> {
-        Ok(match self {
-            Predictor::Cloud(c) => c.irradiance(p, n, state),
-            Predictor::Volume(v, i) => v.irradiance(p, n, *i)?,
-        })
-    }
-
-    /// SH order (bands) of the file's coefficients.
-    pub fn order(&self) -> usize {
-        match self {
-            Predictor::Cloud(c) => c.order() as usize,
-            Predictor::Volume(v, _) => v.order(),
-        }
-    }
-
-    /// Interpolated radiance SH at `p` into `out[..order²]` (`out` must hold
-    /// at least `order²` coefficients); `state` caches the cloud walk.
-    pub fn sh_at(
-        &self,
-        p: Vec3,
-        state: &mut WalkState,
-        out: &mut [Vec3],
-    ) -> Result<(), PredictError> {
-        match self {
-            Predictor::Cloud(c) => c.sh_at(p, state, out),
-            Predictor::Volume(v, i) => v.sample_sh(p, *i, out)?,
-        }
-        Ok(())
-    }
-
-    /// [`blends_hidden_probes`] for a probe cloud; `None` for a volume.
-    pub fn blends_hidden_probes(&self, tracer: &Tracer, points: &[EvalPoint]) -> Option<Vec<bool>> {
-        match self {
-            Predictor::Cloud(c) => Some(blends_hidden_probes(c, tracer, points)),
-            Predictor::Volume(..) => None,
-        }
-    }
-
-    /// [`outside_hull`] for a probe cloud; `None` for a volume.
-    pub fn outside_hull(&self, points: &[EvalPoint]) -> Option<Vec<bool>> {
-        match self {
-            Predictor::Cloud(c) => Some(outside_hull(c, points)),
-            Predictor::Volume(..) => None,
-        }
-    }
-
-    /// Irradiance at every point, in order.
-    pub fn predict(&self, points: &[EvalPoint]) -> Result<Vec<Vec3>, PredictError> {
-        let mut st = WalkState::new();
-        points
-            .iter()
-            .map(|p| self.irradiance(p.position, p.normal, &mut st))
-            .collect()
-    }
 }
