@@ -1,6 +1,9 @@
+use super::orphans::by_pocket_coverage;
 use super::*;
+use crate::delaunay::tetrahedralize;
 use crate::scene::Scene;
 use crate::trace::free_space::*;
+use crate::trace::Tracer;
 
 fn fast_settings() -> CaptureSettings {
     CaptureSettings {
