@@ -46,7 +46,7 @@ pub trait VolumeSource: Sync {
     /// Whether an emitter (an emissive surface, or a positional light's
     /// sphere of its radius) overlaps the box `[min, max]`; such cells are
     /// refined further (see
-    /// [`super::build::AdaptiveSettings::emitter_depth`]). Default: none.
+    /// [`super::AdaptiveSettings::emitter_depth`]). Default: none.
     fn contains_emitter(&self, _min: Vec3, _max: Vec3) -> bool {
         false
     }
