@@ -1,5 +1,5 @@
 //! Per-frame cost of an irradiance rig against brute-force analytic lighting
-//! (seed 000 §4: a character with 4 sphere lights, 8 small bright sphere
+//! (Yuan et al. 2011 §4: a character with 4 sphere lights, 8 small bright sphere
 //! lights and 192 disk lights; the paper saw 449 vs 62 fps on a GPU).
 //!
 //! `cargo bench -p probekit --bench rig`

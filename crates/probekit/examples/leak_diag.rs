@@ -1,5 +1,5 @@
 //! Splits each leak of a baked cloud into SH truncation, Monte Carlo noise
-//! and interpolation (issue 5's leak test, `probekit eval`'s points).
+//! and interpolation (the leak test and the points of `probekit eval`).
 //!
 //! ```text
 //! cargo run --release -p probekit --example leak_diag -- demo.probes [SCENE] \

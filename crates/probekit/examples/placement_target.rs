@@ -1,4 +1,4 @@
-//! Issue 5's placement target, measured: for each level N of `--budgets`, a
+//! The placement target, measured: for each level N of `--budgets`, a
 //! uniform grid of about `GF·N` cell centres over the bake box (those inside
 //! geometry dropped: `G` probes) against `adaptive` with budget `⌊G / GF⌋`,
 //! which places at most that many (the budget is a hard cap), so adaptive

@@ -185,7 +185,7 @@ impl Light {
     /// (no shadowing); disk: Lambert's polygon formula
     /// for a [`DISK_POLYGON_EDGES`]-gon clipped to the horizon. `table`, when
     /// given, replaces the sphere's closed form by its 128 × 128 tabulation
-    /// (what a renderer's analytic path does, seed 000 §3.2), and the disk
+    /// (what a renderer's analytic path does, Yuan et al. 2011 §3.2), and the disk
     /// by the sphere of equal projected area and radiance looked up in the
     /// same table (cheap, as a shader would do it; approximate near the disk
     /// — the Frostbite course notes use the same sphere-for-disk horizon
@@ -317,7 +317,7 @@ fn disk_polygon_irradiance(p: Vec3, n: Vec3, c: Vec3, dn: Vec3, r: f32) -> f32 {
 }
 
 /// Horizon-clipped sphere-light irradiance tabulated over `cos θ ∈ [−1, 1]`
-/// and `sin α = r/d ∈ [0, 1]` (seed 000 §3.2: "a 128 × 128 texture"),
+/// and `sin α = r/d ∈ [0, 1]` (Yuan et al. 2011 §3.2: "a 128 × 128 texture"),
 /// bilinear lookup. Built from
 /// [`sphere_light_irradiance_horizon_clipped`] (unit radiance).
 #[derive(Clone, Debug)]
@@ -326,7 +326,7 @@ pub struct SphereTable {
     data: Vec<f32>,
 }
 
-/// Side of the default table (seed 000 §3.2).
+/// Side of the default table (Yuan et al. 2011 §3.2).
 pub const SPHERE_TABLE_SIZE: usize = 128;
 
 impl SphereTable {

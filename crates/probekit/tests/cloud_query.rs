@@ -1,4 +1,4 @@
-//! Baker → runtime: random Delaunay clouds from `cloud::tetrahedralize`
+//! Baker → runtime: random Delaunay clouds from `delaunay::tetrahedralize`
 //! queried through `probekit_runtime::cloud::TetMesh`, checked against brute
 //! force (containment over all tetrahedra, closest point over all hull faces).
 

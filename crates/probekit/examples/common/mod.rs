@@ -104,7 +104,7 @@ pub fn eval_seeds(
 /// Strata: each light's ball of `radius` (the part not in an earlier ball),
 /// and the rest of the bake box. A ball's points are uniform in it and pass
 /// `probekit eval`'s test (inside the box and
-/// `placement::eval::is_evaluation_point`); each stands for
+/// `trace::free_space::is_evaluation_point`); each stands for
 /// `V_ball / draws` of free space. A uniform
 /// point outside every ball stands for `V_box · f / n` (`f`: the box's free
 /// fraction, from `free_draws` draws of the same test; `n`: the uniform

@@ -3,7 +3,7 @@
 //! triangles) and the environment, each with sampling routines and the
 //! densities multiple importance sampling needs.
 //!
-//! Units (scene format, issue 4): 1 cd = 1 W/sr of radiant intensity, lux =
+//! Units (the scene format's, `docs/scene-format.md`): 1 cd = 1 W/sr of radiant intensity, lux =
 //! W/m²; sphere and disk lights have uniform radiance `I/(π r²)`.
 
 use super::BakeError;

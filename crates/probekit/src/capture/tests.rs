@@ -1,4 +1,4 @@
-//! Capture tests against closed forms (issue 4, "Tests and benchmarks").
+//! Capture tests against closed forms.
 //!
 //! Statistical tolerances come from the estimator's own spread: each check
 //! runs the capture with several seeds and allows 5 standard errors of the
@@ -167,7 +167,7 @@ fn legendre(l: usize, x: f64) -> f64 {
     p1
 }
 
-/// Seed 000 (Irradiance Rigs) A1: a sphere light of radiance L subtending a
+/// Yuan et al. 2011 (Irradiance Rigs), A1: a sphere light of radiance L subtending a
 /// cap of half-angle α has zonal coefficients
 /// `z_l = 2π L ∫_{cos α}^1 Y_l0(x) dx`, here by composite Simpson.
 fn sphere_light_zonal(l_rad: f64, cos_alpha: f64, order: usize) -> Vec<f32> {

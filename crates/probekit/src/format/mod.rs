@@ -118,7 +118,7 @@ pub fn encode_coefficients(
 }
 
 mod quantized {
-    //! The quantized encoders of `probekit_sh::codec` (seed 004).
+    //! The quantized encoders of `probekit_sh::codec` (Iwanicki & Sloan 2017, "Ambient Dice").
     use super::{Codec, FormatError};
     use glam::Vec3;
     use probekit_sh::codec::{encode_l1, encode_l2, encode_zh3};
@@ -225,7 +225,7 @@ mod tests {
 
     /// The file adds nothing to the codecs: what comes out of a file is
     /// exactly `decode(encode(x))` of the SH core, and sizes match the
-    /// strides of seed 004 (13, 16, 28 bytes).
+    /// strides of Iwanicki & Sloan 2017 (13, 16, 28 bytes).
     #[test]
     fn quantized_codecs_round_trip_through_a_file_bit_for_bit() {
         use probekit_sh::codec::{

@@ -1,4 +1,4 @@
-//! # Gradient-ascent placement (seed 003, §3.1.2, after Chajdas, Weis and
+//! # Gradient-ascent placement (Sukys 2014, §3.1.2, after Chajdas, Weis and
 //! Westermann, "Assisted environment map probe placement", SIGRAD 2011)
 //!
 //! 1. Fill the bake box with a uniform grid of probes and capture them.
@@ -47,7 +47,7 @@ use probekit_sh::ShRgb;
 pub struct GradientAscentParams {
     /// Approximate probe count of the initial uniform grid over the bake box.
     pub initial: usize,
-    /// Gradient from indirect light only (seed 003, "Light decoupling").
+    /// Gradient from indirect light only (Sukys 2014, "Light decoupling").
     pub indirect_only: bool,
     /// Initial step, as a fraction of the grid's cell edge (default 0.5).
     pub step: f32,

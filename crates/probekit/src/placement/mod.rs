@@ -84,9 +84,9 @@ pub enum PlacementMethod {
         /// (the `adaptive` placement module docs); see [`LightShells`].
         light_shells: LightShells,
     },
-    /// Seed 003's spawn-and-merge placement ([`spawn_merge`]).
+    /// Spawn-and-merge placement (Sukys 2014; [`spawn_merge`]).
     SpawnMerge(spawn_merge::SpawnMergeParams),
-    /// Seed 003's gradient-ascent placement ([`gradient_ascent`]).
+    /// Gradient-ascent placement (Sukys 2014; [`gradient_ascent`]).
     GradientAscent(gradient_ascent::GradientAscentParams),
 }
 
@@ -226,7 +226,7 @@ pub struct PlacementStats {
     pub crossing_after: f32,
     /// Mean relative error at the last round's candidates (adaptive).
     pub last_mean_error: Option<f32>,
-    /// Pool points that still fail issue 5's leak test (interpolated
+    /// Pool points that still fail the leak test of `probekit eval` (interpolated
     /// irradiance above 4× the captured one plus 1 % of the pool's mean, for
     /// one of 26 normals) when adaptive placement ends; `None` for the other
     /// methods.

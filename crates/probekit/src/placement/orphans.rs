@@ -29,7 +29,7 @@ const ORPHAN_TEST_CLEARANCE: f32 = 0.01;
 /// has only hidden probes to choose from, so the light of the far side of a
 /// wall is all it can give.
 ///
-/// Seed 003's edge test ([`leak_points`](super::leak_points)) finds a wall that crosses an
+/// The edge test of leak prevention ([`leak_points`](super::leak_points)) finds a wall that crosses an
 /// edge; a wall's *end* or a corner (a closet's, say) can reach into a
 /// tetrahedron without crossing any of its edges, leaving such a pocket
 /// behind it. In every tetrahedron, and on every face of the hull (beyond

@@ -1,6 +1,6 @@
-//! # Spawn-and-merge placement (seed 003, §3.1.1)
+//! # Spawn-and-merge placement (Sukys 2014, §3.1.1)
 //!
-//! After the placement thesis summarised in `shared/seeds/003_*` ("Spawn and
+//! After Sukys, "Light probe cloud generation for games" (2014: "Spawn and
 //! merge", "Light probe sampling", "Contrast of spherical harmonics"):
 //!
 //! 1. fill the bake box with a uniform grid of probes and capture them;
@@ -40,7 +40,7 @@ use crate::trace::Ray;
 use glam::Vec3;
 use probekit_sh::ShRgb;
 
-/// How many directions the SH are sampled in (seed 003, §3.1.3 "Light probe sampling").
+/// How many directions the SH are sampled in (Sukys 2014, §3.1.3 "Light probe sampling").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Directions {
     /// ±X, ±Y, ±Z.
@@ -98,7 +98,7 @@ pub fn sampled_irradiance(sh: &ShRgb, dirs: &[Vec3]) -> Vec<f32> {
         .collect()
 }
 
-/// Seed 003's sampled contrast of two probes: the largest per-direction
+/// The sampled contrast of two probes (Sukys 2014): the largest per-direction
 /// `|a − b| / (a + b + floor)` over paired samples `a`, `b` (see the module
 /// docs); 0 for empty input. Negative samples (SH ringing) count as 0.
 pub fn contrast(a: &[f32], b: &[f32], floor: f32) -> f32 {

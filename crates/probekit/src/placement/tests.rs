@@ -289,7 +289,7 @@ fn around_the_closet(ys: &[f32]) -> Vec<Vec3> {
 }
 
 /// A closet whose walls reach into tetrahedra of corridor and room probes
-/// without crossing an edge into it: seed 003's edge test adds nothing
+/// without crossing an edge into it: leak prevention's edge test adds nothing
 /// there, part of the closet sees none of its cell's probes, and
 /// `orphan_points` puts probes in the closet (in open space, off its
 /// walls) after which no point of it is orphaned.

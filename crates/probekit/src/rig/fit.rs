@@ -1,4 +1,4 @@
-//! Least-squares fitting of a rig to a mesh (seed 000 §2.2).
+//! Least-squares fitting of a rig to a mesh (Yuan et al. 2011 §2.2).
 //!
 //! The design matrix `M` (samples × parameters) has `M[j][k]` = weight of
 //! model function `k` at sample `j`, from

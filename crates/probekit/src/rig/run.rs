@@ -27,7 +27,7 @@ pub fn load_mesh(name: &str) -> Result<Mesh, RigSetupError> {
 }
 
 /// Loads the lights of a scene: the rig's own light sets
-/// `builtin:rig-demo` and `builtin:paper-cost` (seed 000's demo: 4 + 8
+/// `builtin:rig-demo` and `builtin:paper-cost` (the Irradiance Rigs paper's demo: 4 + 8
 /// sphere lights and 192 disks), or anything [`Scene::load`] reads
 /// (`builtin:demo`, `.toml`, `.gltf`, `.glb`, `.obj`), converted by
 /// [`lights_from_scene`] (its warnings say what was left out). Load errors

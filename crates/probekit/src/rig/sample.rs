@@ -1,4 +1,4 @@
-//! Evenly spread sample points on a mesh surface (seed 000 §2.2 distributes
+//! Evenly spread sample points on a mesh surface (Yuan et al. 2011 §2.2 distributes
 //! them with Lloyd relaxation).
 //!
 //! Method, deterministic for a seed: draw `CANDIDATES_PER_SAMPLE · N`

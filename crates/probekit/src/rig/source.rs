@@ -1,5 +1,5 @@
-//! A baked probe file as a rig's lighting source (issue 7: "a baked probe
-//! cloud or volume sampled at the rig's points").
+//! A baked probe file as a rig's lighting source: a baked probe cloud or
+//! volume sampled at the rig's points.
 //!
 //! [`ProbeSource`] wraps the runtime's own queries, through [`Predictor`] — [`probekit_runtime::ProbeCloud::sh_at`]
 //! (barycentric blend in the enclosing tetrahedron) or [`probekit_runtime::Volume::sample_sh`]
@@ -215,7 +215,7 @@ mod tests {
         file
     }
 
-    /// Issue 7 check (a): lit by a baked file whose SH is affine in space,
+    /// Lit by a baked file whose SH is affine in space,
     /// the gradient rig reproduces the field at every vertex to f32
     /// precision (its model is affine; least squares recovers it) and the
     /// constant rig's one SH vector is the field at the mean sample

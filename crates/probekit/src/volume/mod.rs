@@ -1,4 +1,4 @@
-//! Irradiance volumes (seed 001, Tatarchuk, *Irradiance Volumes for Games*,
+//! Irradiance volumes (Tatarchuk 2005, *Irradiance Volumes for Games*,
 //! after Greger et al. 1998): a uniform grid or an adaptive octree of
 //! radiance-SH samples with optional SH gradients, baked from any
 //! [`VolumeSource`] and written as a `.probes` file of kind volume.

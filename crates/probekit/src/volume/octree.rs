@@ -91,7 +91,7 @@ fn prediction_error(lat: &Lattice, lo: [u32; 3], s: u32, n: usize, scale: &MissS
     worst
 }
 
-/// Adaptive octree (seed 001 "Adaptive Octree Subdivision"): cells split by
+/// Adaptive octree (Tatarchuk 2005, "Adaptive Octree Subdivision"): cells split by
 /// the enabled heuristics between `min_depth` and `max_depth`, then
 /// redundant children are pruned. Corner samples live on the lattice of the
 /// finest level and are captured once however many cells share them.

@@ -10,7 +10,7 @@ pub enum GradientMode {
     /// No gradients stored.
     None,
     /// Central differences from 6 extra captures at `±step` along each axis
-    /// (seed 001: "project 6 additional irradiance functions").
+    /// (Tatarchuk 2005: "project 6 additional irradiance functions").
     Central {
         /// Offset in metres; 0 or less = [`DEFAULT_STEP_FRACTION`] of the
         /// finest cell edge.
@@ -43,7 +43,7 @@ pub struct CommonSettings {
     pub validity_threshold: f32,
 }
 
-/// Adaptive octree settings (seed 001 "Adaptive Subdivision": min and max
+/// Adaptive octree settings (Tatarchuk 2005, "Adaptive Subdivision": min and max
 /// level and one threshold per heuristic; `None` disables a heuristic).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AdaptiveSettings {

@@ -9,7 +9,7 @@ use crate::format::{ProbeFile, VolumeGrid};
 use glam::Vec3;
 
 /// Uniform grid with `resolution` probes per axis (each ≥ 2) over the box,
-/// probes at cell corners (seed 001 "Uniform Volume Subdivision").
+/// probes at cell corners (Tatarchuk 2005, "Uniform Volume Subdivision").
 pub fn build_uniform(
     src: &dyn VolumeSource,
     common: &CommonSettings,

@@ -1,6 +1,6 @@
 //! # `adaptive` placement: greedy refinement and decimation against a captured pool
 //!
-//! The evaluation (`placement::eval`, `probekit eval`) asks how well the
+//! The evaluation (`eval`, `probekit eval`) asks how well the
 //! interpolated irradiance matches the truth at random points of free space.
 //! `adaptive` optimises that directly, on a *pool* of its own points (never
 //! the evaluation's: a different random stream):
@@ -49,11 +49,11 @@
 //!    new candidates are captured around each at half that distance (inside
 //!    the box and in sight of it), so the pool refines where the lighting
 //!    needs probes. Up to [`LEAK_SHARE`] of each batch goes first to pool
-//!    points that leak through geometry: they fail issue 5's leak test
+//!    points that leak through geometry: they fail the leak test of `probekit eval`
 //!    (interpolated irradiance above 4× the captured one plus 1 % of the
 //!    mean, for one of 26 normals) and blend a probe that a surface hides
 //!    from them (a tetrahedron or hull face reaching through a wall).
-//! 4. **Leak prevention** (seed 003, see [`super`]) with a tenth of the
+//! 4. **Leak prevention** (Sukys 2014; see [`super`]) with a tenth of the
 //!    budget kept in reserve, then insertion up to the budget (less the
 //!    allowances of step 6).
 //! 5. **Decimation and swap.** A probe's removal cost is the error of

@@ -57,10 +57,10 @@ pub(super) fn mean_irradiance_luminance(a: &ShRgb) -> f32 {
     0.5 * std::f32::consts::PI.sqrt() * luminance(a.coeffs()[0])
 }
 
-/// Issue 5's leak test, at a pool point for each of `normals`: true when the
+/// The leak test of `probekit eval`, at a pool point for each of `normals`: true when the
 /// interpolated irradiance `pred` has a luminance above 4× the captured
 /// one's plus `floor` (1 % of the mean luminance) for some normal — the test
-/// `probekit eval` applies to its points (`placement::eval::metrics`).
+/// `probekit eval` applies to its points (`eval::metrics`).
 pub(super) fn leaks(pred: &ShRgb, captured: &ShRgb, normals: &[Vec3], floor: f32) -> bool {
     normals
         .iter()
