@@ -10,8 +10,8 @@ mod common;
 
 use common::run;
 use glam::{Affine3A, Quat, Vec3};
-use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
 use probekit::format::ProbeFile;
+use probekit::sampling::{sample_uniform_sphere, SampleRng};
 use probekit::volume::export::Ktx2;
 use probekit::volume::{Interp, Volume};
 use probekit_sh::ambient_cube::AmbientCube;

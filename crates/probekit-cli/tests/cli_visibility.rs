@@ -72,7 +72,7 @@ fn bake_inspect_query_with_and_without_visibility() {
     let mesh = probekit_runtime::cloud::ProbeCloud::mesh_from_file(&file).unwrap();
     assert_eq!(
         v["cell_visibility"]["subdivision"],
-        probekit::cloud::cell_visibility::auto_subdivision(&mesh)
+        probekit::blend::cell_visibility::auto_subdivision(&mesh)
     );
     // Sparse: some cells stored, none more than exist.
     let cells = v["cell_visibility"]["cells"].as_u64().unwrap();
@@ -99,11 +99,11 @@ fn bake_inspect_query_with_and_without_visibility() {
     assert_eq!(k3["cell_visibility"]["subdivision"], 3);
     // Occluder planes by default (the demo's walls cut cells), recorded;
     // `--no-cell-planes` leaves them out and changes nothing else.
-    let planes = probekit::cloud::cell_visibility::bake_cell_planes(
+    let planes = probekit::blend::cell_planes::bake_cell_planes(
         &probekit::trace::Tracer::new(&probekit::scene::Scene::builtin_demo()),
         &mesh,
         file.cell_visibility.as_ref().unwrap(),
-        probekit::cloud::cell_visibility::CELL_PLANE_SEED,
+        probekit::blend::cell_planes::CELL_PLANE_SEED,
         &|_, _| {},
     )
     .unwrap();

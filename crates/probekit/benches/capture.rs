@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings};
+use probekit::capture::{Baker, CaptureSettings};
 use probekit::scene::Scene;
 use std::path::PathBuf;
 

@@ -4,7 +4,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
-use probekit::cloud::{bench_points, tetrahedralize};
+use probekit::delaunay::{bench_points, tetrahedralize};
 use probekit_runtime::cloud::WalkState;
 use std::hint::black_box;
 

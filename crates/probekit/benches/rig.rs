@@ -1,13 +1,14 @@
 //! Per-frame cost of an irradiance rig against brute-force analytic lighting
-//! (seed 000 §4: a character with 4 sphere lights, 8 small bright sphere
+//! (Yuan et al. 2011 §4: a character with 4 sphere lights, 8 small bright sphere
 //! lights and 192 disk lights; the paper saw 449 vs 62 fps on a GPU).
 //!
 //! `cargo bench -p probekit --bench rig`
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
+use probekit::lights::SphereTable;
 use probekit::rig::fit::FittedRig;
-use probekit::rig::lights::{paper_cost_lights, SphereTable};
+use probekit::rig::lights::paper_cost_lights;
 use probekit::rig::mesh;
 use probekit::rig::split::{self, Frame};
 use probekit::rig::RigSpec;

@@ -7,7 +7,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
-use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
+use probekit::sampling::{sample_uniform_sphere, SampleRng};
 use probekit::scene::{demo::box_triangles, Material, Scene};
 use probekit::trace::{Ray, Tracer};
 use rayon::prelude::*;

@@ -7,7 +7,7 @@
 //! where the optional `SETS` is a comma-separated subset of the set names
 //! (e.g. `grid_47`, for profiling one set).
 
-use probekit::cloud::{bench_points, predicates, tetrahedralize};
+use probekit::delaunay::{bench_points, predicates, tetrahedralize};
 use std::io::Write;
 use std::time::Instant;
 
@@ -22,7 +22,7 @@ fn thread_cpu_ns() -> Option<u64> {
 
 /// FNV-1a over the output tetrahedra and neighbours, so that runs of two
 /// builds can be compared for identical output.
-fn output_hash(t: &probekit::cloud::Tetrahedralization) -> u64 {
+fn output_hash(t: &probekit::delaunay::Tetrahedralization) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325u64;
     for x in t.tets.iter().chain(&t.neighbors).flatten() {
         for b in x.to_le_bytes() {

@@ -17,9 +17,10 @@
 //! seed's own `rel_rmse` follows in brackets: one 2000-point set can be
 //! decided by a handful of points next to a light.
 
-use probekit::bake::Baker;
+use probekit::capture::Baker;
+use probekit::eval::metrics;
 use probekit::format::ProbeFile;
-use probekit::placement::eval::{metrics, Predictor};
+use probekit::query::Predictor;
 use probekit::scene::Scene;
 use probekit::volume::Interp;
 use std::error::Error;

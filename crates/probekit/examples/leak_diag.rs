@@ -1,5 +1,5 @@
 //! Splits each leak of a baked cloud into SH truncation, Monte Carlo noise
-//! and interpolation (issue 5's leak test, `probekit eval`'s points).
+//! and interpolation (the leak test and the points of `probekit eval`).
 //!
 //! ```text
 //! cargo run --release -p probekit --example leak_diag -- demo.probes [SCENE] \
@@ -18,10 +18,11 @@
 //! counts the leaks shown and those (e) leaves.
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings};
-use probekit::cloud::cell_visibility::segment_clear;
-use probekit::placement::eval::{is_leak, leak_threshold, Predictor};
+use probekit::capture::{Baker, CaptureSettings};
+use probekit::eval::{is_leak, leak_threshold};
+use probekit::query::Predictor;
 use probekit::scene::Scene;
+use probekit::trace::free_space::segment_clear;
 use probekit::trace::Ray;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::{Interp, ProbeFile};

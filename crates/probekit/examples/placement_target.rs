@@ -1,4 +1,4 @@
-//! Issue 5's placement target, measured: for each level N of `--budgets`, a
+//! The placement target, measured: for each level N of `--budgets`, a
 //! uniform grid of about `GF·N` cell centres over the bake box (those inside
 //! geometry dropped: `G` probes) against `adaptive` with budget `⌊G / GF⌋`,
 //! which places at most that many (the budget is a hard cap), so adaptive
@@ -77,7 +77,7 @@
 //! own), each probe records the fraction of each light it sees (its captured
 //! direct DC over the light's unshadowed SH DC), and a point's irradiance is
 //! the blend of the probes' SH plus, per light, its exact unshadowed
-//! irradiance (`rig::lights::Light::irradiance`) times the probes'
+//! irradiance (`lights::Light::irradiance`) times the probes'
 //! fractions blended with the same weights (fitted probe weights, when on, are
 //! fitted to the light the probes hold). The ground truth is unchanged.
 //! `--analytic-sun`: the same, and directional lights too.
@@ -92,23 +92,22 @@
 //! `probekit eval` figures).
 
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings};
-use probekit::cloud::blend_fit::{
+use probekit::blend::blend_fit::{
     capture_training_set, fit_blend, BlendFitSettings, BRIGHTNESS_CHOICES,
 };
-use probekit::cloud::cell_visibility::{
-    bake_cell_planes, bake_cell_visibility, CellLattice, CELL_PLANE_SEED,
+use probekit::blend::cell_planes::{bake_cell_planes, CELL_PLANE_SEED};
+use probekit::blend::cell_visibility::{bake_cell_visibility, CellLattice};
+use probekit::blend::visibility::{bake_distance_moments, VisibilitySettings};
+use probekit::capture::{Baker, CaptureSettings};
+use probekit::delaunay::tetrahedralize;
+use probekit::eval::{
+    interpolate_cloud, leaks_at, metrics, region_leaks_at, region_metrics, unlit_points,
+    worst_points,
 };
-use probekit::cloud::tetrahedralize;
-use probekit::cloud::visibility::{bake_distance_moments, VisibilitySettings};
-use probekit::placement::eval::{
-    blends_hidden_probes, interpolate_cloud, leaks_at, metrics, outside_hull, region_leaks_at,
-    region_metrics, unlit_points, worst_points,
-};
-use probekit::placement::{
-    grid_points, inside_geometry, place, LightShells, PlacementMethod, PROBE_CLEARANCE,
-};
+use probekit::placement::{grid_points, place, LightShells, PlacementMethod, PROBE_CLEARANCE};
+use probekit::query::{blends_hidden_probes, outside_hull};
 use probekit::scene::{LightKind, Scene};
+use probekit::trace::free_space::inside_geometry;
 use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
 use probekit_sh::ShRgb;
 use std::error::Error;
@@ -173,14 +172,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         return Err("--analytic-lights needs --visibility".into());
     }
     // Only then: a second copy of the scene and its BVH.
-    let mut near: Vec<(String, probekit::rig::lights::Light)> = Vec::new();
+    let mut near: Vec<(String, probekit::lights::Light)> = Vec::new();
     let grouped = analytic.then(|| {
         let mut grouped = scene.clone();
         for (i, l) in grouped.lights.iter_mut().enumerate() {
             let positional =
                 matches!(l.kind, LightKind::Sphere | LightKind::Point) && bbox.contains(l.position);
             if positional || (analytic_sun && l.kind == LightKind::Directional) {
-                if let Some(rl) = probekit::rig::lights::from_scene_light(l) {
+                if let Some(rl) = probekit::lights::from_scene_light(l) {
                     l.group = Some(format!("near{i:02}"));
                     near.push((format!("near{i:02}"), rl));
                 }
@@ -226,7 +225,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             nl.uniform_weight
         );
     }
-    let all_pts: Vec<probekit::placement::eval::EvalPoint> = pts
+    let all_pts: Vec<probekit::trace::free_space::EvalPoint> = pts
         .iter()
         .chain(strata.iter().flat_map(|nl| nl.set.points.iter()))
         .copied()
@@ -478,7 +477,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             let region = scene.regions.iter().find(|r| &r.name == rn);
             for (i, p) in pts.iter().enumerate() {
                 let inside = region.map_or(true, |r| r.aabb().contains(p.position));
-                if !inside || !probekit::placement::eval::is_leak(pred[i], truth[i], mean) {
+                if !inside || !probekit::eval::is_leak(pred[i], truth[i], mean) {
                     continue;
                 }
                 println!(
@@ -496,7 +495,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                         w4[k],
                         c.probe_weights().map_or(1.0, |s| s[j]),
                         probekit_sh::LUMINANCE.dot(e),
-                        probekit::cloud::cell_visibility::segment_clear(baker.tracer(), p.position, pos[j])
+                        probekit::trace::free_space::segment_clear(baker.tracer(), p.position, pos[j])
                     );
                 }
             }

@@ -18,10 +18,10 @@ pub struct FileSummary {
     pub probes: usize,
     /// Tetrahedra (clouds).
     pub tetrahedra: usize,
-    /// Hull tetrahedra flat up to rounding ([`crate::cloud::hull_slivers`]).
+    /// Hull tetrahedra flat up to rounding ([`crate::delaunay::hull_slivers`]).
     pub hull_slivers: usize,
     /// Probes at the position of another that no tetrahedron uses
-    /// ([`crate::cloud::unused_probes`]).
+    /// ([`crate::delaunay::unused_probes`]).
     pub unused_probes: usize,
     /// `sh{order}/{codec}`.
     pub basis: String,
@@ -89,10 +89,10 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
         probes: file.positions.len(),
         tetrahedra: file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
         hull_slivers: file.tetrahedra.as_ref().map_or(0, |t| {
-            crate::cloud::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
+            crate::delaunay::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
         }),
         unused_probes: file.tetrahedra.as_ref().map_or(0, |t| {
-            crate::cloud::unused_probes(file.positions.len(), &t.vertices).len()
+            crate::delaunay::unused_probes(file.positions.len(), &t.vertices).len()
         }),
         basis: format!(
             "sh{}/{}",

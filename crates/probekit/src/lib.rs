@@ -6,17 +6,23 @@
 
 #![warn(missing_docs)]
 
-pub mod bake;
-pub mod cloud;
+pub mod blend;
+pub mod capture;
+pub mod delaunay;
 pub mod env;
+pub mod eval;
 pub mod format;
 pub mod inspect;
+pub mod lights;
 pub mod pipeline;
 pub mod placement;
 pub mod plot;
+pub mod progress;
+pub mod query;
 pub mod recipe;
 pub mod render;
 pub mod rig;
+pub mod sampling;
 pub mod scene;
 pub mod sh;
 pub mod trace;

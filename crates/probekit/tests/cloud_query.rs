@@ -1,9 +1,9 @@
-//! Baker → runtime: random Delaunay clouds from `cloud::tetrahedralize`
+//! Baker → runtime: random Delaunay clouds from `delaunay::tetrahedralize`
 //! queried through `probekit_runtime::cloud::TetMesh`, checked against brute
 //! force (containment over all tetrahedra, closest point over all hull faces).
 
 use glam::{DVec3, Vec3};
-use probekit::cloud::{bench_points, tetrahedralize};
+use probekit::delaunay::{bench_points, tetrahedralize};
 use probekit_runtime::cloud::{Location, TetMesh, WalkState, INSIDE_TOLERANCE};
 use proptest::prelude::*;
 

@@ -23,14 +23,13 @@ use super::util::{check_outputs, first_given, load_probes, load_scene, read_csv}
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{shard_range, BakeOutput, CaptureSettings};
-use probekit::cloud::blend_fit::BlendFitSettings;
-use probekit::cloud::cell_visibility::CellLattice;
-use probekit::cloud::file::{
-    cloud_file, decode_light_groups, file_validity, light_groups, settings_json,
-};
-use probekit::cloud::visibility::VisibilitySettings;
-use probekit::cloud::visibility_bake::VisibilityBake;
+use probekit::blend::blend_fit::BlendFitSettings;
+use probekit::blend::cell_visibility::CellLattice;
+use probekit::blend::visibility::VisibilitySettings;
+use probekit::blend::visibility_bake::VisibilityBake;
+use probekit::capture::{shard_range, BakeOutput, CaptureSettings};
+use probekit::format::cloud::{cloud_file, decode_light_groups, file_validity, light_groups};
+use probekit::format::settings::settings_json;
 use probekit::format::{write_probe_file, BakeMetadata, Codec, Placement, ProbeFile, Validity};
 use probekit::placement::LightShells;
 use probekit::scene::Scene;
@@ -142,7 +141,7 @@ pub struct BakeArgs {
     pub render: Option<PathBuf>,
     /// Texels per side of each probe's octahedral distance-moment map
     /// (`VISM`, visibility-aware blending at run time; 1..=64).
-    #[arg(long, default_value_t = probekit::cloud::visibility::DEFAULT_RESOLUTION)]
+    #[arg(long, default_value_t = probekit::blend::visibility::DEFAULT_RESOLUTION)]
     pub visibility_res: u32,
     /// Lattice subdivision of the per-cell visibility bits (`CVSP`, 1..=8;
     /// 0: none; `auto`, the default: 4 to 8 from the cell size, the
@@ -174,25 +173,25 @@ pub struct BakeArgs {
     ])]
     pub no_probe_weights: bool,
     /// Training points per probe of the probe weight fit.
-    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_POINTS_PER_PROBE)]
+    #[arg(long, default_value_t = probekit::blend::blend_fit::DEFAULT_POINTS_PER_PROBE)]
     pub fit_points: u32,
     /// Path-traced samples per training point of the probe weight fit.
-    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_FIT_SAMPLES)]
+    #[arg(long, default_value_t = probekit::blend::blend_fit::DEFAULT_FIT_SAMPLES)]
     pub fit_samples: u32,
     /// Regularization `ρ` of the probe weight fit (≥ 0; larger keeps the
     /// weights nearer 1).
-    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_REGULARIZATION)]
+    #[arg(long, default_value_t = probekit::blend::blend_fit::DEFAULT_REGULARIZATION)]
     pub fit_regularization: f32,
     /// Weight `β` of the absolute error beside the relative one in the
     /// probe weight fit (≥ 0; 0 fits relative error alone).
-    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_ABSOLUTE_WEIGHT)]
+    #[arg(long, default_value_t = probekit::blend::blend_fit::DEFAULT_ABSOLUTE_WEIGHT)]
     pub fit_absolute_weight: f32,
     /// Brightness exponent α the cloud blends with and the probe weights
     /// are fitted for (0 to 4; 0: the plain blend, 1: harmonic mean of the
     /// probes' brightness), stored with the weights; `auto` (default): fit
     /// the weights for α = 0, 0.5 and 1 and keep the one that predicts
     /// held-out training points best without raising their absolute error
-    /// by more than 1 % (`probekit::cloud::blend_fit::fit_blend`).
+    /// by more than 1 % (`probekit::blend::blend_fit::fit_blend`).
     #[arg(long, default_value = "auto", value_name = "auto|A")]
     pub brightness_weight: String,
     /// Directional brightness exponent γ the cloud blends with on top of
@@ -201,8 +200,8 @@ pub struct BakeArgs {
     /// one side (a doorway seeing a lit corridor) counts less for the
     /// normals facing it. Not
     /// fitted for: a fixed bias against leaks
-    /// (`probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL`).
-    #[arg(long, default_value_t = probekit::cloud::blend_fit::DEFAULT_DIRECTIONAL, value_name = "G")]
+    /// (`probekit::blend::blend_fit::DEFAULT_DIRECTIONAL`).
+    #[arg(long, default_value_t = probekit::blend::blend_fit::DEFAULT_DIRECTIONAL, value_name = "G")]
     pub directional_brightness: f32,
     /// Print a JSON summary.
     #[arg(long)]
@@ -365,7 +364,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         placement_settings.order = o;
     }
     // One baker (and BVH) for placement, the probes and the blend data.
-    let baker = probekit::bake::Baker::new(&scene).with_context(|| a.scene.clone())?;
+    let baker = probekit::capture::Baker::new(&scene).with_context(|| a.scene.clone())?;
     let (points, parameters) = if method == "spawn-merge" || method == "gradient-ascent" {
         a.seed003.place(
             &baker,
@@ -404,7 +403,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         // as given, then where the capture will put them (the virtual
         // offset moves probes out of geometry and sphere lights, and the
         // file is tetrahedralized at those positions).
-        probekit::cloud::tetrahedralize(&pts).with_context(|| {
+        probekit::delaunay::tetrahedralize(&pts).with_context(|| {
             format!(
                 "{}: the probe positions cannot be tetrahedralized",
                 p.display()
@@ -413,7 +412,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         let captured = baker
             .capture_positions(&pts, 0, &placement_settings)
             .with_context(|| format!("{}: {}", a.scene, p.display()))?;
-        probekit::cloud::tetrahedralize(&captured).with_context(|| {
+        probekit::delaunay::tetrahedralize(&captured).with_context(|| {
             format!(
                 "{}: the probe positions cannot be tetrahedralized once the virtual offset has \
                  moved the probes in geometry or in sphere lights out of them",
@@ -543,7 +542,7 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         probe_weights: weights.filter(|_| whole),
     };
     if kinds != VisibilityBake::none() {
-        probekit::placement::sweep::bake_blend_data(
+        probekit::eval::sweep::bake_blend_data(
             &baker,
             &kinds,
             &settings,
@@ -596,13 +595,13 @@ pub fn run(a: &BakeArgs) -> Result<()> {
 }
 
 /// Tells on stderr which probes share a position with an earlier one: the
-/// tetrahedralization merged them ([`probekit::cloud::unused_probes`]), so
+/// tetrahedralization merged them ([`probekit::delaunay::unused_probes`]), so
 /// they are stored but no query reaches them.
 fn warn_unused_probes(outname: &str, file: &ProbeFile) {
     let Some(t) = &file.tetrahedra else {
         return;
     };
-    let unused = probekit::cloud::unused_probes(file.positions.len(), &t.vertices);
+    let unused = probekit::delaunay::unused_probes(file.positions.len(), &t.vertices);
     if let Some(&first) = unused.first() {
         let p = file.positions[first as usize];
         eprintln!(
@@ -806,9 +805,9 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             &scene_name,
         )?;
         let scene_name = &scene_name;
-        let baker = probekit::bake::Baker::new(&scene).with_context(|| scene_name.clone())?;
+        let baker = probekit::capture::Baker::new(&scene).with_context(|| scene_name.clone())?;
         if let Some(lattice) = cells {
-            let cells = probekit::cloud::cell_visibility::bake_file_cell_visibility(
+            let cells = probekit::blend::cell_visibility::bake_file_cell_visibility(
                 baker.tracer(),
                 &file,
                 lattice,
@@ -817,7 +816,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
             .with_context(|| out.clone())?;
             file.cell_visibility = Some(cells);
             if head.meta.settings["cell_planes"] == serde_json::json!(true) {
-                file.cell_planes = probekit::cloud::cell_visibility::bake_file_cell_planes(
+                file.cell_planes = probekit::blend::cell_planes::bake_file_cell_planes(
                     baker.tracer(),
                     &file,
                     &progress.phase("occluder planes"),
@@ -827,12 +826,12 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         }
         if weights.is_object() {
             // The parts' capture settings, as the bake recorded them.
-            let (capture, _) = probekit::placement::sweep::settings_from_json(
+            let (capture, _) = probekit::format::settings::settings_from_json(
                 &head.meta.settings,
-                &probekit::bake::CaptureSettings::from_scene(&scene),
+                &probekit::capture::CaptureSettings::from_scene(&scene),
             );
             let fit = BlendFitSettings::from_json(weights, &BlendFitSettings::new(capture.seed));
-            let fitted = probekit::cloud::blend_fit::fit_file_probe_weights(
+            let fitted = probekit::blend::blend_fit::fit_file_probe_weights(
                 &baker,
                 &file,
                 &scene.bake_box(),
@@ -966,7 +965,7 @@ impl Seed003Args {
     /// parameters plus the probe `count`).
     pub fn place(
         &self,
-        baker: &probekit::bake::Baker,
+        baker: &probekit::capture::Baker,
         scene_name: &str,
         name: &str,
         budget: usize,

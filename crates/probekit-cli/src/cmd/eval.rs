@@ -1,6 +1,6 @@
 //! `probekit eval PROBES --scene SCENE [--points N] [--seed S] [--json]`:
 //! error of a probe cloud against path-traced ground truth at random
-//! free-space points of the bake box (`probekit::placement::eval`).
+//! free-space points of the bake box (`probekit::eval`).
 //! Works on clouds and volumes alike (`Predictor`).
 //!
 //! `--compare grid` also bakes (in-process, with the capture settings the
@@ -9,7 +9,7 @@
 //! (with the distance moments and cell visibility the file has, baked for
 //! the grid with the same settings, and the same query-time flags);
 //! `--plot FILE.png [--budgets 50,100,200,400]` runs a placement sweep
-//! (`probekit::placement::sweep`) on the same points and ground truth (every
+//! (`probekit::eval::sweep`) on the same points and ground truth (every
 //! swept cloud with the file's kinds of visibility data and the same
 //! query-time flags), draws rel. RMSE against probe count (log-log) and
 //! reports it under `"sweep"`. `--worst K` lists the K points that carry the
@@ -20,17 +20,18 @@ use super::util::{load_probes, parse_interp, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::cloud::visibility_bake::VisibilityBake;
-use probekit::placement::eval::{
+use probekit::blend::visibility_bake::VisibilityBake;
+use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::eval::sweep::{bake_blend_data, place_and_bake, plot_sweep, sweep, SWEEP_METHODS};
+use probekit::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
-    sample_points, unlit_points, worst_points, EvalPoint, Metrics, Predictor,
+    unlit_points, worst_points, Metrics,
 };
-use probekit::placement::sweep::{
-    bake_blend_data, place_and_bake, plot_sweep, settings_from_metadata, sweep, SWEEP_METHODS,
-};
+use probekit::format::settings::settings_from_metadata;
 use probekit::placement::PlacementMethod;
+use probekit::query::Predictor;
 use probekit::scene::{Aabb, Scene};
+use probekit::trace::free_space::{sample_points, EvalPoint};
 use probekit::trace::Tracer;
 use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;

@@ -5,8 +5,8 @@ use super::util::{load_probes, load_scene, parse_interp, parse_vec3, read_csv, r
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::placement::eval::Predictor;
+use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
+use probekit::query::Predictor;
 use probekit_runtime::cloud::WalkState;
 use std::path::PathBuf;
 

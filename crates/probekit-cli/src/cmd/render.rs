@@ -10,7 +10,7 @@ use super::util::{
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::bake::CaptureSettings;
+use probekit::capture::CaptureSettings;
 use probekit::format::ProbeFile;
 use probekit::render::{render, Camera, ObjectKind, RenderSettings, Rendered};
 use probekit::scene::Scene;

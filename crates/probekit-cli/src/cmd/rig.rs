@@ -7,7 +7,7 @@
 use anyhow::{anyhow, Context};
 use clap::{Args, ValueEnum};
 use glam::Vec3;
-use probekit::placement::eval::Predictor;
+use probekit::query::Predictor;
 use probekit::rig::render::{comparison_figure, zones_figure, Column};
 use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
 use probekit::rig::source::ProbeSource;
@@ -262,7 +262,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
 fn render(
     out: &Path,
     mesh: &probekit::rig::mesh::Mesh,
-    lights: &[probekit::rig::lights::Light],
+    lights: &[probekit::lights::Light],
     probes: Option<&ProbeSource>,
     cfg: &RunConfig,
     report: &RunReport,

@@ -273,11 +273,9 @@ impl VisibilityArgs {
     /// Applies the settings to a cloud predictor, after [`Self::check`].
     /// They are the cloud's blend: given with a volume they are an error
     /// rather than ignored.
-    pub fn apply(&self, p: &mut probekit::placement::eval::Predictor) -> Result<()> {
+    pub fn apply(&self, p: &mut probekit::query::Predictor) -> Result<()> {
         self.check()?;
-        if let (Some(flag), probekit::placement::eval::Predictor::Volume(..)) =
-            (self.first_given(), &*p)
-        {
+        if let (Some(flag), probekit::query::Predictor::Volume(..)) = (self.first_given(), &*p) {
             return Err(cloud_flag_on_volume(flag));
         }
         self.set(p);
@@ -285,8 +283,8 @@ impl VisibilityArgs {
     }
 
     /// [`Self::apply`] without the check, for settings already checked.
-    pub fn set(&self, p: &mut probekit::placement::eval::Predictor) {
-        if let probekit::placement::eval::Predictor::Cloud(c) = p {
+    pub fn set(&self, p: &mut probekit::query::Predictor) {
+        if let probekit::query::Predictor::Cloud(c) = p {
             c.set_visibility(!self.no_visibility);
             c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
             c.set_probe_weighting(!self.no_probe_weights);

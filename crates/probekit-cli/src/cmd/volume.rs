@@ -16,7 +16,7 @@ use super::util::load_scene;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::cloud::file::settings_json;
+use probekit::format::settings::settings_json;
 use probekit::format::{write_probe_file, BakeMetadata, Placement};
 use probekit::volume::{
     build_adaptive, build_uniform, inspect_json, plot_depths, resolution_for_cell,

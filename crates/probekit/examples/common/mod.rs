@@ -3,11 +3,10 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
-use probekit::bake::Baker;
-use probekit::placement::eval::{
-    mean_luminance, reference_cache_path, reference_cached, sample_points, EvalPoint,
-};
+use probekit::capture::Baker;
+use probekit::eval::{mean_luminance, reference_cache_path, reference_cached};
 use probekit::scene::Scene;
+use probekit::trace::free_space::{sample_points, EvalPoint};
 use std::error::Error;
 
 /// The value after `name` in `args`, parsed, or `default` when it is
@@ -105,7 +104,7 @@ pub fn eval_seeds(
 /// Strata: each light's ball of `radius` (the part not in an earlier ball),
 /// and the rest of the bake box. A ball's points are uniform in it and pass
 /// `probekit eval`'s test (inside the box and
-/// `placement::eval::is_evaluation_point`); each stands for
+/// `trace::free_space::is_evaluation_point`); each stands for
 /// `V_ball / draws` of free space. A uniform
 /// point outside every ball stands for `V_box · f / n` (`f`: the box's free
 /// fraction, from `free_draws` draws of the same test; `n`: the uniform
@@ -140,9 +139,9 @@ impl NearLights {
         radius: f32,
         seed: u64,
     ) -> Result<Self, Box<dyn Error>> {
-        use probekit::bake::sampling::{sample_uniform_sphere, SampleRng};
-        use probekit::placement::eval::is_evaluation_point;
+        use probekit::sampling::{sample_uniform_sphere, SampleRng};
         use probekit::scene::LightKind;
+        use probekit::trace::free_space::is_evaluation_point;
         let bbox = scene.bake_box();
         let free = |p: Vec3| bbox.contains(p) && is_evaluation_point(baker.tracer(), p);
         let centres: Vec<Vec3> = scene

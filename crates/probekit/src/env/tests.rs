@@ -1,5 +1,5 @@
 use super::*;
-use crate::bake::sampling::SampleRng;
+use crate::sampling::SampleRng;
 use crate::sh::compare::spherical_fibonacci;
 use glam::{DVec3, Vec2};
 use probekit_sh::convolve::eval_sh;

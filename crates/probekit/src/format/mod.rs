@@ -1,5 +1,8 @@
 //! Writing `.probes` files: codec encoding, bake metadata, and atomic
-//! file replacement.
+//! file replacement. Two submodules sit above the capture and the Delaunay
+//! code, which they take their inputs from: [`cloud`] assembles a baked
+//! probe cloud, [`settings`] records the capture settings in the metadata
+//! and reads them back.
 //!
 //! The format itself (layout, reader, serializer, validation) lives in the
 //! runtime crate, [`probekit_runtime::format`], re-exported here, so the
@@ -19,7 +22,9 @@
 //! ```
 
 mod atomic;
+pub mod cloud;
 mod metadata;
+pub mod settings;
 
 pub use atomic::{check_writable, write_atomic, write_probe_file, WriteError};
 pub use metadata::{
@@ -113,7 +118,7 @@ pub fn encode_coefficients(
 }
 
 mod quantized {
-    //! The quantized encoders of `probekit_sh::codec` (seed 004).
+    //! The quantized encoders of `probekit_sh::codec` (Iwanicki & Sloan 2017, "Ambient Dice").
     use super::{Codec, FormatError};
     use glam::Vec3;
     use probekit_sh::codec::{encode_l1, encode_l2, encode_zh3};
@@ -220,7 +225,7 @@ mod tests {
 
     /// The file adds nothing to the codecs: what comes out of a file is
     /// exactly `decode(encode(x))` of the SH core, and sizes match the
-    /// strides of seed 004 (13, 16, 28 bytes).
+    /// strides of Iwanicki & Sloan 2017 (13, 16, 28 bytes).
     #[test]
     fn quantized_codecs_round_trip_through_a_file_bit_for_bit() {
         use probekit_sh::codec::{

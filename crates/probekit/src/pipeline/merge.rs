@@ -1,8 +1,9 @@
 //! Joining shard parts into the file a single machine writes.
 
 use super::{PipelineError, Progress};
-use crate::cloud::cell_visibility::{bake_file_cell_planes, bake_file_cell_visibility};
-use crate::cloud::file::{cloud_file, decode_light_groups, light_groups};
+use crate::blend::cell_planes::bake_file_cell_planes;
+use crate::blend::cell_visibility::bake_file_cell_visibility;
+use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
 use crate::format::ProbeFile;
 use crate::recipe::{check_scene, BakeRecord};
 use crate::scene::Scene;
@@ -130,9 +131,10 @@ pub fn merge(
         let n = p.file.coefficients.coeffs_per_probe().max(1);
         positions.extend_from_slice(&p.file.positions);
         for ch in c.chunks(n) {
-            sh.push(ShRgb::from_coeffs(ch.to_vec()).ok_or_else(|| {
-                bad(format!("{}: coefficients of no SH order", p.name))
-            })?);
+            sh.push(
+                ShRgb::from_coeffs(ch.to_vec())
+                    .ok_or_else(|| bad(format!("{}: coefficients of no SH order", p.name)))?,
+            );
         }
         validity.extend(p.file.validity.clone().unwrap_or_default());
         match (&mut moments, &p.file.visibility) {
@@ -175,19 +177,19 @@ pub fn merge(
             &scene.lighting_hash_hex(),
             scene_name,
         )?;
-        let baker = crate::bake::Baker::new(scene)?;
+        let baker = crate::capture::Baker::new(scene)?;
         if let Some(lattice) = kinds.cell_subdivision {
             file.cell_visibility = Some(
                 bake_file_cell_visibility(baker.tracer(), &file, lattice, &|d, t| {
                     progress("cell visibility", d, t)
                 })
-                .map_err(crate::cloud::visibility_bake::VisibilityBakeError::from)?,
+                .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?,
             );
             if kinds.cell_planes {
                 file.cell_planes = bake_file_cell_planes(baker.tracer(), &file, &|d, t| {
                     progress("occluder planes", d, t)
                 })
-                .map_err(crate::cloud::visibility_bake::VisibilityBakeError::from)?;
+                .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
             }
         }
         kinds.fit_weights_into(&baker, &recipe.capture_settings(), &mut file, &|d, t| {

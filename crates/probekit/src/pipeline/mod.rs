@@ -28,9 +28,9 @@ pub use merge::merge;
 pub use positions::read_positions;
 pub use volume::{bake_volume, bake_volume_from, VolumeReport};
 
-use crate::bake::{BakeError, BakeOutput, Baker, CaptureSettings};
-use crate::cloud::file::{cloud_file, file_validity, light_groups, CloudFileError};
-use crate::cloud::visibility_bake::VisibilityBakeError;
+use crate::blend::visibility_bake::VisibilityBakeError;
+use crate::capture::{BakeError, BakeOutput, Baker, CaptureSettings};
+use crate::format::cloud::{cloud_file, file_validity, light_groups, CloudFileError};
 use crate::format::{BakeMetadata, Codec, FormatError, Placement as OldPlacement, ProbeFile};
 use crate::placement::{grid_points, PlacementError};
 use crate::recipe::{BakeRecord, Part, Placement, PlacementReport, Recipe, RecipeError};
@@ -206,13 +206,14 @@ impl<'s> Bake<'s> {
             }
             Placement::Manual { positions } => {
                 let pts = read_positions(positions)?;
-                let flat = |e: crate::cloud::DelaunayError, why: &str| PipelineError::Positions {
-                    path: positions.clone(),
-                    message: format!("the probe positions cannot be tetrahedralized{why}: {e}"),
-                };
-                crate::cloud::tetrahedralize(&pts).map_err(|e| flat(e, ""))?;
+                let flat =
+                    |e: crate::delaunay::DelaunayError, why: &str| PipelineError::Positions {
+                        path: positions.clone(),
+                        message: format!("the probe positions cannot be tetrahedralized{why}: {e}"),
+                    };
+                crate::delaunay::tetrahedralize(&pts).map_err(|e| flat(e, ""))?;
                 let captured = self.baker.capture_positions(&pts, 0, &capture)?;
-                crate::cloud::tetrahedralize(&captured).map_err(|e| {
+                crate::delaunay::tetrahedralize(&captured).map_err(|e| {
                     flat(
                         e,
                         " once the virtual offset has moved the probes in geometry or in \
@@ -251,7 +252,7 @@ impl<'s> Bake<'s> {
         shards: usize,
         progress: Progress<'_>,
     ) -> Result<BakeOutput, PipelineError> {
-        let range = crate::bake::shard_range(positions.len(), shard, shards)?;
+        let range = crate::capture::shard_range(positions.len(), shard, shards)?;
         Ok(self.baker.bake_shard(
             positions,
             shard,
@@ -264,11 +265,21 @@ impl<'s> Bake<'s> {
     /// Stage 3: the cloud file of a whole capture — tetrahedra,
     /// coefficients in the recipe's codec, light groups, validity — with
     /// `record` as its metadata.
-    pub fn assemble(&self, out: &BakeOutput, record: &BakeRecord) -> Result<ProbeFile, PipelineError> {
+    pub fn assemble(
+        &self,
+        out: &BakeOutput,
+        record: &BakeRecord,
+    ) -> Result<ProbeFile, PipelineError> {
         let (sh, groups) = stored(out, self.recipe.capture.indirect_only);
         let validity: Vec<_> = out.validity.iter().map(file_validity).collect();
         let codec = self.recipe.codec.codec();
-        let mut f = cloud_file(&out.captured_positions, &sh, &validity, codec, &no_metadata())?;
+        let mut f = cloud_file(
+            &out.captured_positions,
+            &sh,
+            &validity,
+            codec,
+            &no_metadata(),
+        )?;
         f.groups = light_groups(&groups, out.settings.order, codec)?;
         f.metadata = record.to_json();
         Ok(f)
@@ -319,9 +330,12 @@ impl<'s> Bake<'s> {
             &|d, t| progress("visibility", d, t),
             &|d, t| progress("cell visibility", d, t),
         )?;
-        kinds.fit_weights_into(&self.baker, &self.recipe.capture_settings(), file, &|d, t| {
-            progress("probe weights", d, t)
-        })?;
+        kinds.fit_weights_into(
+            &self.baker,
+            &self.recipe.capture_settings(),
+            file,
+            &|d, t| progress("probe weights", d, t),
+        )?;
         Ok(())
     }
 
@@ -370,13 +384,18 @@ impl<'s> Bake<'s> {
         clock.lap("capture");
         let mut record = self.record();
         record.placed = Some(placed.report.clone());
-        let mut file =
-            self.assemble_part(&out, &record, shard, shards, placed.positions.len())?;
+        let mut file = self.assemble_part(&out, &record, shard, shards, placed.positions.len())?;
         clock.lap("assembly");
         self.blend_data(&mut file, false, progress)?;
         clock.lap("blend data");
         file.validate()?;
-        let report = report(&file, &out, Some([shard, shards]), placed.report.clone(), clock)?;
+        let report = report(
+            &file,
+            &out,
+            Some([shard, shards]),
+            placed.report.clone(),
+            clock,
+        )?;
         Ok(Baked { file, report })
     }
 }
@@ -428,7 +447,11 @@ fn stored(out: &BakeOutput, indirect_only: bool) -> (Vec<ShRgb>, Vec<(String, Ve
 
 /// Placeholder metadata for [`cloud_file`]; the record replaces it.
 fn no_metadata() -> BakeMetadata {
-    BakeMetadata::new(String::new(), OldPlacement::default(), serde_json::Value::Null)
+    BakeMetadata::new(
+        String::new(),
+        OldPlacement::default(),
+        serde_json::Value::Null,
+    )
 }
 
 /// The report of a finished file.

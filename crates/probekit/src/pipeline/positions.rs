@@ -23,7 +23,8 @@ pub fn parse_positions(text: &str) -> Result<Vec<Vec3>, String> {
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let fields: Result<Vec<f32>, _> = line.split(',').map(|f| f.trim().parse::<f32>()).collect();
+        let fields: Result<Vec<f32>, _> =
+            line.split(',').map(|f| f.trim().parse::<f32>()).collect();
         let row = match fields {
             Ok(r) => r,
             Err(_) if out.is_empty() && i == 0 => continue, // a header
@@ -55,9 +56,18 @@ mod tests {
     fn rows_headers_comments_and_errors() {
         let p = parse_positions("x,y,z\n# a comment\n1,2,3\n\n 4 , 5 , 6\n").unwrap();
         assert_eq!(p, vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 5.0, 6.0)]);
-        assert_eq!(parse_positions("1,2\n").unwrap_err(), "line 1: expected 3 numbers x,y,z, found 2");
-        assert_eq!(parse_positions("1,2,3\n1,a,3\n").unwrap_err(), "line 2: expected 3 numbers x,y,z");
-        assert_eq!(parse_positions("1,2,nan\n").unwrap_err(), "line 1: NaN or infinite value");
+        assert_eq!(
+            parse_positions("1,2\n").unwrap_err(),
+            "line 1: expected 3 numbers x,y,z, found 2"
+        );
+        assert_eq!(
+            parse_positions("1,2,3\n1,a,3\n").unwrap_err(),
+            "line 2: expected 3 numbers x,y,z"
+        );
+        assert_eq!(
+            parse_positions("1,2,nan\n").unwrap_err(),
+            "line 1: NaN or infinite value"
+        );
         assert_eq!(parse_positions("x,y,z\n").unwrap_err(), "no positions");
     }
 }

@@ -50,7 +50,9 @@ pub fn bake_volume(
     bake_box.check_bake_box()?;
     let recipe = recipe.resolved_for(scene);
     let src = BakerSource::new(scene, recipe.capture_settings())?
-        .with_progress(Box::new(|done, requested| progress("capture", done, requested)))
+        .with_progress(Box::new(|done, requested| {
+            progress("capture", done, requested)
+        }))
         .with_max_offset(0.25 * recipe.finest_volume_cell(&bake_box));
     let record = BakeRecord::new(scene_name, scene, recipe.clone());
     let threshold = src.validity_threshold();
@@ -74,11 +76,12 @@ pub fn bake_volume_from(
 ) -> Result<(ProbeFile, VolumeReport), PipelineError> {
     bake_box.check_bake_box()?;
     let mut clock = Clock::new();
-    let (mut file, stats): (ProbeFile, BuildStats) =
-        match recipe.volume_settings(bake_box, validity_threshold)? {
-            VolumeSettings::Uniform { common, resolution } => build_uniform(src, &common, resolution)?,
-            VolumeSettings::Octree(s) => build_adaptive(src, &s)?,
-        };
+    let (mut file, stats): (ProbeFile, BuildStats) = match recipe
+        .volume_settings(bake_box, validity_threshold)?
+    {
+        VolumeSettings::Uniform { common, resolution } => build_uniform(src, &common, resolution)?,
+        VolumeSettings::Octree(s) => build_adaptive(src, &s)?,
+    };
     clock.lap("build");
     if let Some(g) = recipe.volume.gradients.order {
         truncate_gradients(&mut file, g)?;

@@ -1,4 +1,4 @@
-//! # Gradient-ascent placement (seed 003, §3.1.2, after Chajdas, Weis and
+//! # Gradient-ascent placement (Sukys 2014, §3.1.2, after Chajdas, Weis and
 //! Westermann, "Assisted environment map probe placement", SIGRAD 2011)
 //!
 //! 1. Fill the bake box with a uniform grid of probes and capture them.
@@ -22,7 +22,7 @@
 //!    stops when no probe moves or after `max_iterations`.
 //! 4. With `indirect_only` (seed §3.1.2 "Light decoupling") the gradient and
 //!    the dark/brighter tests use the indirect part of the capture
-//!    ([`crate::bake::CaptureSettings::split_direct`]); the probes still store all light.
+//!    ([`crate::capture::CaptureSettings::split_direct`]); the probes still store all light.
 //! 5. Probes that converged onto each other (closer than `merge_fraction` ×
 //!    cell) are merged, keeping the first (Chajdas et al.'s "potential
 //!    probes" that traced to one point).
@@ -36,7 +36,8 @@
 
 use super::spawn_merge::{sampled_irradiance, Directions};
 use super::{crossing_extent, grid_points, LeakSettings, PlacementError, State};
-use crate::bake::sampling::SampleRng;
+use crate::progress::Progress;
+use crate::sampling::SampleRng;
 use crate::scene::Aabb;
 use glam::Vec3;
 use probekit_sh::ShRgb;
@@ -46,7 +47,7 @@ use probekit_sh::ShRgb;
 pub struct GradientAscentParams {
     /// Approximate probe count of the initial uniform grid over the bake box.
     pub initial: usize,
-    /// Gradient from indirect light only (seed 003, "Light decoupling").
+    /// Gradient from indirect light only (Sukys 2014, "Light decoupling").
     pub indirect_only: bool,
     /// Initial step, as a fraction of the grid's cell edge (default 0.5).
     pub step: f32,
@@ -269,7 +270,7 @@ fn capture_field(
     Ok(res
         .into_iter()
         .map(|r| {
-            if r.validity.valid && !super::inside_geometry(tracer, r.position) {
+            if r.validity.valid && !crate::trace::free_space::inside_geometry(tracer, r.position) {
                 let field = if indirect_only {
                     r.indirect.clone().unwrap_or_else(|| r.sh.clone())
                 } else {
@@ -293,7 +294,7 @@ pub(super) fn gradient_ascent(
     bbox: &Aabb,
     p: &GradientAscentParams,
     ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<Vec<AscentMove>, PlacementError> {
     p.validate()?;
     let dirs = Directions::TwentySix.vectors();
@@ -348,7 +349,7 @@ pub(super) fn gradient_ascent(
             .map(|q| {
                 q.cmpge(bbox.min).all()
                     && q.cmple(bbox.max).all()
-                    && !super::inside_geometry(tracer, *q)
+                    && !crate::trace::free_space::inside_geometry(tracer, *q)
             })
             .collect();
         let to_capture: Vec<Vec3> = props
@@ -446,7 +447,7 @@ pub(super) fn gradient_ascent(
 mod tests {
     use super::super::{place, PlacementMethod, PlacementStats};
     use super::*;
-    use crate::bake::{Baker, CaptureSettings};
+    use crate::capture::{Baker, CaptureSettings};
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
 

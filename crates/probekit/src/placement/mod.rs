@@ -6,9 +6,9 @@
 //! interpolation of the current probes disagrees most with the captured
 //! lighting, until a probe budget or a relative-error tolerance is met.
 //!
-//! Every method ends with **leak prevention** after seed 003 (Cupisz, "Light
-//! probe interpolation using tetrahedral tessellations", GDC 2012, and the
-//! placement paper summarised in `shared/seeds/003_*`): every tetrahedron edge
+//! Every method ends with **leak prevention** ([`leak_points`], after Cupisz,
+//! "Light probe interpolation using tetrahedral tessellations", GDC 2012, and
+//! Sukys 2014, "Light probe cloud generation for games"): every tetrahedron edge
 //! is ray-traced in both directions; where it crosses geometry, a probe is
 //! inserted on each side near the hit, offset along the surface normal by a
 //! fraction of the edge length (hits nearly parallel to the surface are
@@ -16,7 +16,7 @@
 //! points are re-tetrahedralized; this repeats a few times. Interpolation
 //! across a wall is then confined to a thin band around it.
 //!
-//! Beyond seed 003, `adaptive` also fills **orphan pockets**
+//! Beyond that, `adaptive` also fills **orphan pockets**
 //! ([`orphan_points`]): a wall's end or a closet's corner can reach into a
 //! tetrahedron without crossing any of its edges, so the edge test adds
 //! nothing there, and the free space behind it sees none of the
@@ -27,21 +27,24 @@
 //! validity says invalid are dropped.
 
 mod adaptive;
-pub mod eval;
 pub mod gradient_ascent;
+mod grid;
+mod leaks;
+mod orphans;
 pub mod spawn_merge;
-pub mod sweep;
 
 pub use adaptive::PROBE_CLEARANCE;
+pub use grid::{grid_points, grid_resolution, MIN_GRID};
+pub use leaks::{crossing_extent, leak_points, tet_edges, LeakSettings};
+pub use orphans::{orphan_points, ORPHAN_COVER_RADIUS, ORPHAN_SPACING};
 
-use crate::bake::{BakeError, Baker, CaptureSettings};
-use crate::cloud::{tetrahedralize, DelaunayError};
+use crate::capture::{BakeError, Baker, CaptureSettings};
+use crate::delaunay::DelaunayError;
+use crate::progress::Progress;
 use crate::scene::{Aabb, BakeBoxError};
-use crate::trace::{Hit, Ray, Tracer};
+use crate::trace::free_space::inside_geometry;
 use glam::Vec3;
 use probekit_sh::ShRgb;
-use rayon::prelude::*;
-use std::collections::BTreeSet;
 use thiserror::Error;
 
 /// The most probes any placement may be asked for (a grid's cell count, an
@@ -81,9 +84,9 @@ pub enum PlacementMethod {
         /// (the `adaptive` placement module docs); see [`LightShells`].
         light_shells: LightShells,
     },
-    /// Seed 003's spawn-and-merge placement ([`spawn_merge`]).
+    /// Spawn-and-merge placement (Sukys 2014; [`spawn_merge`]).
     SpawnMerge(spawn_merge::SpawnMergeParams),
-    /// Seed 003's gradient-ascent placement ([`gradient_ascent`]).
+    /// Gradient-ascent placement (Sukys 2014; [`gradient_ascent`]).
     GradientAscent(gradient_ascent::GradientAscentParams),
 }
 
@@ -223,7 +226,7 @@ pub struct PlacementStats {
     pub crossing_after: f32,
     /// Mean relative error at the last round's candidates (adaptive).
     pub last_mean_error: Option<f32>,
-    /// Pool points that still fail issue 5's leak test (interpolated
+    /// Pool points that still fail the leak test of `probekit eval` (interpolated
     /// irradiance above 4× the captured one plus 1 % of the pool's mean, for
     /// one of 26 normals) when adaptive placement ends; `None` for the other
     /// methods.
@@ -248,229 +251,6 @@ pub struct Placement {
     pub captured: Option<Vec<ShRgb>>,
     /// What happened.
     pub stats: PlacementStats,
-}
-
-/// Leak-prevention parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LeakSettings {
-    /// Passes of trace–insert–retetrahedralize.
-    pub iterations: u32,
-    /// Offset of an inserted probe from the hit, as a fraction of the edge length.
-    pub offset_fraction: f32,
-    /// Offset bounds, metres.
-    pub min_offset: f32,
-    /// Largest offset, metres.
-    pub max_offset: f32,
-    /// Hits with `|cos(edge, normal)|` below this are skipped (surface-parallel).
-    pub min_cos: f32,
-    /// No new probe closer than this fraction of the offset to another probe.
-    pub min_distance_fraction: f32,
-}
-
-impl Default for LeakSettings {
-    fn default() -> Self {
-        Self {
-            iterations: 2,
-            offset_fraction: 0.1,
-            min_offset: 0.05,
-            max_offset: 0.4,
-            min_cos: 0.2,
-            min_distance_fraction: 0.8,
-        }
-    }
-}
-
-/// True when `p` is inside closed geometry: of 7 fixed, well-spread rays, a
-/// majority first hit a back face (the scenes' meshes are closed and
-/// outward-facing). A ray that hits nothing votes "outside".
-pub fn inside_geometry(tracer: &Tracer, p: Vec3) -> bool {
-    const DIRS: [[f32; 3]; 7] = [
-        [0.577, 0.577, 0.577],
-        [-0.577, 0.577, -0.577],
-        [0.577, -0.577, -0.577],
-        [-0.577, -0.577, 0.577],
-        [0.267, 0.802, -0.535],
-        [-0.802, 0.267, 0.535],
-        [0.535, -0.267, 0.802],
-    ];
-    let mut back = 0;
-    for d in DIRS {
-        let ray = Ray::new(p, Vec3::from(d).normalize());
-        if let Some(h) = tracer.closest_hit(&ray, f32::INFINITY) {
-            if !h.front_face {
-                back += 1;
-            }
-        }
-    }
-    back * 2 > DIRS.len()
-}
-
-/// The 26 unit directions towards the faces, edges and corners of a cube
-/// around a point (the axes, face diagonals and cube diagonals), in a fixed
-/// order: the rays of [`is_free`], [`is_open`] and [`push_off_surfaces`].
-fn cube_directions() -> impl Iterator<Item = Vec3> {
-    (0..27).filter(|&i| i != 13).map(|i: i32| {
-        Vec3::new(
-            (i / 9 - 1) as f32,
-            (i / 3 % 3 - 1) as f32,
-            (i % 3 - 1) as f32,
-        )
-        .normalize()
-    })
-}
-
-/// True when `p` is in free space: not [`inside_geometry`] and no surface
-/// within `clearance` metres along any of 26 directions (the axes, face
-/// diagonals and cube diagonals).
-pub fn is_free(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    is_free_of(tracer, p, clearance, |_| true)
-}
-
-/// [`is_free`], counting only the hits within `clearance` for which
-/// `blocks` holds (adaptive placement lets probes nearer to emitters).
-fn is_free_of(tracer: &Tracer, p: Vec3, clearance: f32, blocks: impl Fn(&Hit) -> bool) -> bool {
-    !cube_directions().any(|d| {
-        tracer
-            .closest_hit(&Ray::new(p, d), clearance)
-            .is_some_and(|h| blocks(&h))
-    }) && !inside_geometry(tracer, p)
-}
-
-/// A stricter [`is_free`]: no surface within `clearance` metres along any of
-/// its 26 directions, and fewer than a quarter of them first see a back
-/// face. In a scene of closed, outward-facing meshes a point of free
-/// space sees front faces first, but for a ray through an edge where two
-/// meshes meet; one inside geometry whose rays leave through faces that
-/// coincide with another mesh's (a wall's top under the ceiling) can outvote
-/// [`inside_geometry`]'s seven rays, but not 26.
-pub fn is_open(tracer: &Tracer, p: Vec3, clearance: f32) -> bool {
-    let mut back = 0;
-    for d in cube_directions() {
-        if let Some(h) = tracer.closest_hit(&Ray::new(p, d), f32::INFINITY) {
-            if h.t < clearance {
-                return false;
-            }
-            back += usize::from(!h.front_face);
-        }
-    }
-    4 * back < 26
-}
-
-/// The smallest grid: 2 cells per axis.
-pub const MIN_GRID: usize = 8;
-
-/// Cells per axis of the cell-centred grid over `b` with cells of edge
-/// `cell` metres (when given), else about `budget` cells: cell edge
-/// `∛(V / budget)`, each axis `round(extent / edge)`, at least 2. The one
-/// sizing rule of every grid placement (`bake`, the sweeps, `eval
-/// --compare grid`). Refuses a flat or empty box, a budget below
-/// [`MIN_GRID`] (rather than baking 8 probes for `--grid 1`), a
-/// non-positive cell and grids above [`MAX_PROBES`].
-pub fn grid_resolution(
-    b: &Aabb,
-    cell: Option<f32>,
-    budget: Option<usize>,
-) -> Result<[usize; 3], PlacementError> {
-    b.check_bake_box()?;
-    let size = b.size();
-    let cell = match (cell, budget) {
-        (Some(c), _) if c.is_finite() && c > 0.0 => c,
-        (Some(c), _) => {
-            return Err(PlacementError::BadParameter(format!(
-                "grid cell {c} must be a positive length in metres"
-            )))
-        }
-        (None, Some(n)) if n >= MIN_GRID => (size.x * size.y * size.z / n as f32).cbrt(),
-        (None, Some(n)) => {
-            return Err(PlacementError::BadParameter(format!(
-                "grid of {n} probes: a grid has at least 2 probes per axis, {MIN_GRID} in all"
-            )))
-        }
-        (None, None) => {
-            return Err(PlacementError::BadParameter(
-                "grid needs a cell size or a budget".into(),
-            ))
-        }
-    };
-    // `as` saturates, so a tiny cell gives a huge count, refused below.
-    let dims = size
-        .to_array()
-        .map(|s| ((s / cell).round() as usize).max(2));
-    let count = dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
-    match count {
-        Some(n) if n <= MAX_PROBES => Ok(dims),
-        _ => Err(PlacementError::TooMany {
-            what: format!("grid of {}×{}×{}", dims[0], dims[1], dims[2]),
-            count: count.unwrap_or(usize::MAX),
-        }),
-    }
-}
-
-/// Cell-centred uniform grid over `b` sized by [`grid_resolution`], x
-/// fastest, then y, then z. No point lies on the box faces.
-pub fn grid_points(
-    b: &Aabb,
-    cell: Option<f32>,
-    budget: Option<usize>,
-) -> Result<Vec<Vec3>, PlacementError> {
-    let [nx, ny, nz] = grid_resolution(b, cell, budget)?;
-    let size = b.size();
-    let mut out = Vec::with_capacity(nx * ny * nz);
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                let f = Vec3::new(
-                    (i as f32 + 0.5) / nx as f32,
-                    (j as f32 + 0.5) / ny as f32,
-                    (k as f32 + 0.5) / nz as f32,
-                );
-                out.push(b.min + f * size);
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// Unique edges of tetrahedra, as sorted index pairs in increasing order.
-pub fn tet_edges(tets: &[[u32; 4]]) -> Vec<(u32, u32)> {
-    let mut set = BTreeSet::new();
-    for t in tets {
-        for i in 0..4 {
-            for j in i + 1..4 {
-                let (a, b) = (t[i].min(t[j]), t[i].max(t[j]));
-                set.insert((a, b));
-            }
-        }
-    }
-    set.into_iter().collect()
-}
-
-/// Number of tetrahedron edges of the Delaunay tetrahedralization of
-/// `points` that cross geometry, and their crossing extent: for each such
-/// edge, the free length on both sides over which interpolation spans the
-/// surface (distance from each end point to the first surface seen from it),
-/// summed, in metres. Leak prevention shrinks the extent.
-pub fn crossing_extent(tracer: &Tracer, points: &[Vec3]) -> Result<(usize, f32), PlacementError> {
-    let tri = tetrahedralize(points)?;
-    let mut count = 0;
-    let mut extent = 0.0f64;
-    for (a, b) in tet_edges(&tri.tets) {
-        let (pa, pb) = (points[a as usize], points[b as usize]);
-        let d = pb - pa;
-        let len = d.length();
-        if len <= 0.0 {
-            continue;
-        }
-        let dir = d / len;
-        if let Some(h) = tracer.closest_hit(&Ray::new(pa, dir), len) {
-            count += 1;
-            let back = tracer
-                .closest_hit(&Ray::new(pb, -dir), len)
-                .map_or(len - h.t, |h2| h2.t);
-            extent += (h.t + back) as f64;
-        }
-    }
-    Ok((count, extent as f32))
 }
 
 /// Probes so far: positions, captured SH, and the next capture index.
@@ -583,32 +363,6 @@ impl State<'_, '_> {
         }
     }
 
-    /// Up to `passes` rounds of [`orphan_points`] (inside `bounds`), at most
-    /// `limit` probes added in all; returns how many.
-    fn fix_orphans(
-        &mut self,
-        clearance: f32,
-        passes: u32,
-        limit: usize,
-        bounds: &Aabb,
-    ) -> Result<usize, PlacementError> {
-        let mut added = 0;
-        for _ in 0..passes {
-            if added >= limit {
-                break;
-            }
-            let mut new = orphan_points(self.baker.tracer(), &self.positions, clearance)?;
-            new.retain(|p| bounds.contains(*p));
-            let got = self.admit(new, |p| bounds.contains(*p), limit - added)?;
-            if got == 0 {
-                break;
-            }
-            added += got;
-            self.stats.orphan_probes += got;
-        }
-        Ok(added)
-    }
-
     /// Snaps `new` onto the box layers, keeps those in free space, captures
     /// them and adds up to `room` of the valid captures for which `inside`
     /// holds as probes; returns how many.
@@ -627,285 +381,6 @@ impl State<'_, '_> {
         self.add(got);
         Ok(n)
     }
-
-    /// One or more passes of leak prevention; at most `limit` probes added.
-    fn fix_leaks(&mut self, ls: &LeakSettings, limit: usize) -> Result<(), PlacementError> {
-        self.fix_leaks_within(ls, limit, None)
-    }
-
-    /// [`Self::fix_leaks`], keeping only probes inside `bounds` (when given):
-    /// the far side of an edge that crosses an outer wall is outside the
-    /// building, where a probe sees the sky and sun, and the virtual offset
-    /// can push a capture through a thin wall.
-    fn fix_leaks_within(
-        &mut self,
-        ls: &LeakSettings,
-        limit: usize,
-        bounds: Option<&Aabb>,
-    ) -> Result<(), PlacementError> {
-        let inside = |p: &Vec3| bounds.map_or(true, |b| b.contains(*p));
-        let mut added_total = 0;
-        for _ in 0..ls.iterations {
-            if added_total >= limit {
-                break;
-            }
-            let mut new = leak_points(self.baker.tracer(), &self.positions, ls)?;
-            let n = new.len();
-            new.retain(inside);
-            self.stats.rejected_inside += n - new.len();
-            if new.is_empty() {
-                break;
-            }
-            let got = self.admit(new, inside, limit - added_total)?;
-            added_total += got;
-            self.stats.leak_probes += got;
-        }
-        Ok(())
-    }
-}
-
-/// Points leak prevention would insert for the Delaunay tetrahedralization of
-/// `points` (one pass; see the module docs), in a deterministic order.
-pub fn leak_points(
-    tracer: &Tracer,
-    points: &[Vec3],
-    ls: &LeakSettings,
-) -> Result<Vec<Vec3>, PlacementError> {
-    let tri = tetrahedralize(points)?;
-    let mut cands = Vec::new();
-    for (a, b) in tet_edges(&tri.tets) {
-        let (pa, pb) = (points[a as usize], points[b as usize]);
-        let d = pb - pa;
-        let len = d.length();
-        if len <= 1e-6 {
-            continue;
-        }
-        let dir = d / len;
-        let off = (ls.offset_fraction * len).clamp(ls.min_offset, ls.max_offset);
-        for (o, dd) in [(pa, dir), (pb, -dir)] {
-            if let Some(h) = tracer.closest_hit(&Ray::new(o, dd), len) {
-                let n = h.facing_normal();
-                if n.dot(dd).abs() < ls.min_cos {
-                    continue;
-                }
-                // Not beyond the probe the ray started from.
-                let o2 = off.min(0.5 * h.t);
-                cands.push((h.point + n * o2, o2));
-            }
-        }
-    }
-    Ok(spaced(
-        points,
-        cands
-            .into_iter()
-            .map(|(p, o)| (p, ls.min_distance_fraction * o)),
-        ls.max_offset,
-    ))
-}
-
-/// The candidates `(p, r)` kept in order when no existing point of `points`
-/// and no candidate kept before lies within `r` of `p` (a spatial hash of
-/// cell `cell`, which must be at least the largest `r`); non-finite ones are
-/// dropped.
-fn spaced(points: &[Vec3], cands: impl Iterator<Item = (Vec3, f32)>, cell: f32) -> Vec<Vec3> {
-    let cell = cell.max(1e-3);
-    let key = |p: Vec3| {
-        let q = (p / cell).floor();
-        (q.x as i64, q.y as i64, q.z as i64)
-    };
-    let mut hash: std::collections::HashMap<(i64, i64, i64), Vec<Vec3>> = Default::default();
-    for &p in points {
-        hash.entry(key(p)).or_default().push(p);
-    }
-    let mut out = Vec::new();
-    for (p, r) in cands {
-        if !p.is_finite() {
-            continue;
-        }
-        let k = key(p);
-        let mut near = false;
-        'n: for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(v) = hash.get(&(k.0 + dx, k.1 + dy, k.2 + dz)) {
-                        if v.iter().any(|q| q.distance_squared(p) < r * r) {
-                            near = true;
-                            break 'n;
-                        }
-                    }
-                }
-            }
-        }
-        if !near {
-            hash.entry(k).or_default().push(p);
-            out.push(p);
-        }
-    }
-    out
-}
-
-/// Spacing of the points [`orphan_points`] tests in each tetrahedron,
-/// metres.
-pub const ORPHAN_SPACING: f32 = 0.1;
-
-/// Subdivisions of a tetrahedron's lattice in [`orphan_points`], at most.
-const ORPHAN_MAX_SUBDIVISION: u32 = 8;
-
-/// Points that see none of the probes of their tetrahedron are looked for
-/// this far from surfaces and more, metres: `probekit eval`'s points keep
-/// 1 cm.
-const ORPHAN_TEST_CLEARANCE: f32 = 0.01;
-
-/// Probes for the pockets of free space that see none of the four probes
-/// of their tetrahedron, for the Delaunay tetrahedralization of `points`,
-/// in a deterministic order. In such a pocket every visibility-aware blend
-/// has only hidden probes to choose from, so the light of the far side of a
-/// wall is all it can give.
-///
-/// Seed 003's edge test ([`leak_points`]) finds a wall that crosses an
-/// edge; a wall's *end* or a corner (a closet's, say) can reach into a
-/// tetrahedron without crossing any of its edges, leaving such a pocket
-/// behind it. In every tetrahedron, and on every face of the hull (beyond
-/// which a point blends the face's three probes), this tests the points of
-/// a barycentric lattice about [`ORPHAN_SPACING`] apart (at most 8
-/// subdivisions of its longest edge) that are in open space ([`is_open`]) at
-/// 1 cm from surfaces, as `probekit eval`'s points are: one whose segments
-/// to all the cell's probes are blocked is pushed off nearby surfaces until
-/// it keeps `clearance` (the probes' own; [`push_off_surfaces`]) and becomes
-/// a candidate probe there, unless that fails or another probe or kept
-/// candidate is within [`ORPHAN_SPACING`]. The candidates come largest
-/// pocket first: ordered greedily by how many of the orphaned lattice points
-/// each sees within [`ORPHAN_COVER_RADIUS`] that the ones before it do not.
-pub fn orphan_points(
-    tracer: &Tracer,
-    points: &[Vec3],
-    clearance: f32,
-) -> Result<Vec<Vec3>, PlacementError> {
-    use crate::cloud::cell_visibility::segment_clear;
-    use probekit_runtime::cloud::cell_visibility::{lattice_numerators, lattice_position};
-    let tri = tetrahedralize(points)?;
-    // The tetrahedra, and the hull's faces: outside the hull a point blends
-    // the three probes of the face below it (the outer cells), so a face
-    // point that sees none of those three is orphaned there.
-    let mut cells: Vec<Vec<u32>> = tri.tets.iter().map(|t| t.to_vec()).collect();
-    for (t, nb) in tri.tets.iter().zip(&tri.neighbors) {
-        for i in (0..4).filter(|&i| nb[i] == crate::cloud::HULL) {
-            cells.push((0..4).filter(|&j| j != i).map(|j| t[j]).collect());
-        }
-    }
-    let cands: Vec<(Vec3, Option<Vec3>)> = cells
-        .par_iter()
-        .flat_map_iter(|t| {
-            let v: Vec<Vec3> = t.iter().map(|&k| points[k as usize]).collect();
-            let longest = (0..v.len())
-                .flat_map(|i| (i + 1..v.len()).map(move |j| (i, j)))
-                .map(|(i, j)| v[i].distance(v[j]))
-                .fold(0.0f32, f32::max);
-            let k = ((longest / ORPHAN_SPACING).ceil() as u32).clamp(1, ORPHAN_MAX_SUBDIVISION);
-            lattice_numerators(v.len(), k)
-                .into_iter()
-                .filter(|n| n.iter().all(|&c| c < k))
-                .map(|n| lattice_position(t, points, &n, k))
-                .filter(|&p| {
-                    v.iter().all(|&q| !segment_clear(tracer, p, q))
-                        && is_open(tracer, p, ORPHAN_TEST_CLEARANCE)
-                })
-                .map(|p| (p, push_off_surfaces(tracer, p, clearance)))
-                .collect::<Vec<_>>()
-        })
-        .collect();
-    let orphans: Vec<Vec3> = cands.iter().map(|c| c.0).collect();
-    let spaced = spaced(
-        points,
-        cands
-            .iter()
-            .filter_map(|c| c.1)
-            .map(|p| (p, ORPHAN_SPACING)),
-        ORPHAN_SPACING,
-    );
-    Ok(by_pocket_coverage(tracer, spaced, &orphans))
-}
-
-/// How far a probe for an orphan pocket counts as serving an orphaned
-/// point it sees, metres: [`orphan_points`] orders its candidates by them.
-pub const ORPHAN_COVER_RADIUS: f32 = 1.0;
-
-/// `cands` reordered greedily by the orphaned points they serve: first the
-/// candidate that sees (a clear segment, within [`ORPHAN_COVER_RADIUS`])
-/// the most of `orphans`, then the one that sees the most of those left,
-/// and so on (ties to the earlier candidate; those that serve none keep
-/// their order at the end). An allowance of a few probes then goes to the
-/// largest pockets first — a closet's floor rather than a sliver beside a
-/// pillar — instead of to whichever cell came first.
-fn by_pocket_coverage(tracer: &Tracer, cands: Vec<Vec3>, orphans: &[Vec3]) -> Vec<Vec3> {
-    use crate::cloud::cell_visibility::segment_clear;
-    let r2 = ORPHAN_COVER_RADIUS * ORPHAN_COVER_RADIUS;
-    let sees: Vec<Vec<u32>> = cands
-        .par_iter()
-        .map(|&c| {
-            (0..orphans.len() as u32)
-                .filter(|&i| {
-                    let o = orphans[i as usize];
-                    o.distance_squared(c) < r2 && segment_clear(tracer, c, o)
-                })
-                .collect()
-        })
-        .collect();
-    // Lazy greedy: a candidate's gain only falls as points are served, so
-    // a heap of stale gains (upper bounds) yields the exact greedy order
-    // (highest gain, then lowest index) re-counting only the candidate on
-    // top, instead of every candidate in every round.
-    use std::cmp::Reverse;
-    let mut served = vec![false; orphans.len()];
-    let mut taken = vec![false; cands.len()];
-    let mut out = Vec::with_capacity(cands.len());
-    let mut heap: std::collections::BinaryHeap<(usize, Reverse<usize>)> = sees
-        .iter()
-        .enumerate()
-        .map(|(k, s)| (s.len(), Reverse(k)))
-        .collect();
-    while let Some((stale, Reverse(k))) = heap.pop() {
-        let gain = sees[k].iter().filter(|&&i| !served[i as usize]).count();
-        if gain < stale {
-            heap.push((gain, Reverse(k)));
-            continue;
-        }
-        if gain == 0 {
-            break;
-        }
-        taken[k] = true;
-        for &i in &sees[k] {
-            served[i as usize] = true;
-        }
-        out.push(cands[k]);
-    }
-    out.extend((0..cands.len()).filter(|&k| !taken[k]).map(|k| cands[k]));
-    out
-}
-
-/// `p` moved off the surfaces within `clearance` of it (along the 26
-/// directions of [`is_free`], each hit pushing it back by the clearance it
-/// lacks, a few rounds) until it is in open space ([`is_open`]) at
-/// `clearance`; `None` when it does not get there.
-pub fn push_off_surfaces(tracer: &Tracer, mut p: Vec3, clearance: f32) -> Option<Vec3> {
-    for _ in 0..4 {
-        if is_open(tracer, p, clearance) {
-            return Some(p);
-        }
-        let mut shift = Vec3::ZERO;
-        for d in cube_directions() {
-            if let Some(h) = tracer.closest_hit(&Ray::new(p, d), clearance) {
-                shift -= d * (clearance - h.t);
-            }
-        }
-        let len = shift.length();
-        if len.is_nan() || len <= 0.0 {
-            return None;
-        }
-        // At most the clearance per round, a little past it to converge.
-        p += shift * (1.1 * len.min(clearance) / len);
-    }
-    is_open(tracer, p, clearance).then_some(p)
 }
 
 /// Places probes in `bake_box` with `method`. Captures during placement use
@@ -917,7 +392,7 @@ pub fn place(
     bake_box: Aabb,
     method: &PlacementMethod,
     settings: &CaptureSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<Placement, PlacementError> {
     settings.validate()?;
     // Before any work: a box that can hold probes, and a request that

@@ -1,6 +1,6 @@
-//! # Spawn-and-merge placement (seed 003, §3.1.1)
+//! # Spawn-and-merge placement (Sukys 2014, §3.1.1)
 //!
-//! After the placement thesis summarised in `shared/seeds/003_*` ("Spawn and
+//! After Sukys, "Light probe cloud generation for games" (2014: "Spawn and
 //! merge", "Light probe sampling", "Contrast of spherical harmonics"):
 //!
 //! 1. fill the bake box with a uniform grid of probes and capture them;
@@ -33,13 +33,14 @@
 //! drops below 8. Leak prevention runs at the end, as for every method.
 
 use super::{crossing_extent, grid_points, tet_edges, LeakSettings, PlacementError, State};
-use crate::cloud::tetrahedralize;
+use crate::delaunay::tetrahedralize;
+use crate::progress::Progress;
 use crate::scene::Aabb;
 use crate::trace::Ray;
 use glam::Vec3;
 use probekit_sh::ShRgb;
 
-/// How many directions the SH are sampled in (seed 003, §3.1.3 "Light probe sampling").
+/// How many directions the SH are sampled in (Sukys 2014, §3.1.3 "Light probe sampling").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Directions {
     /// ±X, ±Y, ±Z.
@@ -97,7 +98,7 @@ pub fn sampled_irradiance(sh: &ShRgb, dirs: &[Vec3]) -> Vec<f32> {
         .collect()
 }
 
-/// Seed 003's sampled contrast of two probes: the largest per-direction
+/// The sampled contrast of two probes (Sukys 2014): the largest per-direction
 /// `|a − b| / (a + b + floor)` over paired samples `a`, `b` (see the module
 /// docs); 0 for empty input. Negative samples (SH ringing) count as 0.
 pub fn contrast(a: &[f32], b: &[f32], floor: f32) -> f32 {
@@ -218,7 +219,7 @@ pub(super) fn spawn_merge(
     bbox: &Aabb,
     p: &SpawnMergeParams,
     ls: &LeakSettings,
-    progress: &(dyn Fn(&str, usize, usize) + Sync),
+    progress: Progress<'_>,
 ) -> Result<(), PlacementError> {
     p.validate()?;
     let (merge_d, spawn_d, min_d) = p.distances(bbox);
@@ -281,7 +282,7 @@ pub(super) fn spawn_merge(
                 continue;
             }
             let mid = 0.5 * (pa + pb);
-            if super::inside_geometry(tracer, mid) {
+            if crate::trace::free_space::inside_geometry(tracer, mid) {
                 continue;
             }
             used[a] = true;
@@ -351,7 +352,7 @@ pub(super) fn spawn_merge(
 mod tests {
     use super::super::{inside_geometry, place, PlacementMethod};
     use super::*;
-    use crate::bake::{Baker, CaptureSettings};
+    use crate::capture::{Baker, CaptureSettings};
     use crate::scene::demo::box_triangles;
     use crate::scene::{Light, LightKind, Material, Scene};
 

@@ -4,11 +4,11 @@ use super::{
     CellVisibility, CodecName, Exponent, GradientModeName, LightShellsName, Placement, Recipe,
     VolumeLayout,
 };
-use crate::bake::{CaptureSettings, ValiditySettings};
-use crate::cloud::blend_fit::BlendFitSettings;
-use crate::cloud::cell_visibility::CellLattice;
-use crate::cloud::visibility::VisibilitySettings;
-use crate::cloud::visibility_bake::VisibilityBake;
+use crate::blend::blend_fit::BlendFitSettings;
+use crate::blend::cell_visibility::CellLattice;
+use crate::blend::visibility::VisibilitySettings;
+use crate::blend::visibility_bake::VisibilityBake;
+use crate::capture::{CaptureSettings, ValiditySettings};
 use crate::format::Codec;
 use crate::placement::gradient_ascent::GradientAscentParams;
 use crate::placement::spawn_merge::{Directions, SpawnMergeParams};

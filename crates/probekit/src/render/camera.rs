@@ -120,7 +120,7 @@ impl Camera {
             for fz in [0.1, 0.5, 0.9] {
                 for fx in [0.1, 0.5, 0.9] {
                     let eye = lo + size * Vec3::new(fx, fy, fz);
-                    if !crate::placement::is_free(tracer, eye, EYE_CLEARANCE) {
+                    if !crate::trace::free_space::is_free(tracer, eye, EYE_CLEARANCE) {
                         continue;
                     }
                     let mut targets = vec![target];

@@ -2,7 +2,7 @@
 //!
 //! [`render`] draws a scene from a [`Camera`] three times, side by side:
 //!
-//! 1. **probes** — primary rays through the [`Tracer`]; every scene surface
+//! 1. **probes** — primary rays through the [`Tracer`](crate::trace::Tracer); every scene surface
 //!    is shaded `emission + albedo/π · E_probes(p, n)` (irradiance from the
 //!    probes at the hit point, moved 1 cm along the facing normal, for the
 //!    facing shading normal), so the probes' lighting shows on the walls too
@@ -41,6 +41,8 @@
 
 pub mod camera;
 pub mod objects;
+mod panels;
+mod shade;
 
 #[cfg(test)]
 mod tests;
@@ -48,15 +50,16 @@ mod tests;
 pub use camera::Camera;
 pub use objects::{place_spheres, Sphere, TestObject};
 
-use crate::bake::{BakeError, Baker, ReferenceSettings};
-use crate::env::{EnvError, EnvMap};
-use crate::plot::{draw_text, heat, save_png, to_srgb, PlotError};
+use crate::capture::{BakeError, Baker, ReferenceSettings};
+use crate::env::EnvError;
+use crate::plot::{save_png, PlotError};
 use crate::scene::{Scene, SceneError};
-use crate::trace::{Ray, Tracer};
-use glam::{Quat, Vec3};
-use image::{Rgb, RgbImage};
+use glam::Vec3;
+use image::RgbImage;
+use panels::{compose, draw_edge, label_strip, GAP};
 use probekit_runtime::cloud::WalkState;
-use probekit_runtime::{Interp, ProbeCloud, ProbeFile, ProbeFileKind, Volume};
+use probekit_runtime::ProbeFile;
+use shade::{shade_pixel, Overlay, Px, Sky, Source};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -158,12 +161,12 @@ pub struct RenderSettings {
     /// Diffuse albedo of the test object.
     pub albedo: f32,
     /// Clouds: brightness exponent of the test object's blend
-    /// ([`ProbeCloud::set_brightness_weighting`]; `None`, the default: the
+    /// ([`ProbeCloud::set_brightness_weighting`](probekit_runtime::ProbeCloud::set_brightness_weighting); `None`, the default: the
     /// one the file stores with its probe weights, 0 without). Volumes
     /// ignore it.
     pub brightness_weight: Option<f32>,
     /// Clouds: directional brightness exponent of the test object's blend
-    /// ([`ProbeCloud::set_directional_brightness`]; `None`, the default:
+    /// ([`ProbeCloud::set_directional_brightness`](probekit_runtime::ProbeCloud::set_directional_brightness); `None`, the default:
     /// the one the file stores with its probe weights, 0 without). Volumes
     /// ignore it.
     pub directional_brightness: Option<f32>,
@@ -225,158 +228,6 @@ impl Rendered {
     pub fn save_png(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         Ok(save_png(&self.image, path.as_ref())?)
     }
-}
-
-/// The probes, ready to answer irradiance queries.
-enum Source {
-    Cloud(ProbeCloud),
-    Volume(Volume),
-}
-
-impl Source {
-    /// Cloud when the file has tetrahedra, volume when its kind says so
-    /// (the same dispatch as `probekit query`).
-    fn from_file(file: &ProbeFile) -> Result<Self, RenderError> {
-        if file.tetrahedra.is_some() {
-            ProbeCloud::from_file(file)
-                .map(Source::Cloud)
-                .map_err(|e| RenderError::Probes(e.to_string()))
-        } else if file.kind == ProbeFileKind::Volume {
-            Volume::from_file(file)
-                .map(Source::Volume)
-                .map_err(|e| RenderError::Probes(e.to_string()))
-        } else {
-            Err(RenderError::Probes(
-                "the file has no tetrahedra and is not a volume (an unmerged shard part?)".into(),
-            ))
-        }
-    }
-
-    fn irradiance(&self, p: Vec3, n: Vec3, ws: &mut WalkState) -> Vec3 {
-        match self {
-            Source::Cloud(c) => c.irradiance(p, n, ws),
-            Source::Volume(v) => v.irradiance(p, n, Interp::Trilinear).unwrap_or(Vec3::ZERO),
-        }
-    }
-}
-
-/// What a ray escaping the scene sees.
-enum Sky {
-    Uniform(Vec3),
-    Map {
-        map: EnvMap,
-        scale: f32,
-        map_from_world: Quat,
-    },
-}
-
-impl Sky {
-    fn new(scene: &Scene) -> Result<Self, RenderError> {
-        let e = &scene.environment;
-        Ok(match &e.map {
-            None => Sky::Uniform(e.color * e.intensity),
-            Some(path) => Sky::Map {
-                map: EnvMap::load(path)?,
-                scale: e.intensity,
-                map_from_world: Quat::from_rotation_y(e.rotation_y_degrees.to_radians()).inverse(),
-            },
-        })
-    }
-
-    fn radiance(&self, d: Vec3) -> Vec3 {
-        match self {
-            Sky::Uniform(c) => *c,
-            Sky::Map {
-                map,
-                scale,
-                map_from_world,
-            } => {
-                let (x, y) = map.texel_of(*map_from_world * d);
-                map.texel(x, y) * *scale
-            }
-        }
-    }
-}
-
-/// One drawn probe: position, radius, radiance SH.
-struct Glyph {
-    center: Vec3,
-    sh: Vec<Vec3>,
-}
-
-/// Probe spheres and edges for `show_probes`.
-struct Overlay {
-    glyphs: Vec<Glyph>,
-    radius: f32,
-    edges: Vec<(Vec3, Vec3)>,
-}
-
-impl Overlay {
-    fn new(file: &ProbeFile, source: &Source, bake_box: &crate::scene::Aabb) -> Self {
-        let n = file.positions.len().max(1);
-        let vol = bake_box.size();
-        let spacing = (vol.x.max(1e-3) * vol.y.max(1e-3) * vol.z.max(1e-3) / n as f32).cbrt();
-        let radius = (0.12 * spacing).min(0.08);
-        let glyphs = match source {
-            Source::Cloud(c) => c
-                .mesh()
-                .positions()
-                .iter()
-                .enumerate()
-                .map(|(i, p)| Glyph {
-                    center: *p,
-                    sh: c.probe_sh(i).to_vec(),
-                })
-                .collect(),
-            Source::Volume(v) => {
-                let k = v.coeffs_per_sample();
-                let coeffs = file.coefficients.to_f32().unwrap_or_default();
-                file.positions
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, p)| {
-                        coeffs.get(i * k..(i + 1) * k).map(|c| Glyph {
-                            center: *p,
-                            sh: c.to_vec(),
-                        })
-                    })
-                    .collect()
-            }
-        };
-        let mut edges = Vec::new();
-        if let Source::Cloud(c) = source {
-            let mut set = std::collections::BTreeSet::new();
-            for t in c.mesh().tets() {
-                for a in 0..4 {
-                    for b in a + 1..4 {
-                        let (i, j) = (t[a].min(t[b]), t[a].max(t[b]));
-                        set.insert((i, j));
-                    }
-                }
-            }
-            let pos = c.mesh().positions();
-            edges = set
-                .into_iter()
-                .map(|(i, j)| (pos[i as usize], pos[j as usize]))
-                .collect();
-        }
-        Overlay {
-            glyphs,
-            radius,
-            edges,
-        }
-    }
-}
-
-/// One pixel's result.
-#[derive(Clone, Copy)]
-struct Px {
-    probes: Vec3,
-    reference: Vec3,
-    /// `(E_probes, E_truth)` where the object is the nearest thing seen.
-    object: Option<(Vec3, Vec3)>,
-    /// Distance to what the pixel shows (for depth-tested lines).
-    depth: f32,
 }
 
 /// Renders the three panels (see the module docs). `progress(done, total)`
@@ -664,245 +515,4 @@ pub fn render(
 /// Ground-truth points of a progress total that also counts `h` rows.
 fn spheres_total(total: usize, h: u32) -> usize {
     total - h as usize
-}
-
-/// Shades one primary ray for both panels.
-#[allow(clippy::too_many_arguments)]
-fn shade_pixel(
-    ray: &Ray,
-    tracer: &Tracer,
-    scene: &Scene,
-    (source, wall_source): (&Source, &Source),
-    sky: &Sky,
-    object: &TestObject,
-    overlay: Option<(&Overlay, &[u32])>,
-    albedo: f32,
-    ws: &mut WalkState,
-) -> Px {
-    let inv_pi = std::f32::consts::FRAC_1_PI;
-    // The nearest foreground thing: test object or a probe sphere.
-    let obj = object.hit(ray, f32::INFINITY);
-    let mut fg_t = obj.map_or(f32::INFINITY, |o| o.t);
-    let mut object = obj.map(|o| (source.irradiance(o.point, o.normal, ws), o.truth));
-    let mut fg: Option<(Vec3, Vec3)> =
-        object.map(|(e, t)| (albedo * inv_pi * e, albedo * inv_pi * t));
-    if let Some((ov, cands)) = overlay {
-        for &i in cands {
-            let g = &ov.glyphs[i as usize];
-            let s = Sphere {
-                center: g.center,
-                radius: ov.radius,
-            };
-            if let Some(t) = s.intersect(ray) {
-                if t < fg_t {
-                    fg_t = t;
-                    let n = (ray.at(t) - g.center).normalize();
-                    let c = probekit_sh::irradiance(&g.sh, n) * inv_pi;
-                    fg = Some((c, c));
-                    object = None;
-                }
-            }
-        }
-    }
-    // Scene layers in front of the foreground, front to back.
-    let (mut col, mut trans) = (Vec3::ZERO, 1.0f32);
-    let mut depth = fg_t;
-    let mut r = *ray;
-    let mut travelled = 0.0f32;
-    let mut escaped = false;
-    for _ in 0..16 {
-        let Some(hit) = tracer.closest_hit(&r, fg_t - travelled) else {
-            escaped = true;
-            break;
-        };
-        let nf = hit.facing_normal();
-        let ns = if hit.shading_normal.dot(nf) < 0.0 {
-            -hit.shading_normal
-        } else {
-            hit.shading_normal
-        };
-        let e = wall_source.irradiance(hit.point + 0.01 * nf, ns, ws);
-        let c =
-            scene.emission(hit.material, hit.uv) + scene.albedo(hit.material, hit.uv) * inv_pi * e;
-        col += trans * hit.opacity * c;
-        trans *= 1.0 - hit.opacity;
-        let dist = (hit.point - ray.origin).length();
-        if hit.opacity >= 0.5 && dist < depth {
-            depth = dist;
-        }
-        if trans < 1e-3 {
-            break;
-        }
-        travelled = dist;
-        r = hit.continue_ray(r.direction);
-    }
-    let (probes, reference) = match (escaped, fg) {
-        (true, Some((a, b))) => (col + trans * a, col + trans * b),
-        (true, None) => {
-            let bg = trans * sky.radiance(ray.direction);
-            (col + bg, col + bg)
-        }
-        (false, _) => (col, col),
-    };
-    // The object counts for the metrics only where it is seen (not hidden
-    // behind an almost opaque layer).
-    let object = if escaped && trans >= 0.5 {
-        object
-    } else {
-        None
-    };
-    Px {
-        probes,
-        reference,
-        object,
-        depth,
-    }
-}
-
-/// Gap between panels, pixels.
-const GAP: u32 = 4;
-const BG: Rgb<u8> = Rgb([30, 30, 34]);
-const FG: Rgb<u8> = Rgb([235, 235, 235]);
-
-/// Font scale for panels of width `w`.
-fn text_scale(w: u32) -> i64 {
-    if w >= 240 {
-        2
-    } else {
-        1
-    }
-}
-
-/// Height of the label strip above the panels.
-fn label_strip(w: u32) -> u32 {
-    9 * text_scale(w) as u32 + 4
-}
-
-/// The three panels, labels, colour bar and numbers.
-#[allow(clippy::too_many_arguments)]
-fn compose(
-    px: &[Px],
-    error: &[Option<f32>],
-    w: u32,
-    h: u32,
-    exposure: f32,
-    rel_rmse: f32,
-    max_rel: f32,
-    object_pixels: usize,
-    probes: usize,
-) -> RgbImage {
-    let s = text_scale(w);
-    let top = label_strip(w);
-    let line = 9 * s as u32;
-    let footer = 3 * line + 8;
-    let total_w = 3 * w + 2 * GAP;
-    let mut img = RgbImage::from_pixel(total_w, top + h + footer, BG);
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y * w + x) as usize;
-            let p = &px[i];
-            img.put_pixel(x, top + y, to_srgb(p.probes * exposure));
-            img.put_pixel(w + GAP + x, top + y, to_srgb(p.reference * exposure));
-            let e = match error[i] {
-                Some(r) => heat(r / ERROR_SCALE),
-                None => Vec3::splat(
-                    0.35 * (p.reference * exposure)
-                        .dot(probekit_sh::LUMINANCE)
-                        .clamp(0.0, 1.0),
-                ),
-            };
-            img.put_pixel(2 * (w + GAP) + x, top + y, to_srgb(e));
-        }
-    }
-    // The middle panel path-traces the test objects only; the scene around
-    // them is lit by the probes in both panels (module docs).
-    for (k, name) in ["probes", "objects path traced", "error"]
-        .iter()
-        .enumerate()
-    {
-        draw_text(&mut img, (k as u32 * (w + GAP)) as i64 + 4, 2, name, s, FG);
-    }
-    draw_text(
-        &mut img,
-        (w + GAP) as i64 + 4,
-        (top + h + 4) as i64,
-        "scene: probes",
-        s,
-        FG,
-    );
-    // Footer: colour bar under the error panel, numbers below it.
-    let (bx, by) = (2 * (w + GAP) + 4, top + h + 4);
-    let bw = w.saturating_sub(8).max(1);
-    for x in 0..bw {
-        let c = to_srgb(heat(x as f32 / (bw.max(2) - 1) as f32));
-        for y in by..by + line / 2 + 2 {
-            if bx + x < total_w {
-                img.put_pixel(bx + x, y, c);
-            }
-        }
-    }
-    let ty = (by + line / 2 + 4) as i64;
-    draw_text(&mut img, bx as i64, ty, "0", s, FG);
-    let scale_label = format!("{:.0}%", ERROR_SCALE * 100.0);
-    let sw = crate::plot::font::text_width(&scale_label, s);
-    draw_text(&mut img, (bx + bw) as i64 - sw, ty, &scale_label, s, FG);
-    let numbers = if object_pixels > 0 {
-        format!("RMSE {:.1}%  max {:.0}%", rel_rmse * 100.0, max_rel * 100.0)
-    } else {
-        "no object pixels".to_string()
-    };
-    draw_text(&mut img, bx as i64, ty + line as i64 + 2, &numbers, s, FG);
-    let info = format!("{probes} probes, exposure x{exposure:.3}");
-    draw_text(&mut img, 4, (top + h + 4) as i64, &info, s, FG);
-    img
-}
-
-/// Draws segment `a`–`b` (world) as a thin line in the panel at `(ox, oy)`,
-/// only where it is in front of `depth` (distance from the eye per pixel).
-#[allow(clippy::too_many_arguments)]
-fn draw_edge(
-    img: &mut RgbImage,
-    ox: u32,
-    oy: u32,
-    cam: &Camera,
-    w: u32,
-    h: u32,
-    depth: &[f32],
-    a: Vec3,
-    b: Vec3,
-) {
-    const NEAR: f32 = 0.02;
-    let (mut va, mut vb) = (cam.to_view(a), cam.to_view(b));
-    if va.z < NEAR && vb.z < NEAR {
-        return;
-    }
-    // Clip to the near plane.
-    if va.z < NEAR {
-        va = va + (vb - va) * ((NEAR - va.z) / (vb.z - va.z));
-    } else if vb.z < NEAR {
-        vb = vb + (va - vb) * ((NEAR - vb.z) / (va.z - vb.z));
-    }
-    let (pa, pb) = (cam.view_to_pixel(va, w, h), cam.view_to_pixel(vb, w, h));
-    let steps = ((pb.0 - pa.0).abs().max((pb.1 - pa.1).abs()).ceil() as usize).clamp(1, 20_000);
-    let (r, u, f) = cam.basis();
-    for k in 0..=steps {
-        let s = k as f32 / steps as f32;
-        let (x, y) = (pa.0 + (pb.0 - pa.0) * s, pa.1 + (pb.1 - pa.1) * s);
-        if !(x >= 0.0 && y >= 0.0 && x < w as f32 && y < h as f32) {
-            continue;
-        }
-        // Perspective-correct parameter along the 3-D segment.
-        let q = (s / vb.z) / ((1.0 - s) / va.z + s / vb.z);
-        let v = va + (vb - va) * q;
-        let world = cam.eye + r * v.x + u * v.y + f * v.z;
-        let dist = (world - cam.eye).length();
-        let (xi, yi) = (x as u32, y as u32);
-        let d = depth[(yi * w + xi) as usize];
-        if dist < d * (1.0 - 2e-3) - 2e-3 {
-            let p = img.get_pixel_mut(ox + xi, oy + yi);
-            for c in 0..3 {
-                p.0[c] = ((p.0[c] as u32 * 2 + [170u32, 225, 255][c] * 3) / 5) as u8;
-            }
-        }
-    }
 }

@@ -18,9 +18,9 @@
 //!   the hit triangle's three vertex values.
 
 use super::RenderError;
-use crate::bake::{Baker, ReferenceSettings};
-use crate::placement::inside_geometry;
+use crate::capture::{Baker, ReferenceSettings};
 use crate::scene::{Aabb, Scene};
+use crate::trace::free_space::inside_geometry;
 use crate::trace::{Ray, Tracer};
 use glam::Vec3;
 use probekit_sh::project::fibonacci_point;
@@ -257,7 +257,7 @@ impl<'m> TestObject<'m> {
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 Ok(e.irradiance)
             })
-            .collect::<Result<_, crate::bake::BakeError>>()?;
+            .collect::<Result<_, crate::capture::BakeError>>()?;
         let order = fit_order(k);
         let fits = truth
             .chunks(k.max(1))
@@ -313,7 +313,7 @@ impl<'m> TestObject<'m> {
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1);
                 Ok(e.irradiance)
             })
-            .collect::<Result<_, crate::bake::BakeError>>()?;
+            .collect::<Result<_, crate::capture::BakeError>>()?;
         Ok(TestObject::Mesh {
             tracer: Tracer::new(mesh),
             corners,

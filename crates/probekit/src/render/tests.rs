@@ -1,9 +1,10 @@
 use super::objects::{eval_fit, fit_order, fit_sh};
 use super::*;
-use crate::bake::{bake_points, CaptureSettings};
-use crate::cloud::file::{cloud_file, file_validity};
+use crate::capture::{bake_points, CaptureSettings};
+use crate::format::cloud::{cloud_file, file_validity};
 use crate::format::{BakeMetadata, Codec, Placement};
 use crate::scene::{Aabb, Material, Triangle};
+use crate::trace::Ray;
 use glam::Vec2;
 use probekit_sh::project::fibonacci_point;
 use probekit_sh::ShRgb;
@@ -115,12 +116,37 @@ fn uniform_sky_probes_panel_equals_reference_panel() {
     assert!(r.exposure.is_finite() && r.exposure > 0.0);
 }
 
+/// About `n` cell-centred points of a uniform grid over `b`, x fastest:
+/// cell edge `∛(V / n)`, each axis `round(extent / edge)` cells, at least 2
+/// (the sizing rule of grid placement, which sits above the renderer).
+fn grid(b: &Aabb, n: usize) -> Vec<Vec3> {
+    let size = b.size();
+    let cell = (size.x * size.y * size.z / n as f32).cbrt();
+    let [nx, ny, nz] = size
+        .to_array()
+        .map(|s| ((s / cell).round() as usize).max(2));
+    let mut out = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let f = Vec3::new(
+                    (i as f32 + 0.5) / nx as f32,
+                    (j as f32 + 0.5) / ny as f32,
+                    (k as f32 + 0.5) / nz as f32,
+                );
+                out.push(b.min + f * size);
+            }
+        }
+    }
+    out
+}
+
 /// The demo scene with a tiny grid bake: the picture has object pixels,
 /// finite numbers, the documented size, and the same bytes with one thread.
 #[test]
 fn small_demo_render_has_object_pixels_and_finite_numbers() {
     let scene = Scene::builtin_demo();
-    let pts = crate::placement::grid_points(&scene.bake_box(), None, Some(24)).unwrap();
+    let pts = grid(&scene.bake_box(), 24);
     let cs = CaptureSettings {
         samples: 64,
         bounces: 1,

@@ -1,4 +1,4 @@
-//! Least-squares fitting of a rig to a mesh (seed 000 §2.2).
+//! Least-squares fitting of a rig to a mesh (Yuan et al. 2011 §2.2).
 //!
 //! The design matrix `M` (samples × parameters) has `M[j][k]` = weight of
 //! model function `k` at sample `j`, from
@@ -162,8 +162,8 @@ pub fn rig_file(rigs: &[FittedRig]) -> ProbeFile {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::sampling::SampleRng;
     use crate::rig::mesh;
+    use crate::sampling::SampleRng;
 
     /// A uniform draw in `[-0.5, 0.5)` from the baking library's generator.
     fn centred(rng: &mut SampleRng) -> f32 {

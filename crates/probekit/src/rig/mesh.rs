@@ -55,7 +55,7 @@ impl Mesh {
 
     /// Bounding sphere `(centre, radius)`: centred on the box centre, radius
     /// the farthest vertex (not minimal, but what the transition criterion of
-    /// seed 000 §3.1 needs: every vertex inside).
+    /// Yuan et al. 2011 §3.1 needs: every vertex inside).
     pub fn bounding_sphere(&self) -> (Vec3, f32) {
         let (lo, hi) = self.bbox();
         let c = 0.5 * (lo + hi);
@@ -373,7 +373,7 @@ mod tests {
         assert!((hi.y - lo.y - 1.81).abs() < 0.05);
     }
 
-    /// Issue 7 check (c): the car written as an OBJ by the test and loaded
+    /// The car written as an OBJ by the test and loaded
     /// through the scene loader is the same mesh (same triangles, corner by
     /// corner) and gives the same samples and fitting matrix.
     #[test]

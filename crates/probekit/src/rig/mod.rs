@@ -1,5 +1,5 @@
 //! Irradiance rigs, the baker's side (Yuan, Nowrouzezahrai & Sloan,
-//! *Irradiance Rigs*, JGT 2011 — seed 000).
+//! *Irradiance Rigs*, JGT 2011).
 //!
 //! A rig models how radiance SH varies over a rigid object, fitted to its
 //! actual mesh by least squares (§2.2), and lights near the object are taken
@@ -14,9 +14,10 @@
 //! - [`sample`]: evenly spread surface samples (farthest point + Lloyd).
 //! - [`fit`]: the design matrix and `L = M⁺` (SVD, rank-deficiency cut-off
 //!   documented there), giving a [`fit::FittedRig`] = the `.probes` record.
-//! - [`lights`]: sphere/point/spot/disk/directional lights, their SH at a
-//!   point and their exact irradiance; conversion from the scene loader's
-//!   lights; the 128 × 128 horizon-clipped sphere table.
+//! - [`lights`]: the light sets of rig scenes (the built-in demo, the cost
+//!   test, a loaded scene's analytic lights); the lights themselves, their SH
+//!   at a point, their exact irradiance and the 128 × 128 horizon-clipped
+//!   sphere table are [`crate::lights`].
 //! - [`source`]: a baked probe cloud or volume as a lighting source.
 //! - [`split`]: the error tables, per-light transition distances, the
 //!   analytic/transition/rig evaluation and the error metrics.

@@ -1,4 +1,4 @@
-//! Pictures of rigs (seed 000 figures 1 and 7): a small CPU rasterizer
+//! Pictures of rigs (as in figures 1 and 7 of Yuan et al. 2011): a small CPU rasterizer
 //! (orthographic view, z-buffer, per-vertex colours interpolated across
 //! triangles) writing PNG through `image`.
 

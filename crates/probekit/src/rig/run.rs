@@ -4,13 +4,12 @@
 //! time a frame.
 
 use super::fit::FittedRig;
-use super::lights::{
-    lights_from_scene, paper_cost_lights, rig_demo_lights, Light, SceneLights, SphereTable,
-};
+use super::lights::{lights_from_scene, paper_cost_lights, rig_demo_lights, SceneLights};
 use super::mesh::{self, Mesh};
 use super::source::ProbeSource;
 use super::split::{self, Frame, Zone};
 use super::{RigSetupError, RigSpec};
+use crate::lights::{Light, SphereTable};
 use crate::scene::Scene;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
@@ -28,7 +27,7 @@ pub fn load_mesh(name: &str) -> Result<Mesh, RigSetupError> {
 }
 
 /// Loads the lights of a scene: the rig's own light sets
-/// `builtin:rig-demo` and `builtin:paper-cost` (seed 000's demo: 4 + 8
+/// `builtin:rig-demo` and `builtin:paper-cost` (the Irradiance Rigs paper's demo: 4 + 8
 /// sphere lights and 192 disks), or anything [`Scene::load`] reads
 /// (`builtin:demo`, `.toml`, `.gltf`, `.glb`, `.obj`), converted by
 /// [`lights_from_scene`] (its warnings say what was left out). Load errors

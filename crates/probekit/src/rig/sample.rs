@@ -1,4 +1,4 @@
-//! Evenly spread sample points on a mesh surface (seed 000 §2.2 distributes
+//! Evenly spread sample points on a mesh surface (Yuan et al. 2011 §2.2 distributes
 //! them with Lloyd relaxation).
 //!
 //! Method, deterministic for a seed: draw `CANDIDATES_PER_SAMPLE · N`
@@ -10,7 +10,7 @@
 //! so the result does not depend on the thread count.
 
 use super::mesh::Mesh;
-use crate::bake::sampling::SampleRng;
+use crate::sampling::SampleRng;
 use glam::Vec3;
 
 /// Candidates drawn per requested sample.

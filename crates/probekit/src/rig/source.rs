@@ -1,5 +1,5 @@
-//! A baked probe file as a rig's lighting source (issue 7: "a baked probe
-//! cloud or volume sampled at the rig's points").
+//! A baked probe file as a rig's lighting source: a baked probe cloud or
+//! volume sampled at the rig's points.
 //!
 //! [`ProbeSource`] wraps the runtime's own queries, through [`Predictor`] — [`probekit_runtime::ProbeCloud::sh_at`]
 //! (barycentric blend in the enclosing tetrahedron) or [`probekit_runtime::Volume::sample_sh`]
@@ -17,7 +17,7 @@
 //! zeros (both exact, SH bands are orthogonal).
 
 use super::RigSetupError;
-use crate::placement::eval::Predictor;
+use crate::query::Predictor;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::ProbeFile;
@@ -195,7 +195,7 @@ mod tests {
                 )
             })
             .collect();
-        let mut rng = crate::bake::sampling::SampleRng::from_state(11);
+        let mut rng = crate::sampling::SampleRng::from_state(11);
         for _ in 0..40 {
             let t = Vec3::new(
                 rng.next_f64() as f32,
@@ -204,10 +204,10 @@ mod tests {
             );
             pos.push(LO + (HI - LO) * t);
         }
-        let tet = crate::cloud::tetrahedralize(&pos).unwrap();
+        let tet = crate::delaunay::tetrahedralize(&pos).unwrap();
         let coeffs: Vec<Vec3> = pos.iter().flat_map(|p| f.at(*p)).collect();
         let mut file = ProbeFile::cloud(pos.clone(), ORDER as u32, &coeffs).unwrap();
-        file.tetrahedra = Some(crate::cloud::file::tet_section(
+        file.tetrahedra = Some(crate::format::cloud::tet_section(
             &pos,
             &tet.tets,
             &tet.neighbors,
@@ -215,7 +215,7 @@ mod tests {
         file
     }
 
-    /// Issue 7 check (a): lit by a baked file whose SH is affine in space,
+    /// Lit by a baked file whose SH is affine in space,
     /// the gradient rig reproduces the field at every vertex to f32
     /// precision (its model is affine; least squares recovers it) and the
     /// constant rig's one SH vector is the field at the mean sample

@@ -1,4 +1,4 @@
-//! The analytic / rig split (seed 000 §3) and the error metrics.
+//! The analytic / rig split (Yuan et al. 2011 §3) and the error metrics.
 //!
 //! **Error table.** For a fitted rig on its mesh (placed at the origin),
 //! a reference sphere light of radius [`REF_LIGHT_RADIUS`]` · R` (`R` the
@@ -27,9 +27,9 @@
 //! the rig.
 
 use super::fit::FittedRig;
-use super::lights::{Light, SphereTable};
 use super::mesh::Mesh;
 use super::source::ProbeSource;
+use crate::lights::{Light, SphereTable};
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::Transition;
@@ -260,7 +260,7 @@ pub fn sh_reference_irradiance(
 /// π / l_white` over vertices and channels, where `E_SH` is the irradiance
 /// of the light's own SH at the vertex (so the SH truncation, which no rig
 /// can remove, is not counted), the light entirely in the rig, the mesh at
-/// the origin. Seed 000 §3.1 measures the same "brute force vs rig"
+/// the origin. Yuan et al. 2011 §3.1 measures the same "brute force vs rig"
 /// difference at the single bounding-sphere point nearest the light; the
 /// rig is evaluated on the mesh here instead, where it is used (outside the
 /// mesh a lattice extrapolates from nodes that may have no samples).
@@ -417,7 +417,7 @@ pub struct ErrorStats {
     pub l_white: f32,
 }
 
-/// The white level of seed 000 §3 as the issue defines it: the largest exact
+/// The white level of Yuan et al. 2011 §3, taken as the largest exact
 /// reflected radiance `E/π` (albedo 1) over vertices and channels.
 pub fn white_level(exact: &[Vec3]) -> f32 {
     exact.iter().map(|e| e.max_element()).fold(0.0, f32::max) / std::f32::consts::PI

@@ -1,6 +1,9 @@
+use super::geometry::check_winding;
 use super::*;
-use glam::Quat;
+use glam::{Quat, Vec4};
+use std::collections::HashMap;
 use std::fs;
+use std::path::{Path, PathBuf};
 
 use super::tests_support::shared_data;
 

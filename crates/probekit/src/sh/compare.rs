@@ -28,7 +28,7 @@ use crate::env::{reference_irradiance_texels, Environment};
 use glam::Vec3;
 use serde::Serialize;
 
-/// Minimum number of normals the comparison is specified for (issue 3).
+/// Minimum number of normals the comparison is specified for.
 pub const MIN_NORMALS: usize = 4096;
 
 /// Relative irradiance RMSE per basis (`None`/`null` = basis not available in
@@ -340,7 +340,7 @@ mod tests {
 
     /// For a map whose radiance is exactly an L1 function, L1 and L2 reproduce
     /// the brute-force irradiance (up to texel quadrature error) and the
-    /// table / JSON have the issue's shape.
+    /// table / JSON have the documented shape.
     #[test]
     fn l1_map_is_reproduced() {
         let (w, h) = (128, 64);

@@ -29,6 +29,8 @@
 //! Threading: a `Tracer` is `Sync`; queries take `&self` and allocate nothing, so call them from
 //! any number of rayon threads.
 
+pub mod free_space;
+
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
 use glam_obvhs::{UVec2, Vec3A as OVec3A};

@@ -1,5 +1,5 @@
 use super::*;
-use crate::bake::sampling::{sample_uniform_sphere, SampleRng};
+use crate::sampling::{sample_uniform_sphere, SampleRng};
 use crate::scene::{
     demo, AlphaMode, LightKind, Material, Parts, Scene, SceneExtras, Texture, Triangle as STriangle,
 };

@@ -1,7 +1,7 @@
 //! The path tracer as a [`VolumeSource`]: volumes of any scene the loader
 //! accepts, captured by [`Baker`] with the same estimator, validity and
-//! virtual offset as the probe cloud (issue 6: "on the same capture and
-//! evaluation as the probe cloud").
+//! virtual offset as the probe cloud, so volumes and clouds are captured
+//! and evaluated the same way.
 //!
 //! - **Random numbers** are keyed by the sample's *position* (a hash of its
 //!   f32 bits, see [`position_key`]), not by its place in a batch, so a
@@ -21,11 +21,11 @@
 //!   test, Akenine-Möller 2001) over a uniform grid of triangle bins, on
 //!   the cell shrunk by 10⁻³ of its size (geometry only on a face does not count).
 //! - **Depth heuristic**: the harmonic mean of first-hit distances over
-//!   [`BakerSource::depth_rays`] spherical-Fibonacci rays (seed 001 slide
+//!   [`BakerSource::depth_rays`] spherical-Fibonacci rays (Tatarchuk 2005, slide
 //!   "Harmonic Mean of Scene Depth"; misses count `1/∞ = 0`).
 
 use super::source::{central_difference, central_points, Captured, VolumeSource};
-use crate::bake::{BakeError, Baker, CaptureSettings};
+use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::scene::{Aabb, LightKind, Scene};
 use crate::sh::compare::spherical_fibonacci;
 use crate::trace::Ray;
@@ -62,7 +62,7 @@ pub struct BakerSource<'s> {
 /// A 64-bit key of a position's bits (SplitMix64 finaliser over x, y, z):
 /// the probe index the baker keys its random numbers with.
 pub fn position_key(p: Vec3) -> u64 {
-    use crate::bake::sampling::{mix64, SPLITMIX_GAMMA};
+    use crate::sampling::{mix64, SPLITMIX_GAMMA};
     let mut h = SPLITMIX_GAMMA;
     for v in p.to_array() {
         // +0.0 folds −0.0 into +0.0: the same point, the same key.

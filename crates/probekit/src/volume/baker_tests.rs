@@ -1,7 +1,7 @@
 //! Tests of the path-traced volume source ([`super::BakerSource`]).
 
 use super::*;
-use crate::bake::{CaptureSettings, ValiditySettings};
+use crate::capture::{CaptureSettings, ValiditySettings};
 use crate::format::layout::{VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
 use crate::scene::{Light, LightKind, Material, Scene, Triangle};
 use crate::sh::lights::sphere_light_sh_and_gradient;
@@ -199,7 +199,7 @@ fn central_gradients_match_the_closed_form_and_a_wider_difference() {
     let n = 9;
     let mut value = vec![Vec3::ZERO; n];
     let mut grad = vec![[Vec3::ZERO; 3]; n];
-    let baker = crate::bake::Baker::new(&sc).unwrap();
+    let baker = crate::capture::Baker::new(&sc).unwrap();
     for (i, p) in file.positions.iter().enumerate() {
         sphere_light_sh_and_gradient(
             3,
@@ -501,7 +501,7 @@ fn capture_std_error_is_batch_means_over_the_chunks() {
         Vec3::ONE,
         Vec::new(),
     );
-    let baker = crate::bake::Baker::new(&sc).unwrap();
+    let baker = crate::capture::Baker::new(&sc).unwrap();
     let p = Vec3::new(-0.2, 0.1, 0.0);
     let cap = |n: u32| baker.capture_with_error(p, 5, &settings(n, false)).unwrap();
     assert!(cap(256).1.is_none());

@@ -1,4 +1,4 @@
-//! Irradiance volumes (seed 001, Tatarchuk, *Irradiance Volumes for Games*,
+//! Irradiance volumes (Tatarchuk 2005, *Irradiance Volumes for Games*,
 //! after Greger et al. 1998): a uniform grid or an adaptive octree of
 //! radiance-SH samples with optional SH gradients, baked from any
 //! [`VolumeSource`] and written as a `.probes` file of kind volume.
@@ -9,22 +9,28 @@
 mod baker_source;
 #[cfg(test)]
 mod baker_tests;
-mod build;
 pub mod export;
+mod finish;
+mod lattice;
+mod octree;
 mod report;
+mod settings;
 mod source;
 #[cfg(test)]
 mod tests;
+mod uniform;
 
 pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress};
-pub use build::{
-    build_adaptive, build_uniform, dilate, near_cubic_roots, relative_difference,
-    resolution_for_cell, truncate_gradients, AdaptiveSettings, BuildStats, CommonSettings,
-    GradientMode, DEFAULT_STEP_FRACTION,
-};
+pub use finish::{dilate, relative_difference, truncate_gradients};
+pub use octree::build_adaptive;
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};
 pub use report::{depth_rows, plot_depths, DepthRow};
+pub use settings::{
+    near_cubic_roots, AdaptiveSettings, BuildStats, CommonSettings, GradientMode,
+    DEFAULT_STEP_FRACTION,
+};
 pub use source::{Captured, LightsDemo, Slab, SphereLight, VolumeSource};
+pub use uniform::{build_uniform, resolution_for_cell};
 
 use crate::format::FormatError;
 

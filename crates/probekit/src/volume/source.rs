@@ -38,7 +38,7 @@ pub trait VolumeSource: Sync {
     fn capture(&self, points: &[Vec3]) -> Vec<Captured>;
 
     /// Whether scene geometry intersects the box `[min, max]` (Greger et
-    /// al.'s subdivision heuristic, seed 001). Default: no geometry.
+    /// al.'s subdivision heuristic, after Tatarchuk 2005). Default: no geometry.
     fn contains_geometry(&self, _min: Vec3, _max: Vec3) -> bool {
         false
     }
@@ -46,19 +46,19 @@ pub trait VolumeSource: Sync {
     /// Whether an emitter (an emissive surface, or a positional light's
     /// sphere of its radius) overlaps the box `[min, max]`; such cells are
     /// refined further (see
-    /// [`super::build::AdaptiveSettings::emitter_depth`]). Default: none.
+    /// [`super::AdaptiveSettings::emitter_depth`]). Default: none.
     fn contains_emitter(&self, _min: Vec3, _max: Vec3) -> bool {
         false
     }
 
     /// Harmonic mean `N / Σ 1/dᵢ` of the ray distances to the scene from `p`
-    /// (seed 001 after Pharr & Humphreys); `f32::INFINITY` where nothing is
+    /// (Tatarchuk 2005 after Pharr & Humphreys); `f32::INFINITY` where nothing is
     /// hit. Default: infinity.
     fn depth_harmonic_mean(&self, _p: Vec3) -> f32 {
         f32::INFINITY
     }
 
-    /// Central-difference gradients at `points` (seed 001: "project 6
+    /// Central-difference gradients at `points` (Tatarchuk 2005: "project 6
     /// additional irradiance functions" at `p ± step·eᵢ`), layout
     /// `[(p·3 + axis)·order² + c]` (per metre): `(c(p + h eᵢ) − c(p − h eᵢ)) / 2h`.
     /// The default captures the 6 points with [`Self::capture`]; a Monte

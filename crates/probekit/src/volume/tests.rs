@@ -500,7 +500,7 @@ fn invalid_samples_are_dilated_from_valid_neighbours() {
 fn file_round_trip_memory_and_errors() {
     let demo = lights_no_slab(3);
     let (min, max) = (Vec3::splat(-0.5), Vec3::splat(0.5));
-    // Seed 001's uniform scene: 17³ = 4913 samples, L2 + gradients ≈ 2 MB.
+    // Tatarchuk 2005's uniform scene: 17³ = 4913 samples, L2 + gradients ≈ 2 MB.
     let (file, _) = build_uniform(
         &demo,
         &common(min, max, GradientMode::Analytic),

@@ -1,0 +1,97 @@
+//! Training points: drawn in free space (half uniform in the bake box, half
+//! uniform in the cloud's cells) and captured as radiance SH.
+
+use super::{BlendFitError, BlendFitSettings};
+use crate::capture::{Baker, CaptureSettings};
+use crate::sampling::SampleRng;
+use crate::scene::Aabb;
+use crate::trace::free_space::{is_free, sample_points, SURFACE_CLEARANCE};
+use glam::Vec3;
+use probekit_runtime::cloud::TetMesh;
+use probekit_sh::ShRgb;
+
+/// Seed stream of the training points (`"wfit"`), apart from `probekit
+/// eval`'s points of the same seed.
+const TRAINING_STREAM: u64 = 0x7766_6974;
+
+/// Stream of the per-cell training points' random numbers.
+const CELL_STREAM: u64 = 0x6365_6c6c; // "cell"
+
+/// Capture index of the first training point: far above any probe's, so
+/// training points never share a probe's random numbers.
+const TRAINING_INDEX: usize = 1 << 32;
+
+/// Captured training points: positions (metres) and their radiance SH.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainingSet {
+    /// Where each point was captured.
+    pub positions: Vec<Vec3>,
+    /// Radiance SH at each point (all light, or indirect only, as the cloud
+    /// stores).
+    pub sh: Vec<ShRgb>,
+}
+
+/// Draws `count` training points in free space of `bake_box` (seeded by
+/// `fit.seed`) and captures them with `capture` at `fit.samples` samples:
+/// all light, or indirect light only when `capture.split_direct` (the
+/// convention of the cloud bakes: what `bake --indirect-only` stores). Half are uniform in the box, as `probekit eval`'s points; the
+/// other half are uniform in tetrahedra of `mesh` chosen uniformly (not by
+/// volume), so every cell has evidence and small cells — where adaptive
+/// placement packed probes, next to lights — are sampled densely: a fit that
+/// only saw uniform points could shift weight onto a probe beside a light
+/// where no point would show the overshoot. `progress(done, total)` counts
+/// points. Deterministic (any thread count).
+pub fn capture_training_set(
+    baker: &Baker,
+    bake_box: &Aabb,
+    mesh: &TetMesh,
+    count: usize,
+    capture: &CaptureSettings,
+    fit: &BlendFitSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TrainingSet, BlendFitError> {
+    fit.validate()?;
+    let seed = fit.seed ^ TRAINING_STREAM;
+    let uniform = count.div_ceil(2);
+    let mut pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, uniform, seed)
+        .into_iter()
+        .map(|p| p.position)
+        .collect();
+    let tets = mesh.tets();
+    let pos = mesh.positions();
+    let want = count - uniform;
+    let mut tries = 0u64;
+    let mut cell_points = 0;
+    while !tets.is_empty() && cell_points < want && tries < 200 * want as u64 + 1000 {
+        let mut rng = SampleRng::new(seed, CELL_STREAM, tries);
+        tries += 1;
+        let t = &tets[((rng.next_f32() * tets.len() as f32) as usize).min(tets.len() - 1)];
+        // Uniform in the simplex: the gaps of three sorted uniforms.
+        let mut u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+        u.sort_by(f32::total_cmp);
+        let b = [u[0], u[1] - u[0], u[2] - u[1], 1.0 - u[2]];
+        let p = (0..4).fold(Vec3::ZERO, |acc, k| acc + b[k] * pos[t[k] as usize]);
+        if bake_box.contains(p) && is_free(baker.tracer(), p, SURFACE_CLEARANCE) {
+            pts.push(p);
+            cell_points += 1;
+        }
+    }
+    if pts.is_empty() {
+        return Err(BlendFitError::NoTrainingPoints);
+    }
+    let mut s = capture.clone();
+    s.samples = fit.samples;
+    s.groups = false;
+    let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
+    let (positions, sh) = rs
+        .into_iter()
+        .map(|r| {
+            let sh = match (capture.split_direct, r.indirect) {
+                (true, Some(ind)) => ind,
+                _ => r.sh,
+            };
+            (r.position, sh)
+        })
+        .unzip();
+    Ok(TrainingSet { positions, sh })
+}

@@ -1,0 +1,255 @@
+//! What a cloud's blend uses beyond its probes, baked into a file as
+//! `probekit bake` stores it: distance moments (`VISM`,
+//! [`super::visibility`]), cell visibility (`CVSP`,
+//! [`super::cell_visibility`]) and, fitted to training points with both in
+//! place, per-probe blend weights (`PWGT`, [`super::blend_fit`]).
+//!
+//! `probekit bake`, `probekit eval --compare grid` (the grid gets what the
+//! evaluated file has) and the `--plot` sweep all go through
+//! [`VisibilityBake::bake_into`], so a cloud compared or plotted blends
+//! exactly as a baked one; [`VisibilityBake::fit_weights_into`] then fits the
+//! probe weights.
+
+use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
+use super::cell_planes::bake_file_cell_planes;
+use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
+use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
+use crate::capture::{Baker, CaptureSettings};
+use crate::trace::Tracer;
+use probekit_runtime::format::ProbeFile;
+use thiserror::Error;
+
+/// Why a cloud's visibility data cannot be baked.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum VisibilityBakeError {
+    /// The distance moments failed (settings or positions).
+    #[error("distance moments: {0}")]
+    Moments(#[from] VisibilityError),
+    /// The cell visibility failed (subdivision, or the file's tetrahedra).
+    #[error("cell visibility: {0}")]
+    Cells(#[from] CellVisibilityError),
+    /// The probe weight fit failed.
+    #[error(transparent)]
+    Weights(#[from] BlendFitError),
+}
+
+/// Which visibility data to bake for a cloud.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VisibilityBake {
+    /// Distance moments (`VISM`) with these settings; `None`: none.
+    pub moments: Option<VisibilitySettings>,
+    /// Cell visibility (`CVSP`) at this lattice subdivision (fixed, 1..=8,
+    /// or from the cell size); `None`: none.
+    pub cell_subdivision: Option<CellLattice>,
+    /// Occluder planes (`CPLN`) for the cells one flat wall cuts, refining
+    /// the cell visibility ([`super::cell_planes::bake_cell_planes`]);
+    /// only with `cell_subdivision`.
+    pub cell_planes: bool,
+    /// Fitted probe weights (`PWGT`) with these settings; `None`: none.
+    pub probe_weights: Option<BlendFitSettings>,
+}
+
+impl VisibilityBake {
+    /// No visibility data: the cloud blends with plain barycentric weights.
+    pub fn none() -> Self {
+        Self {
+            moments: None,
+            cell_subdivision: None,
+            cell_planes: false,
+            probe_weights: None,
+        }
+    }
+
+    /// The kinds `file` stores, with its settings: the moments' resolution
+    /// and distance clamp (ray jitter from `seed`, default rays per texel),
+    /// the cells' subdivision (chosen anew from the cell size where the
+    /// metadata records `settings.cell_visibility` as `"auto"`), and probe
+    /// weights fitted with the settings its metadata records
+    /// (`settings.probe_weights`; the defaults with `seed` where absent). For a second cloud that should blend as `file`
+    /// does (`eval --compare grid`, the `--plot` sweep).
+    pub fn like(file: &ProbeFile, seed: u64) -> Self {
+        let meta: serde_json::Value = serde_json::from_str(&file.metadata).unwrap_or_default();
+        Self {
+            moments: file.visibility.as_ref().map(|v| VisibilitySettings {
+                resolution: v.resolution,
+                ..VisibilitySettings::new(v.max_distance, seed)
+            }),
+            cell_subdivision: file.cell_visibility.as_ref().map(|c| {
+                match CellLattice::from_json(&meta["settings"]["cell_visibility"]) {
+                    Some(CellLattice::Auto) => CellLattice::Auto,
+                    _ => CellLattice::Fixed(c.subdivision()),
+                }
+            }),
+            cell_planes: file.cell_planes.is_some(),
+            // A file from before the exponent was fitted records none: it
+            // blends with the one it stores (0).
+            probe_weights: file.probe_weights.as_ref().map(|_| {
+                BlendFitSettings::from_json(
+                    &meta["settings"]["probe_weights"],
+                    &BlendFitSettings {
+                        brightness: Some(file.brightness_exponent),
+                        directional: file.directional_exponent,
+                        ..BlendFitSettings::new(seed)
+                    },
+                )
+            }),
+        }
+    }
+
+    /// Bakes the selected visibility kinds into `file` (a cloud with
+    /// positions and, for the cells, tetrahedra), replacing what it had;
+    /// kinds not selected are removed, and so are probe weights (fitted to
+    /// the old blend: [`VisibilityBake::fit_weights_into`] fits them anew).
+    /// `moments_progress(done, total)` counts probes,
+    /// `cells_progress` cells and hull faces, then the cells whose planes
+    /// are fitted. Deterministic (any thread
+    /// count).
+    pub fn bake_into(
+        &self,
+        tracer: &Tracer<'_>,
+        file: &mut ProbeFile,
+        moments_progress: &(dyn Fn(usize, usize) + Sync),
+        cells_progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
+        file.visibility = match &self.moments {
+            Some(v) => Some(bake_distance_moments(
+                tracer,
+                &file.positions,
+                v,
+                moments_progress,
+            )?),
+            None => None,
+        };
+        file.cell_visibility = match self.cell_subdivision {
+            Some(lattice) => Some(bake_file_cell_visibility(
+                tracer,
+                file,
+                lattice,
+                cells_progress,
+            )?),
+            None => None,
+        };
+        file.cell_planes = None;
+        if self.cell_planes {
+            file.cell_planes = bake_file_cell_planes(tracer, file, cells_progress)?;
+        }
+        file.probe_weights = None;
+        file.brightness_exponent = 0.0;
+        file.directional_exponent = 0.0;
+        Ok(())
+    }
+
+    /// After [`VisibilityBake::bake_into`]: fits probe weights to the blend
+    /// `file` now has ([`fit_file_probe_weights`]), training points captured
+    /// with `capture` (indirect light only when `capture.split_direct`, as
+    /// the bake stores), when selected; removes them otherwise.
+    /// `progress(done, total)` counts training points. Deterministic (any
+    /// thread count).
+    pub fn fit_weights_into(
+        &self,
+        baker: &Baker,
+        capture: &CaptureSettings,
+        file: &mut ProbeFile,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
+        file.probe_weights = None;
+        file.brightness_exponent = 0.0;
+        file.directional_exponent = 0.0;
+        if let Some(fit) = &self.probe_weights {
+            let f = fit_file_probe_weights(
+                baker,
+                file,
+                &baker.scene().bake_box(),
+                capture,
+                fit,
+                progress,
+            )?;
+            file.probe_weights = Some(f.weights);
+            file.brightness_exponent = f.brightness;
+            file.directional_exponent = f.directional;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blend::cell_planes::{bake_cell_planes, CELL_PLANE_SEED};
+    use crate::format::cloud::test_cloud_file;
+    use glam::Vec3;
+    use probekit_sh::ShRgb;
+
+    /// `like` reproduces a file's kinds and settings, and `bake_into` gives
+    /// the bytes the two bakers give on their own.
+    #[test]
+    fn like_then_bake_into_matches_the_separate_bakes() {
+        let scene = crate::scene::tests_support::boxes_scene(&[(
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.3, 2.0, 2.0),
+        )]);
+        let tracer = Tracer::new(&scene);
+        let mut pos = Vec::new();
+        for i in 0..4 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    pos.push(Vec3::new(
+                        -1.5 + i as f32,
+                        0.3 + 0.7 * j as f32,
+                        0.3 + 0.7 * k as f32,
+                    ));
+                }
+            }
+        }
+        let mut a = test_cloud_file(&pos, &vec![ShRgb::zeros(2); pos.len()]);
+        let vs = VisibilitySettings {
+            resolution: 4,
+            ..VisibilitySettings::new(5.0, 7)
+        };
+        let want = VisibilityBake {
+            moments: Some(vs),
+            cell_subdivision: Some(CellLattice::Fixed(2)),
+            cell_planes: true,
+            probe_weights: None,
+        };
+        a.probe_weights = Some(vec![2.0; pos.len()]);
+        want.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
+            .unwrap();
+        let moments = bake_distance_moments(&tracer, &pos, &vs, &|_, _| {}).unwrap();
+        assert_eq!(a.visibility.as_ref(), Some(&moments));
+        let cells =
+            bake_file_cell_visibility(&tracer, &a, CellLattice::Fixed(2), &|_, _| {}).unwrap();
+        assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
+        let mesh = probekit_runtime::cloud::ProbeCloud::mesh_from_file(&a).unwrap();
+        let planes = bake_cell_planes(&tracer, &mesh, &cells, CELL_PLANE_SEED, &|_, _| {}).unwrap();
+        assert!(!planes.is_empty());
+        assert_eq!(a.cell_planes.as_ref(), Some(&planes));
+        // Weights fitted to the old blend are gone.
+        assert!(a.probe_weights.is_none());
+        let like = VisibilityBake::like(&a, 7);
+        assert_eq!(like.cell_subdivision, Some(CellLattice::Fixed(2)));
+        assert!(like.cell_planes);
+        assert_eq!(
+            like.moments.map(|m| (m.resolution, m.max_distance)),
+            Some((4, 5.0))
+        );
+        // `none` removes both.
+        VisibilityBake::none()
+            .bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
+            .unwrap();
+        assert!(a.visibility.is_none() && a.cell_visibility.is_none() && a.cell_planes.is_none());
+        assert_eq!(VisibilityBake::like(&a, 7), VisibilityBake::none());
+        // A bad subdivision is a typed error.
+        let bad = VisibilityBake {
+            moments: None,
+            cell_subdivision: Some(CellLattice::Fixed(99)),
+            cell_planes: true,
+            probe_weights: None,
+        };
+        assert!(matches!(
+            bad.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {}),
+            Err(VisibilityBakeError::Cells(_))
+        ));
+    }
+}
