@@ -7,9 +7,10 @@
 #![warn(missing_docs)]
 
 mod cmd;
+mod markdown;
 mod progress;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// probekit: bake and inspect diffuse lighting (light probes, spherical harmonics).
@@ -23,8 +24,8 @@ struct Cli {
 /// The subcommands; each lives in `src/cmd/<name>.rs`.
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Bake a probe cloud: adaptive placement (default), a grid, given positions or seed 003's
-    /// methods; `--shard I/N` for one part.
+    /// Bake a probe cloud: adaptive placement (default), a grid, given positions, spawn-and-merge
+    /// or gradient ascent; `--shard I/N` for one part.
     Bake(cmd::bake::BakeArgs),
     /// Join shard parts into the file a single-machine bake writes.
     Merge(cmd::bake::MergeArgs),
@@ -50,10 +51,45 @@ enum Command {
     Eval(cmd::eval::EvalArgs),
     /// Picture: the scene lit by the probes beside path-traced truth, and the error.
     Render(cmd::render::RenderArgs),
+    /// Print docs/cli.md, the command-line reference, from these definitions.
+    #[command(hide = true)]
+    MarkdownHelp,
+}
+
+/// Parses the command line. Help and the version print as clap writes
+/// them; a usage error is one line on stderr, exit code 1, like every other
+/// error.
+fn parse() -> Result<Cli, ExitCode> {
+    Cli::try_parse().map_err(|e| {
+        use clap::error::ErrorKind;
+        if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+            || e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+        {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+        let text = e.render().to_string();
+        let line: Vec<&str> = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| {
+                !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+            })
+            .collect();
+        eprintln!("{}", line.join(" "));
+        ExitCode::FAILURE
+    })
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match parse() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
     let result = match cli.command {
         Command::Bake(args) => cmd::bake::run(&args),
         Command::Merge(args) => cmd::bake::merge(&args),
@@ -68,6 +104,12 @@ fn main() -> ExitCode {
         Command::Rig(args) => cmd::rig::run(args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Render(args) => cmd::render::run(&args),
+        Command::MarkdownHelp => {
+            let mut cli = Cli::command();
+            cli.build();
+            print!("{}", markdown::cli_markdown(&cli));
+            Ok(())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -287,19 +287,19 @@ fn lights_demo_sampled_as_bevy_does_matches_the_runtimes_ambient_cube() {
         d,
         lights,
         "lights-demo uniform 6³",
-        &["--uniform", "--resolution", "6,6,6"],
+        &["--layout", "uniform", "--resolution", "6,6,6"],
     );
-    let uniform = &["--uniform", "--resolution", "8,8,8"];
+    let uniform = &["--layout", "uniform", "--resolution", "8,8,8"];
     let (u, _) = measure(d, lights, "lights-demo uniform 8³", uniform);
     assert!(u.cube.median <= 0.01, "uniform median {}", u.cube.median);
-    let (a, (volume, ..)) = measure(d, lights, "lights-demo adaptive", &["--adaptive"]);
+    let (a, (volume, ..)) = measure(d, lights, "lights-demo adaptive", &["--layout", "octree"]);
     assert!(volume.root_grid().is_some());
     assert!(a.cube.median <= 0.01, "adaptive median {}", a.cube.median);
     let (r, _) = measure(
         d,
         "builtin:demo",
         "demo uniform 6³",
-        &["--uniform", "--resolution", "6,6,6"],
+        &["--layout", "uniform", "--resolution", "6,6,6"],
     );
     assert!(r.cube.median <= 0.01, "demo median {}", r.cube.median);
 }
@@ -319,10 +319,15 @@ fn cornell_box_sampled_as_bevy_does_matches_and_is_lit_at_the_default_exposure()
     let dir = tempfile::tempdir().unwrap();
     let scene = toml.to_str().unwrap();
     header();
-    let uniform = ["--uniform", "--resolution", "6,6,6"];
+    let uniform = ["--layout", "uniform", "--resolution", "6,6,6"];
     let (u, (volume, sidecar, ktx2)) = measure(dir.path(), scene, "cornell uniform 6³", &uniform);
     assert!(u.cube.median <= 0.01, "uniform median {}", u.cube.median);
-    let (a, _) = measure(dir.path(), scene, "cornell adaptive", &["--adaptive"]);
+    let (a, _) = measure(
+        dir.path(),
+        scene,
+        "cornell adaptive",
+        &["--layout", "octree"],
+    );
     assert!(a.cube.median <= 0.01, "adaptive median {}", a.cube.median);
     // On screen (before tone mapping) at Bevy's default exposure, a white
     // diffuse surface shows exposure · light (light includes the intensity).
@@ -358,7 +363,7 @@ fn sidecar_names_both_intensities_and_a_one_voxel_axis_is_refused() {
         d,
         "builtin:lights-demo",
         "v",
-        &["--uniform", "--resolution", "3,3,3"],
+        &["--layout", "uniform", "--resolution", "3,3,3"],
     );
     assert_eq!(sidecar["intensity_in_scene_units"], 1.0);
     let at_default = sidecar["intensity_for_bevy_default_exposure"]

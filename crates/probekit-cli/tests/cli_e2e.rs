@@ -15,7 +15,17 @@ fn triple(v: &Value) -> bool {
 fn sharded_bake_merges_to_the_unsharded_file() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let common = ["bake", "--grid", "30", "--samples", "64", "--bounces", "1"];
+    let common = [
+        "bake",
+        "--placement",
+        "grid",
+        "--budget",
+        "30",
+        "--samples",
+        "64",
+        "--set",
+        "capture.bounces=1",
+    ];
     let full = json(d, &[&common[..], &["-o", "full.probes", "--json"]].concat());
     assert_eq!(full["probes"], 30);
     assert!(full["bytes"].as_u64().unwrap() > 0);
@@ -88,12 +98,14 @@ fn sharded_bake_merges_to_the_unsharded_file() {
         d,
         &[
             "bake",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "30",
             "--samples",
             "32",
-            "--bounces",
-            "1",
+            "--set",
+            "capture.bounces=1",
             "--shard",
             "1/3",
             "-o",
@@ -123,12 +135,14 @@ fn json_shapes_and_bad_input() {
         d,
         &[
             "bake",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "40",
             "--samples",
             "64",
-            "--bounces",
-            "1",
+            "--set",
+            "capture.bounces=1",
             "-o",
             "c.probes",
             "--json",
@@ -326,8 +340,8 @@ fn manual_probe_sets_degenerate_and_duplicate() {
             csv,
             "--samples",
             "8",
-            "--bounces",
-            "1",
+            "--set",
+            "capture.bounces=1",
             "-o",
             out,
         ]
@@ -380,9 +394,26 @@ fn manual_probe_sets_degenerate_and_duplicate() {
 fn ignored_flags_are_refused() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let bake = ["bake", "--grid", "12", "--samples", "16", "--bounces", "1"];
+    let bake = [
+        "bake",
+        "--placement",
+        "grid",
+        "--budget",
+        "12",
+        "--samples",
+        "16",
+        "--set",
+        "capture.bounces=1",
+    ];
     json(d, &[&bake[..], &["-o", "c.probes", "--json"]].concat());
-    let volume = ["volume", "builtin:demo", "-o", "v.probes", "--uniform"];
+    let volume = [
+        "volume",
+        "builtin:demo",
+        "-o",
+        "v.probes",
+        "--layout",
+        "uniform",
+    ];
     json(
         d,
         &[&volume[..], &["--resolution", "3,3,3", "--json"]].concat(),
@@ -449,7 +480,8 @@ fn outputs_are_checked_before_the_work() {
     let volume = [
         "volume",
         "builtin:demo",
-        "--uniform",
+        "--layout",
+        "uniform",
         "--resolution",
         "3,3,3",
     ];

@@ -14,13 +14,23 @@ fn rgb(v: &Value) -> [f64; 3] {
     [0, 1, 2].map(|k| a[k].as_f64().unwrap())
 }
 
-const COMMON: [&str; 7] = ["bake", "--grid", "30", "--samples", "64", "--bounces", "1"];
+const COMMON: [&str; 9] = [
+    "bake",
+    "--placement",
+    "grid",
+    "--budget",
+    "30",
+    "--samples",
+    "64",
+    "--set",
+    "capture.bounces=1",
+];
 
 #[test]
 fn sharded_bake_with_groups_merges_to_the_unsharded_file() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let extra = ["--groups", "--codec", "f16"];
+    let extra = ["--set", "capture.groups=true", "--codec", "f16"];
     let full = json(
         d,
         &[&COMMON[..], &extra, &["-o", "full.probes", "--json"]].concat(),
@@ -111,8 +121,16 @@ fn query_group_scale_relights_linearly() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
     for (out, flags) in [
-        ("g.probes", &["--groups"][..]),
-        ("gi.probes", &["--groups", "--indirect-only"][..]),
+        ("g.probes", &["--set", "capture.groups=true"][..]),
+        (
+            "gi.probes",
+            &[
+                "--set",
+                "capture.groups=true",
+                "--set",
+                "capture.indirect_only=true",
+            ][..],
+        ),
     ] {
         let b = json(d, &[&COMMON[..], flags, &["-o", out, "--json"]].concat());
         let names: Vec<String> = b["groups"]

@@ -1,5 +1,5 @@
-//! End-to-end tests of seed 003's placements (`bake --placement
-//! spawn-merge|gradient-ascent`) and of `eval --compare grid` / `--plot`.
+//! End-to-end tests of the spawn-and-merge and gradient-ascent placements
+//! (`bake --placement spawn-and-merge|gradient-ascent`) and of `eval --compare grid` / `--plot`.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -81,7 +81,11 @@ fn seed_placements_bake_and_record_their_parameters() {
     let scene = write_scene(dir.path());
     // `--directions` is spawn-merge's (gradient-ascent refuses it).
     for (method, key, extra) in [
-        ("spawn-merge", "contrast", &["--directions", "6"][..]),
+        (
+            "spawn-and-merge",
+            "contrast",
+            &["--set", "placement.directions=6"][..],
+        ),
         ("gradient-ascent", "step", &[]),
     ] {
         let out = dir.path().join(format!("{method}.probes"));
@@ -92,14 +96,14 @@ fn seed_placements_bake_and_record_their_parameters() {
         let n = v["probes"].as_u64().unwrap();
         assert!(n >= 4, "{method}: {v}");
         let i = json(&probekit(&["inspect", out.to_str().unwrap(), "--json"]));
-        let pl = &i["placement"];
+        let pl = &i["recipe"]["placement"];
         assert_eq!(pl["method"], method, "{i}");
-        assert!(pl["parameters"][key].is_number(), "{i}");
-        assert_eq!(pl["parameters"]["count"].as_u64(), Some(n), "{i}");
+        assert!(pl[key].is_number(), "{i}");
+        assert_eq!(i["placed"]["count"].as_u64(), Some(n), "{i}");
     }
-    let sm = dir.path().join("spawn-merge.probes");
+    let sm = dir.path().join("spawn-and-merge.probes");
     let i = json(&probekit(&["inspect", sm.to_str().unwrap(), "--json"]));
-    assert_eq!(i["placement"]["parameters"]["directions"], 6);
+    assert_eq!(i["recipe"]["placement"]["directions"], 6);
     // Bad input: one line naming the problem, exit code 1.
     for args in [
         vec!["bake", scene.as_str(), "--placement", "nope"],
@@ -107,17 +111,17 @@ fn seed_placements_bake_and_record_their_parameters() {
             "bake",
             scene.as_str(),
             "--placement",
-            "spawn-merge",
-            "--directions",
-            "7",
+            "spawn-and-merge",
+            "--set",
+            "placement.directions=7",
         ],
         vec![
             "bake",
             scene.as_str(),
             "--placement",
-            "spawn-merge",
-            "--contrast",
-            "2",
+            "spawn-and-merge",
+            "--set",
+            "placement.contrast=2",
         ],
     ] {
         let o = probekit(&args);
@@ -141,7 +145,10 @@ fn bake_seed_seeds_adaptive_placement() {
             "16",
             "--seed",
             seed,
-            "--no-visibility",
+            "--set",
+            "blend.distance_moments=0",
+            "--set",
+            "blend.cell_visibility=0",
             "-o",
             out.to_str().unwrap(),
             "--json",
@@ -184,7 +191,9 @@ fn eval_compare_and_sweep_plot() {
     json(&probekit(&[
         "bake",
         &scene,
-        "--grid",
+        "--placement",
+        "grid",
+        "--budget",
         "20",
         "-o",
         probes.to_str().unwrap(),
@@ -297,10 +306,16 @@ fn eval_compare_and_sweep_plot() {
     json(&probekit(&[
         "bake",
         &scene,
-        "--grid",
+        "--placement",
+        "grid",
+        "--budget",
         "20",
-        "--no-visibility",
-        "--no-probe-weights",
+        "--set",
+        "blend.distance_moments=0",
+        "--set",
+        "blend.cell_visibility=0",
+        "--set",
+        "blend.probe_weights=false",
         "-o",
         plain.to_str().unwrap(),
         "--json",
@@ -343,7 +358,9 @@ fn eval_compare_and_sweep_plot() {
         assert!(r["probes"].as_u64().unwrap() >= 4, "{r}");
         assert!(r["rel_rmse"].as_f64().unwrap().is_finite(), "{r}");
         assert!(r["p95_rel_error"].is_number() && r["leaks"].is_number());
-        assert!(["grid", "spawn-merge", "gradient-ascent"].contains(&r["method"].as_str().unwrap()));
+        assert!(
+            ["grid", "spawn-and-merge", "gradient-ascent"].contains(&r["method"].as_str().unwrap())
+        );
     }
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
@@ -363,22 +380,30 @@ fn bake_light_shells_auto_records_its_choice() {
         "24",
         "--samples",
         "32",
-        "--no-visibility",
-        "--no-probe-weights",
+        "--set",
+        "blend.distance_moments=0",
+        "--set",
+        "blend.cell_visibility=0",
+        "--set",
+        "blend.probe_weights=false",
         "-o",
         o,
     ];
-    let bad = probekit(&[&base[..], &["--light-shells", "maybe"]].concat());
+    let bad = probekit(&[&base[..], &["--set", "placement.light_shells=maybe"]].concat());
     assert_eq!(bad.status.code(), Some(1));
     let msg = String::from_utf8_lossy(&bad.stderr);
-    assert!(msg.contains("--light-shells maybe"), "{msg}");
+    assert!(msg.contains("placement.light_shells"), "{msg}");
     assert!(!out.exists());
     json(&probekit(
-        &[&base[..], &["--light-shells", "auto", "--json"]].concat(),
+        &[
+            &base[..],
+            &["--set", "placement.light_shells=auto", "--json"],
+        ]
+        .concat(),
     ));
     let i = json(&probekit(&["inspect", o, "--json"]));
-    let p = &i["placement"]["parameters"];
-    assert_eq!(p["light_shells_mode"], "auto", "{i}");
+    assert_eq!(i["recipe"]["placement"]["light_shells"], "auto", "{i}");
+    let p = &i["placed"];
     let e: Vec<f64> = p["held_out_error"]
         .as_array()
         .unwrap()
@@ -388,34 +413,56 @@ fn bake_light_shells_auto_records_its_choice() {
     assert_eq!(e.len(), 2, "{i}");
     assert!(e.iter().all(|x| x.is_finite() && *x > 0.0), "{i}");
     assert_eq!(p["light_shells"].as_bool(), Some(e[1] < e[0]), "{i}");
-    // The bare flag still means `on`.
     json(&probekit(
-        &[&base[..], &["--light-shells", "--json"]].concat(),
+        &[&base[..], &["--set", "placement.light_shells=on", "--json"]].concat(),
     ));
     let i = json(&probekit(&["inspect", o, "--json"]));
-    assert_eq!(i["placement"]["parameters"]["light_shells_mode"], "on");
-    assert!(i["placement"]["parameters"]["held_out_error"].is_null());
+    assert_eq!(i["recipe"]["placement"]["light_shells"], "on");
+    assert!(i["placed"]["held_out_error"].is_null());
 }
 
-/// `--placement grid --budget N` is the grid `--grid N` gives, and flags
-/// the chosen method would ignore (a grid's size elsewhere, adaptive's or
-/// seed 003's flags with another method) are refused before any capture.
+/// `--placement grid --budget N` is the grid `--set placement.budget=N`
+/// gives, and keys the chosen method does not read are refused before any
+/// capture, naming the key, the method and the keys it reads.
 #[test]
 fn bake_flags_fit_the_placement_or_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path());
     let bake = |extra: &[&str], name: &str| {
         let out = dir.path().join(name);
-        let mut args = vec!["bake", &scene, "--samples", "16", "--bounces", "1"];
+        let mut args = vec![
+            "bake",
+            &scene,
+            "--samples",
+            "16",
+            "--set",
+            "capture.bounces=1",
+        ];
+        args.extend_from_slice(&[
+            "--set",
+            "blend.distance_moments=0",
+            "--set",
+            "blend.cell_visibility=0",
+            "--set",
+            "blend.probe_weights=false",
+        ]);
         args.extend_from_slice(extra);
-        args.extend_from_slice(&["--no-visibility", "--no-probe-weights", "--json", "-o"]);
+        args.extend_from_slice(&["--json", "-o"]);
         args.push(out.to_str().unwrap());
         let o = probekit(&args);
         (o, out)
     };
     let (by_budget, a) = bake(&["--placement", "grid", "--budget", "20"], "a.probes");
-    let (by_grid, b) = bake(&["--grid", "20"], "b.probes");
-    let (ja, jb) = (json(&by_budget), json(&by_grid));
+    let (by_key, b) = bake(
+        &[
+            "--set",
+            "placement.method=grid",
+            "--set",
+            "placement.budget=20",
+        ],
+        "b.probes",
+    );
+    let (ja, jb) = (json(&by_budget), json(&by_key));
     assert_eq!(ja["probes"], jb["probes"]);
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     // The default grid has about 256 probes: far more than 20.
@@ -425,65 +472,56 @@ fn bake_flags_fit_the_placement_or_are_refused() {
     std::fs::write(&positions, "0,1,0\n1,1,0\n0,2,0\n0,1,1\n").unwrap();
     let p = positions.to_str().unwrap();
     for (args, needle) in [
-        (vec!["--grid", "20", "--cell", "0.5"], "--grid and --cell"),
         (
-            vec!["--placement", "grid", "--budget", "20", "--grid", "20"],
-            "--budget and --grid",
+            vec!["--placement", "grid", "--budget", "20", "--set", "placement.cell=0.5"],
+            "not both",
         ),
         (
-            vec!["--budget", "20", "--cell", "0.5"],
-            "--budget and --cell",
+            vec!["--placement", "spawn-and-merge", "--set", "placement.cell=0.5"],
+            "`placement.cell`: spawn-and-merge placement does not read it (grid placement reads it)",
         ),
         (
-            vec!["--placement", "adaptive", "--grid", "20"],
-            "--placement adaptive",
+            vec!["--positions", p, "--budget", "20"],
+            "manual placement does not read it",
         ),
-        (
-            vec!["--placement", "spawn-merge", "--cell", "0.5"],
-            "--placement spawn-merge",
-        ),
-        (vec!["--positions", p, "--budget", "20"], "do not apply"),
         (
             vec!["--placement", "grid", "--positions", p],
-            "exclude each other",
+            "cannot be used with",
         ),
         (
-            vec!["--grid", "20", "--tolerance", "0.1"],
-            "--tolerance applies",
+            vec!["--placement", "grid", "--set", "placement.tolerance=0.1"],
+            "grid placement does not read it (adaptive placement reads it)",
         ),
         (
-            vec!["--positions", p, "--light-shells", "off"],
-            "--light-shells applies",
+            vec!["--positions", p, "--set", "placement.light_shells=off"],
+            "manual placement does not read it",
         ),
         (
-            vec!["--placement", "spawn-merge", "--step", "0.3"],
-            "--step applies",
+            vec!["--placement", "spawn-and-merge", "--set", "placement.step=0.3"],
+            "spawn-and-merge placement does not read it (gradient-ascent placement reads it)",
         ),
         (
-            vec!["--placement", "gradient-ascent", "--contrast", "0.3"],
-            "--contrast applies",
-        ),
-        (vec!["--max-iterations", "2"], "--max-iterations applies"),
-        (vec!["--grid", "20", "--initial", "8"], "--initial applies"),
-        (
-            vec!["--grid", "20", "--shard", "0/2", "--render", "x.png"],
-            "'--shard <SHARD>' cannot be used with '--render <RENDER>'",
-        ),
-        // `bake` below passes --no-visibility and --no-probe-weights.
-        (
-            vec!["--grid", "20", "--visibility-res", "4"],
-            "'--visibility-res <VISIBILITY_RES>' cannot be used with '--no-visibility'",
+            vec!["--placement", "gradient-ascent", "--set", "placement.contrast=0.3"],
+            "gradient-ascent placement does not read it",
         ),
         (
-            vec!["--grid", "20", "--fit-points", "8"],
-            "'--fit-points <FIT_POINTS>' cannot be used with '--no-probe-weights'",
+            vec!["--set", "placement.max_iterations=2"],
+            "adaptive placement does not read it",
         ),
+        (
+            vec!["--placement", "grid", "--budget", "20", "--shard", "0/2", "--render", "x.png"],
+            "cannot be used with",
+        ),
+        (vec!["--set", "blend.fit.points=8"], "`blend.fit.points`"),
+        (vec!["--set", "capture.samples=0"], "capture.samples"),
+        (vec!["--placement", "grid", "--budget", "2"], "placement.budget"),
     ] {
         let (o, out) = bake(&args, "refused.probes");
         assert!(!o.status.success(), "{args:?} was accepted");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }

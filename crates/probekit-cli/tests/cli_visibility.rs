@@ -32,19 +32,28 @@ fn bake_inspect_query_with_and_without_visibility() {
     // Visibility alone here (probe weights: the next test).
     let common = [
         "bake",
-        "--grid",
+        "--placement",
+        "grid",
+        "--budget",
         "40",
         "--samples",
         "32",
-        "--bounces",
-        "1",
-        "--no-probe-weights",
+        "--set",
+        "capture.bounces=1",
+        "--set",
+        "blend.probe_weights=false",
     ];
     json(
         d,
         &[
             &common[..],
-            &["-o", "v.probes", "--visibility-res", "4", "--json"],
+            &[
+                "-o",
+                "v.probes",
+                "--set",
+                "blend.distance_moments=4",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -52,7 +61,15 @@ fn bake_inspect_query_with_and_without_visibility() {
         d,
         &[
             &common[..],
-            &["-o", "n.probes", "--no-visibility", "--json"],
+            &[
+                "-o",
+                "n.probes",
+                "--set",
+                "blend.distance_moments=0",
+                "--set",
+                "blend.cell_visibility=0",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -91,7 +108,13 @@ fn bake_inspect_query_with_and_without_visibility() {
         d,
         &[
             &common[..],
-            &["-o", "k3.probes", "--cell-visibility", "3", "--json"],
+            &[
+                "-o",
+                "k3.probes",
+                "--set",
+                "blend.cell_visibility=3",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -119,9 +142,10 @@ fn bake_inspect_query_with_and_without_visibility() {
             &[
                 "-o",
                 "np.probes",
-                "--visibility-res",
-                "4",
-                "--no-cell-planes",
+                "--set",
+                "blend.distance_moments=4",
+                "--set",
+                "blend.occluder_planes=false",
                 "--json",
             ],
         ]
@@ -134,8 +158,17 @@ fn bake_inspect_query_with_and_without_visibility() {
     for bad in ["9", "fine"] {
         fails_one_line(
             d,
-            &[&common[..], &["-o", "x.probes", "--cell-visibility", bad]].concat(),
-            "cell-visibility",
+            &[
+                &common[..],
+                &[
+                    "-o",
+                    "x.probes",
+                    "--set",
+                    &format!("blend.cell_visibility={}", bad),
+                ],
+            ]
+            .concat(),
+            "blend.cell_visibility",
         );
     }
 
@@ -159,7 +192,11 @@ fn bake_inspect_query_with_and_without_visibility() {
 
     fails_one_line(
         d,
-        &[&common[..], &["-o", "x.probes", "--visibility-res", "0"]].concat(),
+        &[
+            &common[..],
+            &["-o", "x.probes", "--set", "blend.distance_moments=0"],
+        ]
+        .concat(),
         "visibility",
     );
     fails_one_line(
@@ -221,7 +258,8 @@ fn bake_inspect_query_with_and_without_visibility() {
             "builtin:lights-demo",
             "-o",
             "vol.probes",
-            "--uniform",
+            "--layout",
+            "uniform",
             "--resolution",
             "3,3,3",
             "--json",
@@ -264,8 +302,23 @@ fn bake_inspect_query_with_and_without_visibility() {
 fn bake_fits_probe_weights_and_query_uses_them() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let common = ["bake", "--grid", "40", "--samples", "32", "--bounces", "1"];
-    let fit = ["--fit-points", "4", "--fit-samples", "16"];
+    let common = [
+        "bake",
+        "--placement",
+        "grid",
+        "--budget",
+        "40",
+        "--samples",
+        "32",
+        "--set",
+        "capture.bounces=1",
+    ];
+    let fit = [
+        "--set",
+        "blend.fit.points_per_probe=4",
+        "--set",
+        "blend.fit.samples=16",
+    ];
     json(
         d,
         &[&common[..], &fit[..], &["-o", "w.probes", "--json"]].concat(),
@@ -274,7 +327,13 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         d,
         &[
             &common[..],
-            &["-o", "p.probes", "--no-probe-weights", "--json"],
+            &[
+                "-o",
+                "p.probes",
+                "--set",
+                "blend.probe_weights=false",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -297,13 +356,11 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     assert!(lo < hi, "some weight moved: {pw}");
     assert!(p["probe_weights"].is_null());
     assert!(p["bytes_by_section"].get("probe_weights").is_none());
-    let meta = String::from_utf8_lossy(&std::fs::read(d.join("w.probes")).unwrap()).to_string();
-    assert!(
-        meta.contains(
-            "\"probe_weights\":{\"absolute_weight\":1.0,\"brightness\":\"auto\",\"directional\":0.5,\"points_per_probe\":4"
-        ),
-        "{meta}"
-    );
+    let blend = &w["recipe"]["blend"];
+    assert_eq!(blend["probe_weights"], true, "{w}");
+    assert_eq!(blend["brightness_exponent"], "auto", "{w}");
+    assert_eq!(blend["directional_exponent"], 0.5, "{w}");
+    assert_eq!(blend["fit"]["points_per_probe"], 4, "{w}");
     let alpha = pw["brightness_exponent"].as_f64().unwrap();
     assert!([0.0, 0.5, 1.0].contains(&alpha), "{pw}");
     // A fixed exponent is stored as given, and query blends with it.
@@ -312,7 +369,13 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         &[
             &common[..],
             &fit[..],
-            &["-o", "h.probes", "--brightness-weight", "0.75", "--json"],
+            &[
+                "-o",
+                "h.probes",
+                "--set",
+                "blend.brightness_exponent=0.75",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -326,7 +389,13 @@ fn bake_fits_probe_weights_and_query_uses_them() {
         &[
             &common[..],
             &fit[..],
-            &["-o", "g.probes", "--directional-brightness", "0", "--json"],
+            &[
+                "-o",
+                "g.probes",
+                "--set",
+                "blend.directional_exponent=0",
+                "--json",
+            ],
         ]
         .concat(),
     );
@@ -373,20 +442,21 @@ fn bake_fits_probe_weights_and_query_uses_them() {
     );
 
     for (flag, bad) in [
-        ("--fit-points", "0"),
-        ("--fit-samples", "0"),
-        ("--fit-regularization", "-1"),
-        ("--fit-regularization", "nan"),
-        ("--fit-absolute-weight", "-2"),
-        ("--brightness-weight", "5"),
-        ("--brightness-weight", "often"),
-        ("--directional-brightness", "-1"),
-        ("--directional-brightness", "nan"),
+        ("--set", "blend.fit.points_per_probe=0"),
+        ("--set", "blend.fit.samples=0"),
+        ("--set", "blend.fit.regularization=-1"),
+        ("--set", "blend.fit.regularization=nan"),
+        ("--set", "blend.fit.absolute_weight=-2"),
+        ("--set", "blend.brightness_exponent=5"),
+        ("--set", "blend.brightness_exponent=often"),
+        ("--set", "blend.directional_exponent=-1"),
+        ("--set", "blend.directional_exponent=nan"),
     ] {
+        let key = bad.split('=').next().unwrap();
         fails_one_line(
             d,
-            &[&common[..], &["-o", "x.probes", &format!("{flag}={bad}")]].concat(),
-            flag,
+            &[&common[..], &["-o", "x.probes", flag, bad]].concat(),
+            key,
         );
     }
     assert!(!d.join("x.probes").exists());

@@ -21,7 +21,8 @@ fn volume_bake_and_export() {
         "builtin:lights-demo",
         "-o",
         out.to_str().unwrap(),
-        "--uniform",
+        "--layout",
+        "uniform",
         "--resolution",
         "5,4,3",
         "--gradients",
@@ -90,9 +91,10 @@ fn volume_adaptive_and_errors() {
         "builtin:lights-demo",
         "-o",
         out.to_str().unwrap(),
-        "--adaptive",
-        "--min-depth",
-        "1",
+        "--layout",
+        "octree",
+        "--set",
+        "volume.min_depth=1",
         "--max-depth",
         "3",
         "--json",
@@ -109,9 +111,10 @@ fn volume_adaptive_and_errors() {
         "builtin:lights-demo",
         "-o",
         f.to_str().unwrap(),
-        "--adaptive",
-        "--roots",
-        "2,1,3",
+        "--layout",
+        "octree",
+        "--set",
+        "volume.roots=[2,1,3]",
         "--max-depth",
         "1",
         "--json",
@@ -145,7 +148,8 @@ fn volume_adaptive_and_errors() {
         "builtin:lights-demo",
         "-o",
         u.to_str().unwrap(),
-        "--uniform",
+        "--layout",
+        "uniform",
         "--resolution",
         "2,2,2",
     ]);
@@ -162,16 +166,10 @@ fn volume_adaptive_and_errors() {
             "export", &us, "--format", "ktx2", "--layout", "sparse", "-o", &ks,
         ],
         vec![
-            "volume",
-            "nope",
-            "-o",
-            "x.probes",
-            "--uniform",
-            "--cell",
-            "1",
+            "volume", "nope", "-o", "x.probes", "--layout", "uniform", "--cell", "1",
         ],
-        lights_demo(&["--uniform"]),
-        lights_demo(&["--uniform", "--resolution", "1,2"]),
+        lights_demo(&["--layout", "uniform"]),
+        lights_demo(&["--layout", "uniform", "--resolution", "1,2"]),
         vec![
             "export",
             "missing.probes",
@@ -180,27 +178,44 @@ fn volume_adaptive_and_errors() {
             "-o",
             "x.ktx2",
         ],
-        lights_demo(&["--adaptive", "--roots", "0,1,1"]),
-        lights_demo(&["--adaptive", "--roots", "2,1"]),
-        lights_demo(&["--uniform", "--cell", "1", "--gradient-step", "0.1"]),
+        lights_demo(&["--layout", "octree", "--set", "volume.roots=[0,1,1]"]),
+        lights_demo(&["--layout", "octree", "--set", "volume.roots=[2,1]"]),
         lights_demo(&[
-            "--uniform",
+            "--layout",
+            "uniform",
+            "--cell",
+            "1",
+            "--set",
+            "volume.gradients.step=0.1",
+        ]),
+        lights_demo(&[
+            "--layout",
+            "uniform",
             "--cell",
             "1",
             "--gradients",
             "central",
-            "--gradient-step=-0.1",
+            "--set",
+            "volume.gradients.step=-0.1",
         ]),
         lights_demo(&[
-            "--uniform",
+            "--layout",
+            "uniform",
             "--cell",
             "1",
             "--gradients",
             "analytic",
-            "--gradient-order",
-            "0",
+            "--set",
+            "volume.gradients.order=0",
         ]),
-        lights_demo(&["--uniform", "--cell", "1", "--gradient-order", "2"]),
+        lights_demo(&[
+            "--layout",
+            "uniform",
+            "--cell",
+            "1",
+            "--set",
+            "volume.gradients.order=2",
+        ]),
     ] {
         let o = probekit(&args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
@@ -224,7 +239,8 @@ fn volume_of_a_path_traced_scene_evaluates() {
         "builtin:demo",
         "-o",
         out.to_str().unwrap(),
-        "--uniform",
+        "--layout",
+        "uniform",
         "--resolution",
         "3,3,3",
         "--samples",
@@ -258,7 +274,8 @@ fn volume_of_a_path_traced_scene_evaluates() {
         "builtin:demo",
         "-o",
         out.to_str().unwrap(),
-        "--uniform",
+        "--layout",
+        "uniform",
         "--resolution",
         "2,2,2",
         "--samples",
@@ -281,7 +298,7 @@ fn export_options_of_another_format_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let v = dir.path().join("v.probes");
     let v = v.to_str().unwrap();
-    let grid = ["--uniform", "--resolution", "3,3,3"];
+    let grid = ["--layout", "uniform", "--resolution", "3,3,3"];
     let o = probekit(&[&["volume", "builtin:lights-demo", "-o", v][..], &grid].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = dir.path().join("x.ktx2");
@@ -307,40 +324,50 @@ fn export_options_of_another_format_are_refused() {
     }
 }
 
-/// The adaptive octree's options with `--uniform`, and the uniform grid's
-/// with `--adaptive`, are refused (exit code 2, the flag named) rather than
-/// ignored, and nothing is written.
+/// The adaptive octree's keys with `--layout uniform`, and the uniform
+/// grid's with `--layout octree`, are refused (exit code 1, one line naming
+/// the key and the layout) rather than ignored, and nothing is written.
 #[test]
 fn volume_options_of_the_other_layout_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("v.probes");
     let o = out.to_str().unwrap();
-    for (args, flag) in [
+    for (args, key) in [
         (
-            &["--uniform", "--resolution", "3,3,3", "--max-depth", "2"][..],
-            "--max-depth",
+            &[
+                "--layout",
+                "uniform",
+                "--resolution",
+                "3,3,3",
+                "--max-depth",
+                "2",
+            ][..],
+            "volume.max_depth",
         ),
         (
-            &["--uniform", "--cell", "1", "--tolerance", "0.5"],
-            "--tolerance",
+            &["--cell", "1", "--set", "volume.tolerance=0.5"],
+            "volume.tolerance",
         ),
         (
-            &["--uniform", "--cell", "1", "--geometry", "false"],
-            "--geometry",
+            &["--cell", "1", "--set", "volume.geometry=false"],
+            "volume.geometry",
         ),
-        (&["--uniform", "--cell", "1", "--balance"], "--balance"),
-        (&["--adaptive", "--resolution", "3,3,3"], "--resolution"),
-        (&["--adaptive", "--cell", "0.5"], "--cell"),
+        (
+            &["--layout", "octree", "--resolution", "3,3,3"],
+            "volume.resolution",
+        ),
+        (&["--layout", "octree", "--cell", "0.5"], "volume.cell"),
     ] {
         let mut all = vec!["volume", "builtin:lights-demo", "-o", o];
         all.extend_from_slice(args);
         let r = probekit(&all);
-        assert_eq!(r.status.code(), Some(2), "{args:?} was accepted");
+        assert_eq!(r.status.code(), Some(1), "{args:?} was accepted");
         let err = String::from_utf8_lossy(&r.stderr);
         assert!(
-            err.contains(flag) && err.contains("cannot be used with"),
+            err.contains(key) && err.contains("does not read it"),
             "{err}"
         );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
         assert!(!out.exists());
     }
 }

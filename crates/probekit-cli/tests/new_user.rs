@@ -60,7 +60,7 @@ fn a_flat_bake_box_is_refused_by_every_placement_before_any_work() {
     for extra in [
         &[][..],
         &["--placement", "grid"],
-        &["--placement", "spawn-merge"],
+        &["--placement", "spawn-and-merge"],
         &["--placement", "gradient-ascent"],
     ] {
         let args = [&["bake", "flat.toml", "-o", "f.probes"][..], extra].concat();
@@ -76,7 +76,17 @@ fn a_flat_bake_box_is_refused_by_every_placement_before_any_work() {
         assert!(t.elapsed().as_secs() < 20, "{args:?}");
         assert!(!d.join("f.probes").exists());
     }
-    let o = run_limited(d, &["volume", "flat.toml", "--adaptive", "-o", "v.probes"]);
+    let o = run_limited(
+        d,
+        &[
+            "volume",
+            "flat.toml",
+            "--layout",
+            "octree",
+            "-o",
+            "v.probes",
+        ],
+    );
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is empty or flat"));
 }
@@ -92,11 +102,25 @@ fn budgets_above_the_cap_are_refused_before_any_work() {
             "adaptive budget 99999999999 is above the limit of 5000000 probes",
         ),
         (
-            &["bake", "lights.toml", "--grid", "99999999999"][..],
+            &[
+                "bake",
+                "lights.toml",
+                "--placement",
+                "grid",
+                "--budget",
+                "99999999999",
+            ][..],
             "above the limit of 5000000 probes",
         ),
         (
-            &["bake", "lights.toml", "--cell", "0.0001"][..],
+            &[
+                "bake",
+                "lights.toml",
+                "--placement",
+                "grid",
+                "--set",
+                "placement.cell=0.0001",
+            ][..],
             "above the limit of 5000000 probes",
         ),
     ] {
@@ -144,7 +168,8 @@ fn a_scene_of_lights_alone_bakes_captures_and_evaluates_with_a_box() {
         &[
             "volume",
             "lights.toml",
-            "--uniform",
+            "--layout",
+            "uniform",
             "--resolution",
             "3,3,3",
             "--samples",
@@ -158,7 +183,14 @@ fn a_scene_of_lights_alone_bakes_captures_and_evaluates_with_a_box() {
     // Without a box: what is missing, by name.
     for args in [
         &["bake", "nobox.toml", "--samples", "8"][..],
-        &["volume", "nobox.toml", "--adaptive", "-o", "v2.probes"],
+        &[
+            "volume",
+            "nobox.toml",
+            "--layout",
+            "octree",
+            "-o",
+            "v2.probes",
+        ],
     ] {
         fails_one_line(d, args, "no bake box: the scene has no geometry");
     }
@@ -174,11 +206,14 @@ fn eval_render_and_rig_refuse_another_scenes_lighting() {
         &[
             "bake",
             "lights.toml",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "27",
             "--samples",
             "16",
-            "--no-probe-weights",
+            "--set",
+            "blend.probe_weights=false",
             "-o",
             "l.probes",
             "--json",
@@ -263,7 +298,8 @@ fn eval_render_and_rig_refuse_another_scenes_lighting() {
         &[
             "volume",
             "lights.toml",
-            "--uniform",
+            "--layout",
+            "uniform",
             "--resolution",
             "3,3,3",
             "--samples",
@@ -300,7 +336,9 @@ fn progress_off_a_terminal_is_a_line_per_phase() {
         &[
             "bake",
             "lights.toml",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "27",
             "--samples",
             "16",
@@ -334,7 +372,14 @@ fn requests_are_not_silently_changed() {
     lights_scene(d);
     fails_one_line(
         d,
-        &["bake", "lights.toml", "--grid", "1"],
+        &[
+            "bake",
+            "lights.toml",
+            "--placement",
+            "grid",
+            "--budget",
+            "1",
+        ],
         "a grid has at least 2 probes per axis, 8 in all",
     );
     fails_one_line(
@@ -354,7 +399,9 @@ fn inspect_summarises_for_people_and_names_rig_files() {
         &[
             "bake",
             "lights.toml",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "27",
             "--samples",
             "16",
@@ -404,7 +451,9 @@ fn the_output_is_named_after_the_scene_and_a_bad_glb_says_so() {
         &[
             "bake",
             "lights.toml",
-            "--grid",
+            "--placement",
+            "grid",
+            "--budget",
             "8",
             "--samples",
             "8",

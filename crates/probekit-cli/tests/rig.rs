@@ -185,8 +185,24 @@ fn rig_interp_needs_a_volume() {
     let cloud = dir.path().join("c.probes");
     let c = cloud.to_str().unwrap();
     let bake = probekit()
-        .args(["bake", "--grid", "12", "--samples", "16", "--bounces", "1"])
-        .args(["--no-visibility", "--no-probe-weights", "-o", c])
+        .args([
+            "bake",
+            "--placement",
+            "grid",
+            "--budget",
+            "12",
+            "--samples",
+            "16",
+            "--set",
+            "capture.bounces=1",
+        ])
+        .args([
+            "--set",
+            "blend.distance_moments=0",
+            "--set",
+            "blend.cell_visibility=0",
+        ])
+        .args(["--set", "blend.probe_weights=false", "-o", c])
         .output()
         .unwrap();
     assert!(

@@ -1,4 +1,4 @@
-//! Criterion benchmarks of the alternative bases and codecs (issue 3):
+//! Criterion benchmarks of the alternative bases and codecs (ZH3, Geomerics L1, ambient cube, HL2):
 //! per-normal irradiance evaluation (scalar and a batch of 1024 normals),
 //! the ZH3 axis solve and fits per probe, ambient-cube fit, and the codecs.
 

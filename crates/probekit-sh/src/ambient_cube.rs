@@ -1,8 +1,7 @@
 //! Valve's ambient cube: six irradiance values along ±X, ±Y, ±Z blended by the
 //! squared normal components (McTaggart, *Half-Life 2 / Valve Source
 //! Shading*, GDC 2004; Mitchell, McTaggart, Green, *Shading in Valve's Source
-//! Engine*, SIGGRAPH 2006 course; described in Pettineo, *SG Series Part 1*,
-//! seed 002).
+//! Engine*, SIGGRAPH 2006 course; described in Pettineo, *SG Series Part 1*).
 //!
 //! `E(n) ≈ Σ_i n_i²·face(i, sign n_i)` for unit `n` (the weights sum to 1, so
 //! a constant irradiance is exact).
@@ -37,7 +36,7 @@ use glam::{DVec3, Vec3};
 use once_cell::race::OnceBox;
 
 /// Valve's ambient cube: irradiance (not divided by π, linear RGB) for the
-/// six axis directions, in the order +X, −X, +Y, −Y, +Z, −Z (seed 002).
+/// six axis directions, in the order +X, −X, +Y, −Y, +Z, −Z (McTaggart 2004).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AmbientCube {
     /// Irradiance along +X, −X, +Y, −Y, +Z, −Z.
@@ -119,7 +118,7 @@ fn moments() -> &'static [[f64; MAX_COEFFS]; 6] {
 
 impl AmbientCube {
     /// Irradiance for unit normal `n`: `Σ_i n_i²·face(i, sign n_i)` (Valve,
-    /// seed 002). Linear in the faces; a constant cube gives a constant.
+    /// McTaggart 2004). Linear in the faces; a constant cube gives a constant.
     pub fn irradiance(&self, n: Vec3) -> Vec3 {
         let w = ambient_cube_weights(n);
         self.faces

@@ -1,5 +1,5 @@
 //! Quantized storage of probes: the ratio-based encoding of Roughton et al.,
-//! *ZH3: Quadratic Zonal Harmonics* (I3D 2024, seed 004), RGB9E5 shared
+//! *ZH3: Quadratic Zonal Harmonics* (Roughton et al., I3D 2024), RGB9E5 shared
 //! exponents (`GL_EXT_texture_shared_exponent`), and plain f16 / f32 layouts.
 //!
 //! ## Why ratios are bounded
@@ -52,11 +52,11 @@ use crate::zh3::{shared_axis, zonal_projection, Zh3};
 use alloc::vec::Vec;
 use glam::Vec3;
 
-/// Bytes of a quantized L1 probe: 4 (DC RGB9E5) + 9 (snorm8) (seed 004).
+/// Bytes of a quantized L1 probe: 4 (DC RGB9E5) + 9 (snorm8) (Roughton et al., ZH3).
 pub const L1_BYTES: usize = 13;
-/// Bytes of a quantized shared-axis ZH3 probe: L1 + 3 zonal bytes (seed 004).
+/// Bytes of a quantized shared-axis ZH3 probe: L1 + 3 zonal bytes (Roughton et al., ZH3).
 pub const ZH3_BYTES: usize = 16;
-/// Bytes of a quantized L2 probe: 4 (DC RGB9E5) + 24 (snorm8) (seed 004).
+/// Bytes of a quantized L2 probe: 4 (DC RGB9E5) + 24 (snorm8) (Roughton et al., ZH3).
 pub const L2_BYTES: usize = 28;
 /// Bytes of an ambient cube: six RGB9E5 words.
 pub const AMBIENT_CUBE_BYTES: usize = 24;
@@ -214,7 +214,7 @@ fn decode_ratios(b: &[u8], out: &mut [Vec3]) {
     }
 }
 
-/// Encodes L1 radiance SH in 13 bytes (layout table in the module docs; seed 004).
+/// Encodes L1 radiance SH in 13 bytes (layout table in the module docs).
 pub fn encode_l1(c: &[Vec3; 4]) -> [u8; L1_BYTES] {
     let mut out = [0u8; L1_BYTES];
     encode_ratios(c, &mut out);
@@ -228,7 +228,7 @@ pub fn decode_l1(b: &[u8; L1_BYTES]) -> [Vec3; 4] {
     out
 }
 
-/// Encodes L2 radiance SH in 28 bytes (layout table in the module docs; seed 004).
+/// Encodes L2 radiance SH in 28 bytes (layout table in the module docs).
 pub fn encode_l2(c: &[Vec3; 9]) -> [u8; L2_BYTES] {
     let mut out = [0u8; L2_BYTES];
     encode_ratios(c, &mut out);
@@ -242,7 +242,7 @@ pub fn decode_l2(b: &[u8; L2_BYTES]) -> [Vec3; 9] {
     out
 }
 
-/// Encodes ZH3 in 16 bytes as **shared-axis** ZH3 (seed 004): the L1 part as
+/// Encodes ZH3 in 16 bytes as **shared-axis** ZH3 (Roughton et al., I3D 2024): the L1 part as
 /// [`encode_l1`], then per channel the zonal coefficient about the luminance
 /// axis of the *decoded* L1 ([`shared_axis`]), the axis the decoder will
 /// derive. The zonal coefficient is re-projected from `c.to_l2()` onto that
@@ -609,7 +609,7 @@ mod tests {
 
     /// Round-trip irradiance relative RMSE (over 1024 normals and the three
     /// channels) on random non-negative functions; the numbers are reported in
-    /// `docs/bench/shbases.md` (run with `--nocapture`).
+    /// BENCHMARKS.md, "SH bases on real environment maps" (run with `--nocapture`).
     #[test]
     fn round_trip_irradiance_error_on_non_negative_functions() {
         let dirs: Vec<Vec3> = fibonacci_sphere(1024).iter().map(|d| d.as_vec3()).collect();

@@ -2,9 +2,9 @@
 //! (Graham Hazel / Geomerics, "Reconstructing diffuse lighting from spherical
 //! harmonic data", reference implementation in Probulator; described in
 //! Pettineo, *SG Series Part 1*, and cited as \[Joseph15\] in Roughton et al.,
-//! *ZH3: Quadratic Zonal Harmonics*, I3D 2024 — seeds 002 and 004).
+//! *ZH3: Quadratic Zonal Harmonics*, I3D 2024).
 //!
-//! ## Normalisation (issue 3)
+//! ## Normalisation
 //!
 //! For one colour channel with radiance coefficients `c0..c3` (crate
 //! conventions), the band-1 part of the radiance is `Y1·(v·ω)` with
@@ -24,7 +24,7 @@
 //!
 //! Because the mean of `(p + 1)·q^p` over the sphere is 1, `E` keeps the mean
 //! irradiance `R0` exactly, is non-negative whenever `c0 ≥ 0`, and does not keep
-//! the linear moment for strong directionality (it over-brightens; Sloan & Silvennoinen 2020, cited in seed 004).
+//! the linear moment for strong directionality (it over-brightens; Sloan & Silvennoinen 2020, as cited by Roughton et al. 2024).
 
 // Index loops over colour channels and SH coefficients read like the formulas.
 #![allow(clippy::needless_range_loop)]
@@ -37,8 +37,8 @@ use glam::Vec3;
 /// Irradiance `E(n)` (not divided by π) for unit normal `n` from L1
 /// **radiance** SH `c`, by the Geomerics non-negative reconstruction, each
 /// colour channel separately with its own direction (module docs give the
-/// formula and normalisation; source: Hazel/Geomerics via Probulator, seed 002,
-/// normalised as issue 3 states).
+/// formula and normalisation; source: Hazel/Geomerics via Probulator,
+/// normalised so `E` keeps the mean irradiance `R0`).
 ///
 /// A channel with `c0 ≤ 0` (or non-finite) gives 0; a channel without a
 /// band-1 vector gives its mean irradiance `π·Y00·c0`. Never NaN for finite input.

@@ -2,7 +2,7 @@
 //! tangent-space directions, each storing one irradiance value (McTaggart,
 //! *Half-Life 2 / Valve Source Shading*, GDC 2004; Mitchell, McTaggart,
 //! Green, *Shading in Valve's Source Engine*, SIGGRAPH 2006; described in
-//! Pettineo, *SG Series Part 1*, seed 002).
+//! Pettineo, *SG Series Part 1*).
 //!
 //! **Tangent space**: +Z is the surface normal, X the tangent, Y the
 //! bitangent (this is the one place in probekit where +Z, not +Y, is "up").
@@ -37,7 +37,7 @@ const S13: f32 = 0.577_350_26; // 1/sqrt(3)
 
 /// The three HL2 basis directions in tangent space (+Z = surface normal):
 /// `(√(2/3), 0, 1/√3)`, `(−1/√6, 1/√2, 1/√3)`, `(−1/√6, −1/√2, 1/√3)` —
-/// orthonormal, each 54.7° from the normal (McTaggart 2004, seed 002).
+/// orthonormal, each 54.7° from the normal (McTaggart 2004).
 pub const HL2_BASIS: [Vec3; 3] = [
     Vec3::new(S23, 0.0, S13),
     Vec3::new(-S16, S12, S13),

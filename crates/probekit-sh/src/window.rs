@@ -4,7 +4,7 @@
 //! Truncating a sharp signal (a bright sun, a small area light) to a few SH
 //! bands makes it *ring*: the reconstruction overshoots and goes negative on
 //! the far side of the sphere (Sloan, *Stupid Spherical Harmonics (SH)
-//! Tricks*, GDC 2008, §"Windowing"; Pettineo, *SG Series Part 1*, seed 002).
+//! Tricks*, GDC 2008, §"Windowing"; Pettineo, *SG Series Part 1*).
 //! Windowing multiplies band `l` of the **radiance** coefficients by a factor
 //! `h_l ≤ 1` that falls with `l`, trading contrast for less ringing. Every
 //! window here has `h_0 = 1`, so the mean (and the irradiance of a constant

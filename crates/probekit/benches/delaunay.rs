@@ -1,6 +1,6 @@
 //! Tetrahedralization speed: 100 k uniform random points and a 47³ regular
 //! grid (103 823 points, every cube co-spherical). The Qhull peer runs on the
-//! same points from `scripts/bench_qhull.py`; see `docs/bench/delaunay.md`.
+//! same points from `scripts/bench_qhull.py`; see BENCHMARKS.md, "Delaunay tetrahedralization".
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;

@@ -3,7 +3,7 @@
 //! threads, beside obvhs's own raw rate (same BVH, obvhs's Möller–Trumbore triangle test, no
 //! hit record) in the same run.
 //!
-//! Run: `cargo bench -p probekit --bench trace`. Results: docs/bench/scene.md.
+//! Run: `cargo bench -p probekit --bench trace`. Results: BENCHMARKS.md, "Ray tracing".
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;

@@ -2,8 +2,9 @@
 //! ([`FileSummary`]) that serialises to JSON and prints as a few lines for
 //! people ([`FileSummary`]'s `Display`).
 
-use crate::format::{layout::VALIDITY_INVALID, BakeMetadata, FormatError, ProbeFile};
-use crate::format::{Placement, ProbeFileKind};
+use crate::format::ProbeFileKind;
+use crate::format::{layout::VALIDITY_INVALID, FormatError, ProbeFile};
+use crate::recipe::{BakeRecord, Part, PlacementReport, Recipe};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -40,14 +41,17 @@ pub struct FileSummary {
     /// Fitted probe weights: `{"min","median","max","below_half","above_two",
     /// "brightness_exponent","directional_exponent"}`.
     pub probe_weights: Option<serde_json::Value>,
-    /// Placement method and parameters, as recorded.
-    pub placement: Option<Placement>,
+    /// The resolved recipe the file was baked with (`probekit bake
+    /// --recipe` with it bakes the same file again).
+    pub recipe: Option<Recipe>,
+    /// What placement did (probe count, held-out error, light shells).
+    pub placed: Option<PlacementReport>,
     /// The scene the file was baked from, as it was named.
     pub scene: Option<String>,
     /// The scene's lighting hash, as recorded.
     pub scene_hash: Option<String>,
-    /// A shard part's `{"shard","shards","first_index","count","total"}`.
-    pub part: Option<serde_json::Value>,
+    /// A shard part's place in the whole bake.
+    pub part: Option<Part>,
     /// Irradiance rigs in the file.
     pub rigs: usize,
     /// A volume's `leaves`, `resolution`, `roots`, `max_depth` and
@@ -60,10 +64,8 @@ pub struct FileSummary {
 pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
     let by = file.bytes_by_section()?;
     let bytes = by.values().sum();
-    let meta = BakeMetadata::from_json(&file.metadata);
-    let part = serde_json::from_str::<serde_json::Value>(&file.metadata)
-        .ok()
-        .and_then(|v| v.get("part").cloned());
+    let meta = BakeRecord::from_json(&file.metadata);
+    let part = meta.as_ref().and_then(|m| m.part.clone());
     let invalid = file.validity.as_ref().map_or(0, |v| {
         v.iter().filter(|x| x.flags & VALIDITY_INVALID != 0).count()
     });
@@ -131,7 +133,8 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
                     "directional_exponent": file.directional_exponent,
                 })
             }),
-        placement: meta.as_ref().map(|m| m.placement.clone()),
+        recipe: meta.as_ref().map(|m| m.recipe.clone()),
+        placed: meta.as_ref().and_then(|m| m.placed.clone()),
         scene: meta
             .as_ref()
             .map(|m| m.scene.clone())
@@ -182,8 +185,12 @@ impl fmt::Display for FileSummary {
             }
             writeln!(f)?;
         }
-        if let Some(p) = &self.placement {
-            writeln!(f, "  placement: {}", p.method)?;
+        if let Some(r) = &self.recipe {
+            write!(f, "  placement: {}", r.placement.method())?;
+            if let Some(p) = &self.placed {
+                write!(f, ", {} probes placed", p.count)?;
+            }
+            writeln!(f)?;
         }
         let mut blend = Vec::new();
         if let Some(v) = &self.visibility {
@@ -218,6 +225,15 @@ impl fmt::Display for FileSummary {
                 "  {} hull slivers, {} unused probes",
                 self.hull_slivers, self.unused_probes
             )?;
+        }
+        if let Some(r) = &self.recipe {
+            writeln!(
+                f,
+                "  recipe (`bake --recipe` with it bakes this file again):"
+            )?;
+            for line in r.to_toml().lines() {
+                writeln!(f, "    {line}")?;
+            }
         }
         Ok(())
     }

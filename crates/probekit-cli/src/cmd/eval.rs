@@ -9,7 +9,7 @@
 //! (with the distance moments and cell visibility the file has, baked for
 //! the grid with the same settings, and the same query-time flags);
 //! `--plot FILE.png [--budgets 50,100,200,400]` runs a placement sweep
-//! (`probekit::eval::sweep`) on the same points and ground truth (every
+//! (`probekit::pipeline::sweep`) on the same points and ground truth (every
 //! swept cloud with the file's kinds of visibility data and the same
 //! query-time flags), draws rel. RMSE against probe count (log-log) and
 //! reports it under `"sweep"`. `--worst K` lists the K points that carry the
@@ -20,16 +20,15 @@ use super::util::{load_probes, parse_interp, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
-use probekit::blend::visibility_bake::VisibilityBake;
-use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::eval::sweep::{bake_blend_data, place_and_bake, plot_sweep, sweep, SWEEP_METHODS};
+use probekit::capture::{Baker, ReferenceSettings};
 use probekit::eval::{
     leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
     unlit_points, worst_points, Metrics,
 };
-use probekit::format::settings::settings_from_metadata;
-use probekit::placement::PlacementMethod;
+use probekit::pipeline::sweep::{plot_sweep, sweep, SWEEP_METHODS};
+use probekit::pipeline::Bake;
 use probekit::query::Predictor;
+use probekit::recipe::{BakeRecord, CellVisibility, Placement};
 use probekit::scene::{Aabb, Scene};
 use probekit::trace::free_space::{sample_points, EvalPoint};
 use probekit::trace::Tracer;
@@ -180,27 +179,29 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         a.worst,
         &predictor,
     );
-    let mut fallback = CaptureSettings::from_scene(&scene);
-    fallback.samples = scene.bake.samples.unwrap_or(super::bake::DEFAULT_SAMPLES);
-    let (mut settings, codec) = settings_from_metadata(&file.metadata, &fallback);
+    // The recipe the file was baked with (the defaults for a file that
+    // records none), with `--samples` for the bakes below.
+    let mut recipe = BakeRecord::from_json(&file.metadata)
+        .map(|r| r.recipe)
+        .unwrap_or_default();
     if let Some(n) = a.samples {
-        settings.samples = n;
+        recipe.capture.samples = n;
     }
     match a.compare.as_deref() {
         None => {}
         Some("grid") => {
-            let grid = PlacementMethod::Grid {
-                cell: None,
+            // The same recipe, placed on a grid of the file's probe count:
+            // the grid gets the blend data the evaluated file has.
+            recipe.placement = Placement::Grid {
                 budget: Some(file.positions.len().max(8)),
+                cell: None,
             };
             let ctx = || format!("{scene_name}: --compare grid");
             let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
-            let mut g = place_and_bake(&baker, scene.bake_box(), &grid, &settings, codec, &step)
-                .with_context(ctx)?;
-            // The grid gets the visibility data and probe weights the
-            // evaluated file has, so both blend the same way.
-            let kinds = VisibilityBake::like(&file, settings.seed);
-            bake_blend_data(&baker, &kinds, &settings, &mut g, &step).with_context(ctx)?;
+            let g = Bake::new(&scene, &scene_name, &recipe)
+                .and_then(|b| b.run(&step))
+                .with_context(ctx)?
+                .file;
             let mut gpred = Predictor::from_file(&g, interp).with_context(ctx)?;
             a.visibility.apply(&mut gpred)?;
             let gp = gpred.predict(&pts).with_context(ctx)?;
@@ -230,23 +231,22 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         // The swept clouds get the evaluated file's visibility data (less
         // what the flags turn off) and its query flags, so the curves blend
         // as the file does (the flags were checked by `apply` above).
-        let mut kinds = VisibilityBake::like(&file, settings.seed);
+        let blend = &mut recipe.blend;
         if a.visibility.no_visibility {
-            kinds.moments = None;
-            kinds.cell_subdivision = None;
+            blend.distance_moments = 0;
+            blend.cell_visibility = CellVisibility::Subdivision(0);
         } else if a.visibility.no_cell_visibility {
-            kinds.cell_subdivision = None;
+            blend.cell_visibility = CellVisibility::Subdivision(0);
         }
         if a.visibility.no_probe_weights {
-            kinds.probe_weights = None;
+            blend.probe_weights = false;
         }
         let rows = sweep(
-            &baker,
-            scene.bake_box(),
+            &scene,
+            &scene_name,
+            &recipe,
             &methods,
             &budgets,
-            &settings,
-            &kinds,
             &|p| a.visibility.set(p),
             &pts,
             &truth,

@@ -5,6 +5,7 @@ pub mod convert;
 pub mod eval;
 pub mod export;
 pub mod probes;
+pub mod recipe_args;
 pub mod render;
 pub mod rig;
 pub mod sh;

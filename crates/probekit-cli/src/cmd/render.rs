@@ -87,10 +87,8 @@ fn parse_camera(s: &str) -> Result<Camera> {
 
 /// Bounces of the bake that wrote `file` (its metadata), else the scene's default.
 fn bake_bounces(file: &ProbeFile, scene: &Scene) -> u32 {
-    serde_json::from_str::<serde_json::Value>(&file.metadata)
-        .ok()
-        .and_then(|v| v["settings"]["bounces"].as_u64())
-        .map(|b| b as u32)
+    probekit::pipeline::recorded_capture(file)
+        .map(|c| c.bounces)
         .unwrap_or_else(|| CaptureSettings::from_scene(scene).bounces)
 }
 

@@ -1,5 +1,5 @@
 //! `probekit rig MESH --scene SCENE [--probes BAKED] --rig SPEC --at x,y,z
-//! [--json] ...`: fits an irradiance rig (seed 000) to a mesh placed at a
+//! [--json] ...`: fits an irradiance rig (Yuan, Nowrouzezahrai & Sloan 2011) to a mesh placed at a
 //! point among the scene's lights and a baked probe file, splits the lights
 //! into analytic / transition / rig zones, and reports the per-vertex error
 //! against the exact lighting and the cost of a frame.

@@ -1,7 +1,7 @@
 //! Probe-cloud queries: which probes light a point, and with what weights.
 //!
 //! A [`TetMesh`] holds the probe positions and their Delaunay tetrahedra (as
-//! produced by the baker's `probekit::cloud::tetrahedralize`), each with its
+//! produced by the baker's `probekit::delaunay::tetrahedralize`), each with its
 //! four neighbours and a precomputed [`BaryMatrix`] (after Cupisz,
 //! GDC 2012: "a 3×3 matrix … 9 extra floats per tetrahedron").
 //!

@@ -156,7 +156,7 @@ pub struct OctreeNode {
 /// A single root cell copies the box's aspect ratio into every cell of the
 /// tree (an 8 × 3 × 4 m room gives cells 2.7× longer in x than in y); a
 /// grid of near-cubic roots keeps cells near-cubic at every depth, which is
-/// what interpolation error and the seed's cell-size heuristics assume
+/// what interpolation error and Tatarchuk's cell-size heuristics assume
 /// (format 1.3; see `docs/file-format.md`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Octree {
@@ -218,7 +218,8 @@ pub struct Gradients {
     pub data: Vec<Vec3>,
 }
 
-/// Basis along one axis of a tensor-product rig (seed 000, Yuan et al.).
+/// Basis along one axis of a tensor-product rig (Yuan, Nowrouzezahrai & Sloan,
+/// *Irradiance Rigs*, JGT 2011).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AxisModel {
     /// `{1}`: one function.
@@ -240,7 +241,7 @@ impl AxisModel {
     }
 }
 
-/// A rig model M(p, c) over the mesh's bounding box (seed 000).
+/// A rig model M(p, c) over the mesh's bounding box (Yuan et al., *Irradiance Rigs*, §2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RigModel {
     /// One SH vector.
@@ -266,7 +267,7 @@ impl RigModel {
     }
 }
 
-/// One entry of a rig's analytic/rig transition table (seed 000 §3).
+/// One entry of a rig's analytic/rig transition table (Yuan et al., *Irradiance Rigs*, §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transition {
     /// Light distance from the object's bounding-sphere centre, in

@@ -5,7 +5,7 @@
 //! ([`sample_points`](crate::trace::free_space::sample_points)), compute
 //! reference irradiance with [`Baker::reference_irradiance`], and compare an
 //! interpolation (a baked file through [`crate::query::Predictor`]).
-//! Placement comparisons and budget sweeps are [`sweep`].
+//! Placement comparisons and budget sweeps are [`crate::pipeline::sweep`].
 //!
 //! Metrics (RGB irradiance `E`, not divided by π):
 //! * `rel_rmse = sqrt(mean |E_pred − E_true|²) / sqrt(mean |E_true|²)` (normalised RMSE);
@@ -24,7 +24,6 @@
 //!   floor slabs, which the free-space test cannot tell from rooms — and
 //!   the leaks among them (counted in `leaks` too).
 
-pub mod sweep;
 #[cfg(test)]
 mod tests;
 

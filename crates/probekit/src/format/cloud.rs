@@ -3,7 +3,7 @@
 //! SH, the capture's validity, light groups and `META` JSON. Above the
 //! capture and the Delaunay code, which it takes its inputs from.
 
-use super::{encode_coefficients, BakeMetadata, FormatError, ProbeFile};
+use super::{encode_coefficients, FormatError, ProbeFile};
 use crate::capture::Validity;
 use crate::delaunay::{tetrahedralize, DelaunayError, HULL};
 use glam::{DMat3, DVec3, Vec3};
@@ -74,14 +74,14 @@ pub fn file_validity(v: &Validity) -> FileValidity {
 
 /// A complete probe-cloud file: tetrahedralizes `positions` (metres),
 /// stores their radiance SH (`sh`, all of one order) in `codec`, the
-/// validity (see [`file_validity`]) and `metadata` as JSON. Deterministic: equal inputs give equal
-/// bytes.
+/// validity (see [`file_validity`]) and `metadata` (the `META` text: a
+/// bake's record as JSON). Deterministic: equal inputs give equal bytes.
 pub fn cloud_file(
     positions: &[Vec3],
     sh: &[ShRgb],
     validity: &[FileValidity],
     codec: Codec,
-    metadata: &BakeMetadata,
+    metadata: &str,
 ) -> Result<ProbeFile, CloudFileError> {
     if sh.len() != positions.len() || validity.len() != positions.len() {
         return Err(CloudFileError::Mismatch(format!(
@@ -104,7 +104,7 @@ pub fn cloud_file(
     file.coefficients = coefficients;
     file.tetrahedra = Some(tet_section(positions, &t.tets, &t.neighbors));
     file.validity = Some(validity.to_vec());
-    file.metadata = metadata.to_json();
+    file.metadata = metadata.to_string();
     file.validate()?;
     Ok(file)
 }
@@ -167,15 +167,7 @@ pub(crate) fn test_cloud_file(positions: &[Vec3], sh: &[ShRgb]) -> ProbeFile {
         };
         positions.len()
     ];
-    let meta = BakeMetadata::new(
-        "0".into(),
-        super::Placement {
-            method: "manual".into(),
-            parameters: serde_json::json!({}),
-        },
-        serde_json::json!({}),
-    );
-    cloud_file(positions, sh, &validity, Codec::F32, &meta).expect("test cloud")
+    cloud_file(positions, sh, &validity, Codec::F32, "").expect("test cloud")
 }
 
 #[cfg(test)]
@@ -185,8 +177,6 @@ mod tests {
         assert_close, group_probe_points, mean_se, quick, red, two_group_room,
     };
     use crate::capture::{bake_points, BakeOutput, CaptureSettings};
-    use crate::format::settings::settings_json;
-    use crate::format::Placement;
 
     #[test]
     fn barycentric_matrices_reproduce_vertices() {
@@ -211,23 +201,9 @@ mod tests {
 
     /// A stored cloud file of a bake, with its light groups (as `bake --groups`).
     fn cloud_with_groups(out: &BakeOutput) -> ProbeFile {
-        let meta = BakeMetadata::new(
-            "0".into(),
-            Placement {
-                method: "manual".into(),
-                parameters: serde_json::json!({}),
-            },
-            settings_json(&out.settings, Codec::F32),
-        );
         let validity: Vec<_> = out.validity.iter().map(file_validity).collect();
-        let mut f = cloud_file(
-            &out.captured_positions,
-            &out.sh,
-            &validity,
-            Codec::F32,
-            &meta,
-        )
-        .unwrap();
+        let mut f =
+            cloud_file(&out.captured_positions, &out.sh, &validity, Codec::F32, "").unwrap();
         f.groups = light_groups(&out.groups, out.settings.order, Codec::F32).unwrap();
         f
     }

@@ -152,13 +152,12 @@ pub fn merge(
             }
         }
     }
-    let mut file = cloud_file(&positions, &sh, &validity, codec, &super::no_metadata())?;
+    let mut record = head.record.clone();
+    record.part = None;
+    let mut file = cloud_file(&positions, &sh, &validity, codec, &record.to_json())?;
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec)?;
     file.visibility = moments;
-    let mut record = head.record.clone();
-    record.part = None;
-    file.metadata = record.to_json();
     let Some(first) = read.first() else {
         return Err(bad("no parts to merge".into()));
     };

@@ -22,6 +22,7 @@
 
 mod merge;
 mod positions;
+pub mod sweep;
 mod volume;
 
 pub use merge::merge;
@@ -31,7 +32,7 @@ pub use volume::{bake_volume, bake_volume_from, VolumeReport};
 use crate::blend::visibility_bake::VisibilityBakeError;
 use crate::capture::{BakeError, BakeOutput, Baker, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity, light_groups, CloudFileError};
-use crate::format::{BakeMetadata, Codec, FormatError, Placement as OldPlacement, ProbeFile};
+use crate::format::{Codec, FormatError, ProbeFile};
 use crate::placement::{grid_points, PlacementError};
 use crate::recipe::{BakeRecord, Part, Placement, PlacementReport, Recipe, RecipeError};
 use crate::scene::{Aabb, BakeBoxError, Scene};
@@ -278,10 +279,9 @@ impl<'s> Bake<'s> {
             &sh,
             &validity,
             codec,
-            &no_metadata(),
+            &record.to_json(),
         )?;
         f.groups = light_groups(&groups, out.settings.order, codec)?;
-        f.metadata = record.to_json();
         Ok(f)
     }
 
@@ -443,15 +443,6 @@ fn stored(out: &BakeOutput, indirect_only: bool) -> (Vec<ShRgb>, Vec<(String, Ve
     } else {
         (out.sh.clone(), out.groups.clone())
     }
-}
-
-/// Placeholder metadata for [`cloud_file`]; the record replaces it.
-fn no_metadata() -> BakeMetadata {
-    BakeMetadata::new(
-        String::new(),
-        OldPlacement::default(),
-        serde_json::Value::Null,
-    )
 }
 
 /// The report of a finished file.

@@ -46,14 +46,14 @@ impl CodecName {
 
 impl Recipe {
     /// The box this recipe bakes `scene` in: its own, else the scene's
-    /// geometry bounds.
+    /// ([`Scene::bake_box`]: its `[bake] box` or its geometry bounds).
     pub fn bake_box_in(&self, scene: &Scene) -> Aabb {
         match self.bake_box {
             Some([lo, hi]) => Aabb {
                 min: Vec3::from(lo),
                 max: Vec3::from(hi),
             },
-            None => scene.bounds,
+            None => scene.bake_box(),
         }
     }
 

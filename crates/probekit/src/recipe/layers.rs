@@ -75,6 +75,47 @@ impl RecipeLayers {
         self
     }
 
+    /// Adds the scene file's `[bake]` table as a layer named `NAME [bake]`
+    /// (`box`; `samples`, `bounces` and `seed` as shorthands of the
+    /// `capture` keys; every other key as written). Nothing for a scene
+    /// without one.
+    pub fn push_scene(&mut self, name: &str, scene: &crate::scene::Scene) -> &mut Self {
+        let b = &scene.bake;
+        let mut table = b.recipe.clone();
+        if let Some(bx) = b.r#box {
+            table.insert(
+                "box".into(),
+                to_value(&[bx.min.to_array(), bx.max.to_array()]),
+            );
+        }
+        let mut capture = match table.remove("capture") {
+            Some(Value::Table(t)) => t,
+            Some(other) => {
+                // Left for the key check to refuse as written.
+                table.insert("capture".into(), other);
+                Table::new()
+            }
+            None => Table::new(),
+        };
+        let shorthands = [
+            ("samples", b.samples.map(u64::from)),
+            ("bounces", b.bounces.map(u64::from)),
+            ("seed", b.seed),
+        ];
+        for (key, v) in shorthands {
+            if let Some(v) = v {
+                capture.insert(key.into(), Value::Integer(v as i64));
+            }
+        }
+        if !capture.is_empty() && !table.contains_key("capture") {
+            table.insert("capture".into(), Value::Table(capture));
+        }
+        if table.is_empty() {
+            return self;
+        }
+        self.push_table(&format!("{name} [bake]"), table)
+    }
+
     /// Adds one key (`capture.samples`) set to `value`.
     pub fn push_value(&mut self, layer: &str, key: &str, value: Value) -> &mut Self {
         /// `{a = {b = value}}` for `["a", "b"]`.
@@ -141,6 +182,12 @@ impl RecipeLayers {
         recipe.validate()?;
         Ok(recipe)
     }
+}
+
+/// A value as a TOML value (through JSON, like [`to_table`]).
+fn to_value<T: serde::Serialize>(v: &T) -> Value {
+    let json = serde_json::to_string(v).unwrap_or_default();
+    serde_json::from_str(&json).unwrap_or(Value::Table(Table::new()))
 }
 
 /// A value as a TOML table (through JSON, so `f32`s keep their shortest

@@ -13,7 +13,7 @@
 //! layer names only the keys it changes; a layer that names another
 //! placement (or volume) `method` starts that section afresh from the
 //! method's defaults. The resolved recipe is what a bake stores in its file
-//! ([`crate::format::BakeRecord`]), what `inspect` prints and what `bake
+//! ([`crate::recipe::BakeRecord`]), what `inspect` prints and what `bake
 //! --print-recipe` prints; baking again from it gives the same file, byte
 //! for byte.
 //!
@@ -132,7 +132,7 @@ pub enum Placement {
         /// Candidate shells around small lights.
         light_shells: LightShellsName,
     },
-    /// Spawn-and-merge placement (Wang et al. 2019): an initial grid, then
+    /// Spawn-and-merge placement (Sukys 2014): an initial grid, then
     /// probes spawned between contrasting pairs and merged where similar.
     #[serde(alias = "spawn-merge")]
     SpawnAndMerge {
@@ -161,7 +161,7 @@ pub enum Placement {
         /// Most spawn/merge iterations.
         max_iterations: u32,
     },
-    /// Gradient-ascent placement (Wang et al. 2019): probes of an initial
+    /// Gradient-ascent placement (Sukys 2014): probes of an initial
     /// grid climb the irradiance gradient; dark probes are clustered.
     GradientAscent {
         /// Probes of the initial grid.

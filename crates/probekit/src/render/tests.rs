@@ -2,22 +2,15 @@ use super::objects::{eval_fit, fit_order, fit_sh};
 use super::*;
 use crate::capture::{bake_points, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity};
-use crate::format::{BakeMetadata, Codec, Placement};
+use crate::format::Codec;
 use crate::scene::{Aabb, Material, Triangle};
 use crate::trace::Ray;
 use glam::Vec2;
 use probekit_sh::project::fibonacci_point;
 use probekit_sh::ShRgb;
 
-fn meta() -> BakeMetadata {
-    BakeMetadata::new(
-        "0".into(),
-        Placement {
-            method: "grid".into(),
-            parameters: serde_json::json!({}),
-        },
-        serde_json::json!({}),
-    )
+fn meta() -> String {
+    String::new()
 }
 
 /// A cloud file of `positions`, every probe holding `sh`.

@@ -204,6 +204,7 @@ pub(crate) fn build() -> Scene {
             samples: None,
             bounces: None,
             seed: None,
+            recipe: Default::default(),
         },
         regions: REGIONS
             .iter()

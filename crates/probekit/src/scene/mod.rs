@@ -70,7 +70,11 @@ impl Default for EnvironmentDesc {
     }
 }
 
-/// Bake defaults from the scene file's `[bake]` table; command-line flags override them.
+/// The scene file's `[bake]` table: a partial bake recipe
+/// (`probekit::recipe`), which a recipe file and command-line flags
+/// override. `box`, `samples`, `bounces` and `seed` are also read here
+/// (the last three are shorthands of `capture.samples`, `capture.bounces`
+/// and `capture.seed`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BakeSettings {
     /// Where to place probes and evaluate (default: the geometry's bounds, see [`Scene::bake_box`]).
@@ -81,6 +85,9 @@ pub struct BakeSettings {
     pub bounces: Option<u32>,
     /// Random seed.
     pub seed: Option<u64>,
+    /// The other keys of the table as written (`placement`, `capture`,
+    /// `blend`, `codec`, `volume`): the recipe layer checks them.
+    pub recipe: toml::Table,
 }
 
 /// A named axis-aligned part of the scene, for per-region reports.

@@ -54,13 +54,16 @@ struct EnvEntry {
     rotation_y_degrees: Option<f32>,
 }
 
+/// `[bake]`: a partial recipe. Its own keys are checked here; the rest
+/// are checked against the recipe when a bake resolves it.
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct BakeEntry {
     r#box: Option<[[f32; 3]; 2]>,
     samples: Option<u32>,
     bounces: Option<u32>,
     seed: Option<u64>,
+    #[serde(flatten)]
+    recipe: toml::Table,
 }
 
 #[derive(Deserialize)]
@@ -262,6 +265,7 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             samples: b.samples,
             bounces: b.bounces,
             seed: b.seed,
+            recipe: b.recipe.clone(),
             ..Default::default()
         };
         if let Some([lo, hi]) = b.r#box {

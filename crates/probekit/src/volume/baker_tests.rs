@@ -451,10 +451,10 @@ fn depth_rows_partition_leaves_samples_and_volume() {
     assert!(std::fs::metadata(&p).unwrap().len() > 1000);
 }
 
-/// Draws docs/bench/img/volume_error_memory.png from the CSV named by
+/// Draws docs/img/volume_error_memory.png from the CSV named by
 /// `PROBEKIT_VOLBAKE_CSV` (`method,bytes,rel_rmse` rows, one line per
-/// method in file order), for docs/bench/volbake.md. Not a test: run with
-/// `--ignored` after the measurement script.
+/// method in file order), for BENCHMARKS.md, "Irradiance volumes against
+/// uniform grids". Not a test: run with `--ignored` after the measurement script.
 #[test]
 #[ignore]
 fn draw_error_memory_plot_from_bench_csv() {
@@ -475,7 +475,7 @@ fn draw_error_memory_plot_from_bench_csv() {
         s.1.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
     let out = std::env::var("PROBEKIT_VOLBAKE_PNG")
-        .unwrap_or_else(|_| "../../docs/bench/img/volume_error_memory.png".into());
+        .unwrap_or_else(|_| "../../docs/img/volume_error_memory.png".into());
     let title = std::env::var("PROBEKIT_VOLBAKE_TITLE")
         .unwrap_or_else(|_| "builtin:demo: eval rel. RMSE vs file bytes".into());
     crate::plot::line_chart_log(

@@ -58,7 +58,7 @@ pub struct AdaptiveSettings {
     pub geometry: bool,
     /// Geometry alone splits only cells shallower than this; deeper cells
     /// that contain geometry split only if the other heuristics (the
-    /// prediction test) say so. `max_depth` or more = the seed's rule (every
+    /// prediction test) say so. `max_depth` or more = Tatarchuk's rule (every
     /// cell touching a wall down to the finest level, which spends most of
     /// an interior's samples on walls the light field is smooth across).
     pub geometry_depth: u32,
@@ -107,7 +107,7 @@ pub struct AdaptiveSettings {
     /// Root cells per axis: the box is first cut into this grid and each
     /// root cell is an octree (a forest, format 1.3); depths count from the
     /// root cells. `None` = [`near_cubic_roots`] of the box; `Some([1, 1,
-    /// 1])` = the seed's single octree over the whole box, whose cells copy
+    /// 1])` = Tatarchuk's single octree over the whole box, whose cells copy
     /// the box's aspect ratio.
     pub roots: Option<[u32; 3]>,
 }

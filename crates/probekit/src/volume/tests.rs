@@ -1095,7 +1095,7 @@ fn noise_aware_refinement_ignores_noise_but_not_a_step() {
 }
 
 /// `geometry_depth`: geometry alone refines the slab's cells to the
-/// finest level under the seed's rule, only down to `geometry_depth` when
+/// finest level under Tatarchuk's rule, only down to `geometry_depth` when
 /// the field (constant, so the prediction test never fires) gives no reason.
 #[test]
 fn geometry_depth_caps_refinement_by_geometry_alone() {

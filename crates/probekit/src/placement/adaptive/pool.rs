@@ -25,7 +25,7 @@ pub(super) const LIGHT_SHELL_MAX: f32 = 2.5;
 /// interpolation between a probe close to the light and probes far from it
 /// overshoots in between; the geometric shells keep it even only as a set,
 /// and a small budget affords the inner shell alone. Measured on the duplex
-/// (docs/bench/shells.md): at 137 probes one point 0.5 m from a ceiling
+/// (docs/notes/light-shells.md): at 137 probes one point 0.5 m from a ceiling
 /// light, predicted 4.5× its truth, held 60 % of the squared error
 /// (rel_rmse 1.66); starting the shells at a quarter of the spacing gave
 /// 0.71. At larger budgets the 0.3 m floor decides, as before.
@@ -38,7 +38,7 @@ pub(super) const LIGHT_SHELL_INNER: f32 = 0.25;
 /// the hull and a wall is lit by the nearest hull face, which can span a
 /// whole room or reach across a wall; pool points along the walls let the
 /// ranking see that error and put probes there. Measured on builtin:demo
-/// (docs/bench/placement.md): without it, a point by room A's lamp and the
+/// (BENCHMARKS.md, "Placement against uniform grids"): without it, a point by room A's lamp and the
 /// back wall was predicted at 0.5 % of its truth.
 pub(in crate::placement) const BOUNDARY_SNAP: f32 = 1.2 * PROBE_CLEARANCE;
 

@@ -104,7 +104,7 @@ impl Adaptive<'_, '_, '_> {
         // In the bake box and seen from the probe it refines: a candidate
         // behind a wall (or outside the building, beyond an outer wall)
         // does not refine this probe's neighbourhood, and one outside sees
-        // the sky and sun (docs/bench/placement.md, leaks).
+        // the sky and sun (BENCHMARKS.md, "Placement against uniform grids").
         let bbox = self.bbox;
         let cands: Vec<Vec3> = cands
             .into_par_iter()

@@ -19,14 +19,14 @@ const RELATIVE_WEIGHT: f32 = 0.05;
 /// The ranking multiplies each point's error by `d^SPACING_EXPONENT`, `d`
 /// its distance to the nearest probe of its tetrahedron: a point far from
 /// probes stands for more volume than one next to them (`d³` would be the
-/// volume itself). Measured on builtin:demo (docs/bench/placement.md): 1.5
+/// volume itself). Measured on builtin:demo (BENCHMARKS.md, "Placement against uniform grids"): 1.5
 /// beat 0 and 3 at 500 probes and tied at 2000.
 const SPACING_EXPONENT: f32 = 1.5;
 
 /// Share of each insertion batch reserved for pool points that leak through
 /// geometry (fail the leak test [`leaks`] while blending a probe hidden
 /// behind a surface), ahead of the error ranking. Measured on builtin:demo
-/// (docs/bench/placement.md): 0.5 beat 0 at 66, 125 and 256 probes.
+/// (BENCHMARKS.md, "Placement against uniform grids"): 0.5 beat 0 at 66, 125 and 256 probes.
 pub(super) const LEAK_SHARE: f32 = 0.5;
 
 /// The normals the pool's leak test checks: the 6 axes, 12 face diagonals
