@@ -1,7 +1,7 @@
 //! The GPU buffers the WGSL library reads, and packers that fill them from
 //! loaded probe files (`docs/shaders.md`, "Buffers", gives every layout).
 //!
-//! * [`pack_cloud`]: a [`ProbeCloud`] — positions, coefficients,
+//! * [`pack_cloud`]: a [`ProbeCloud`](probekit_runtime::ProbeCloud) — positions, coefficients,
 //!   tetrahedra, hull faces, distance moments (`VISM`), cell visibility
 //!   (`CVSP`) and occluder planes (`CPLN`), fitted probe weights with the
 //!   brightness and directional exponents (`PWGT`), the per-probe
