@@ -4,10 +4,12 @@
 //
 // Pure functions only (no bindings): concatenate this file in front of your
 // shader. `probekit_buffers.wgsl` adds storage-buffer access (codecs from a
-// u32 buffer, probe-cloud blending, trilinear volume sampling). docs/shaders.md
-// explains the buffer layouts; every function here reproduces the Rust
-// function named in its comment (crates/probekit-sh), and the tests of
-// crates/probekit-shaders compare them on random inputs.
+// u32 buffer, uniform volumes: trilinear, Taylor, tricubic),
+// `probekit_cloud.wgsl` probe-cloud blending and `probekit_bricks.wgsl`
+// octree volumes from their brick atlas. docs/shaders.md explains the
+// buffer layouts; every function here reproduces the Rust function named in
+// its comment (crates/probekit-sh, crates/probekit-runtime), and the tests
+// of crates/probekit-shaders compare them on random inputs and baked files.
 //
 // Conventions (crates/probekit-sh/src/lib.rs): right-handed, +Y up; linear
 // RGB; real SH indexed l*(l+1)+m with Sloan's Condon–Shortley phase
@@ -67,12 +69,15 @@ struct PkAmbientCube {
 /// A uniform probe volume (Rust `probekit_runtime::format::VolumeGrid`):
 /// box corners in metres and probes per axis; probes sit at the corners of
 /// `resolution - 1` cells per axis, probe (i, j, k) at index
-/// `i + rx·(j + ry·k)`. As a uniform: min at byte 0, max at 16,
-/// resolution at 32, 48 bytes.
+/// `i + rx·(j + ry·k)`; `gradient_coeffs`: how many coefficients per probe
+/// have stored gradients (the `GRAD` section's order², 0 without
+/// gradients, at most 9 read). As a uniform: min at byte 0, max at 16,
+/// resolution at 32, gradient_coeffs at 44, 48 bytes.
 struct PkVolumeGrid {
     min: vec3<f32>,
     max: vec3<f32>,
     resolution: vec3<u32>,
+    gradient_coeffs: u32,
 }
 
 // --- SH basis and irradiance -------------------------------------------------
@@ -222,7 +227,7 @@ fn pk_zh3_hallucinate(l1: array<vec3<f32>, 4>) -> PkZh3 {
 }
 
 /// Irradiance (not divided by π) at unit normal `n` from L1 radiance SH by
-/// hallucinated ZH3 (probekit_sh::zh3::zh3_hallucinated_irradiance; seed 004,
+/// hallucinated ZH3 (probekit_sh::zh3::zh3_hallucinated_irradiance; Roughton et al. 2024,
 /// `SHHallucinateZH3Irradiance`, kernel π/4 for our unnormalised cosine).
 fn pk_irradiance_zh3_hallucinated(sh: PkShL1, n: vec3<f32>) -> vec3<f32> {
     return pk_irradiance_zh3(pk_zh3_hallucinate(sh.c), n);
@@ -267,24 +272,37 @@ fn pk_blend_l2(a: PkShL2, b: PkShL2, c: PkShL2, d: PkShL2, w: vec4<f32>) -> PkSh
     return out;
 }
 
-/// Lower corner (probe coordinates) and fractions of the trilinear cell of
-/// `grid` containing `pos`; positions outside the box clamp to its faces.
-/// Returns the corner in `.xyz` of `corner` and the fractions in `frac`.
+/// The trilinear cell of a position in a uniform volume: lower corner
+/// (probe coordinates), fractions in it, and the cell size per axis
+/// (metres; 0 on an axis with one probe).
 struct PkVolumeCell {
     corner: vec3<u32>,
     frac: vec3<f32>,
+    size: vec3<f32>,
 }
 
-/// The trilinear cell of `pos` in `grid` (probes at cell corners, positions
-/// clamped to the box; an axis with one probe or an empty extent has
-/// fraction 0).
+/// The trilinear cell of `pos` in `grid`, positions clamped to the box; an
+/// axis with one probe has corner 0, fraction 0 and size 0 (the grid branch
+/// of probekit_runtime::volume::Volume::sample_sh, same arithmetic).
 fn pk_volume_cell(grid: PkVolumeGrid, pos: vec3<f32>) -> PkVolumeCell {
-    let res = max(grid.resolution, vec3<u32>(1u));
-    let extent = grid.max - grid.min;
-    let t = clamp((pos - grid.min) / extent, vec3<f32>(0.0), vec3<f32>(1.0));
-    let u = select(vec3<f32>(0.0), t, extent > vec3<f32>(0.0)) * vec3<f32>(res - vec3<u32>(1u));
-    let corner = min(vec3<u32>(floor(u)), res - vec3<u32>(1u));
-    return PkVolumeCell(corner, u - vec3<f32>(corner));
+    let p = clamp(pos, grid.min, grid.max);
+    var cell: PkVolumeCell;
+    for (var a = 0u; a < 3u; a = a + 1u) {
+        let r = grid.resolution[a];
+        if r < 2u {
+            continue;
+        }
+        let h = (grid.max[a] - grid.min[a]) / f32(r - 1u);
+        var x = 0.0;
+        if h > 0.0 {
+            x = (p[a] - grid.min[a]) / h;
+        }
+        let i = min(u32(max(floor(x), 0.0)), r - 2u);
+        cell.corner[a] = i;
+        cell.frac[a] = clamp(x - f32(i), 0.0, 1.0);
+        cell.size[a] = h;
+    }
+    return cell;
 }
 
 /// Index of probe (i, j, k) of `grid`: i + rx·(j + ry·k), coordinates clamped
@@ -305,6 +323,24 @@ fn pk_decode_rgb9e5(x: u32) -> vec3<f32> {
     let m = vec3<f32>(f32(x & 0x1ffu), f32((x >> 9u) & 0x1ffu), f32((x >> 18u) & 0x1ffu));
     // ldexp is exact (exp2 of an integer need not be on every platform).
     return ldexp(m, vec3<i32>(e));
+}
+
+/// IEEE binary16 in the low 16 bits of `h` → f32, exactly (what
+/// `unpack2x16float` gives, without the float16 capability it needs in
+/// naga; probekit_runtime::format::f16_to_f32).
+fn pk_decode_f16(h: u32) -> f32 {
+    let sign = (h & 0x8000u) << 16u;
+    let e = (h >> 10u) & 0x1fu;
+    let m = h & 0x3ffu;
+    if e == 0u {
+        // Zero and subnormals: m·2^−24, exact in f32.
+        let v = ldexp(f32(m), -24);
+        return select(v, -v, sign != 0u);
+    }
+    if e == 31u {
+        return bitcast<f32>(sign | 0x7f800000u | (m << 13u));
+    }
+    return bitcast<f32>(sign | ((e + 112u) << 23u) | (m << 13u));
 }
 
 /// Byte `i` of a little-endian word window.
@@ -398,4 +434,178 @@ fn pk_decode_ambient_cube_window(w: ptr<function, array<u32, 8>>, start: u32) ->
         cube.faces[k] = pk_decode_rgb9e5(pk_window_u32(w, start + 4u * k));
     }
     return cube;
+}
+
+// --- cloud blending helpers (probekit_runtime::cloud) ------------------------
+// Pure parts of the blend of probekit_cloud.wgsl: the Freudenthal–Kuhn
+// interpolation of cell visibility bits, the octahedral map and Chebyshev
+// test of the distance moments, and renormalization.
+
+/// DDGI's crush threshold and visibility floor
+/// (probekit_runtime::cloud::visibility::VISIBILITY_CRUSH, VISIBILITY_FLOOR).
+const PK_VISIBILITY_CRUSH: f32 = 0.2;
+const PK_VISIBILITY_FLOOR: f32 = 1e-4;
+
+/// Lattice index of the point with cumulative numerators `c` in a cell with
+/// `vertices` corners (cell_visibility::lattice, `lattice_index`).
+fn pk_lattice_index(vertices: u32, c: vec3<u32>) -> u32 {
+    let tri = c.y * (c.y + 1u) / 2u;
+    if vertices == 3u {
+        return tri + c.x;
+    }
+    return c.z * (c.z + 1u) * (c.z + 2u) / 6u + tri + c.x;
+}
+
+/// Lattice points of a cell with `vertices` corners at subdivision `k`
+/// (cell_visibility::lattice_len).
+fn pk_lattice_len(vertices: u32, k: u32) -> u32 {
+    if vertices == 3u {
+        return (k + 1u) * (k + 2u) / 2u;
+    }
+    return (k + 1u) * (k + 2u) * (k + 3u) / 6u;
+}
+
+/// The Freudenthal–Kuhn sub-simplex holding a point: its lattice indices
+/// and the point's weights in it (unused fourth slot of a hull face: 0).
+struct PkKuhn {
+    idx: vec4<u32>,
+    w: vec4<f32>,
+}
+
+/// `before(a, b)`: axis a sorts before axis b (decreasing fraction, ties
+/// the higher axis first).
+fn pk_kuhn_before(f: vec3<f32>, a: u32, b: u32) -> bool {
+    return f[a] > f[b] || (f[a] == f[b] && a > b);
+}
+
+/// The Freudenthal–Kuhn sub-simplex of the `k`-subdivided cell with
+/// `vertices` (3 or 4) corners holding the point with barycentric
+/// coordinates `bary` (probekit_runtime::cloud::cell_visibility::kuhn_weights).
+fn pk_kuhn_weights(bary: vec4<f32>, vertices: u32, k: u32) -> PkKuhn {
+    let dim = vertices - 1u;
+    let kf = f32(max(k, 1u));
+    let top = max(k, 1u) - 1u;
+    var y = vec3<f32>(0.0);
+    var acc = 0.0;
+    var prev = 0.0;
+    for (var j = 0u; j < dim; j = j + 1u) {
+        acc = acc + max(bary[j], 0.0);
+        let v = clamp(acc * kf, prev, kf);
+        y[j] = v;
+        prev = v;
+    }
+    var base = vec3<u32>(0u);
+    var f = vec3<f32>(0.0);
+    for (var j = 0u; j < dim; j = j + 1u) {
+        let b = min(u32(max(floor(y[j]), 0.0)), top);
+        base[j] = b;
+        f[j] = clamp(y[j] - f32(b), 0.0, 1.0);
+    }
+    var axes = vec3<u32>(0u, 1u, 2u);
+    for (var i = 0u; i < dim; i = i + 1u) {
+        for (var j = 0u; j + 1u < dim - i; j = j + 1u) {
+            if pk_kuhn_before(f, axes[j + 1u], axes[j]) {
+                let t = axes[j];
+                axes[j] = axes[j + 1u];
+                axes[j + 1u] = t;
+            }
+        }
+    }
+    var out: PkKuhn;
+    var c = base;
+    out.idx[0] = pk_lattice_index(vertices, c);
+    out.w[0] = 1.0 - f[axes[0]];
+    for (var m = 0u; m < dim; m = m + 1u) {
+        c[axes[m]] = c[axes[m]] + 1u;
+        out.idx[m + 1u] = pk_lattice_index(vertices, c);
+        if m + 1u < dim {
+            out.w[m + 1u] = f[axes[m]] - f[axes[m + 1u]];
+        } else {
+            out.w[m + 1u] = f[axes[m]];
+        }
+    }
+    return out;
+}
+
+/// ±1 by the sign bit (+1 for +0.0) (visibility, `sign_not_zero`).
+fn pk_sign_not_zero(x: f32) -> f32 {
+    return select(1.0, -1.0, (bitcast<u32>(x) & 0x80000000u) != 0u);
+}
+
+/// Octahedral encoding with +Y at the centre (visibility::oct_encode;
+/// Cigolle et al. 2014).
+fn pk_oct_encode(d: vec3<f32>) -> vec2<f32> {
+    let l1 = abs(d.x) + abs(d.y) + abs(d.z);
+    var n = vec3<f32>(0.0, 1.0, 0.0);
+    if l1 > 0.0 {
+        n = d / l1;
+    }
+    if n.y >= 0.0 {
+        return vec2<f32>(n.x, n.z);
+    }
+    return vec2<f32>((1.0 - abs(n.z)) * pk_sign_not_zero(n.x), (1.0 - abs(n.x)) * pk_sign_not_zero(n.z));
+}
+
+/// Texel (i, j) ∈ [−1, S]² after the octahedral border wrap
+/// (visibility, `wrapped_index`).
+fn pk_oct_wrapped_index(s: i32, i_in: i32, j_in: i32) -> u32 {
+    var i = i_in;
+    var j = j_in;
+    if i < 0 {
+        i = 0;
+        j = s - 1 - j;
+    } else if i >= s {
+        i = s - 1;
+        j = s - 1 - j;
+    }
+    if j < 0 {
+        j = 0;
+        i = s - 1 - i;
+    } else if j >= s {
+        j = s - 1;
+        i = s - 1 - i;
+    }
+    return u32(j * s + i);
+}
+
+/// DDGI's visibility of a point at distance `d` from moments μ, μ2: the
+/// one-sided Chebyshev bound to the power `sharpness`, crushed below 0.2,
+/// floored at 1e-4 (visibility::chebyshev_visibility, chebyshev_bound;
+/// Majercik et al. 2019, Donnelly & Lauritzen 2006).
+fn pk_chebyshev_visibility(d: f32, mu: f32, mu2: f32, min_variance: f32, sharpness: u32) -> f32 {
+    var c = 1.0;
+    // `!(d <= mu)` is also true for a NaN distance, which the bound treats
+    // as visible; d is never NaN here.
+    if d > mu {
+        let variance = max(mu2 - mu * mu, min_variance);
+        let t = d - mu;
+        c = variance / (variance + t * t);
+    }
+    var v = 1.0;
+    for (var k = 0u; k < sharpness; k = k + 1u) {
+        v = v * c;
+    }
+    if v < PK_VISIBILITY_CRUSH {
+        v = v * (v * v / (PK_VISIBILITY_CRUSH * PK_VISIBILITY_CRUSH));
+    }
+    return max(v, PK_VISIBILITY_FLOOR);
+}
+
+fn pk_finite(x: f32) -> bool {
+    return abs(x) <= 3.4028235e38;
+}
+
+/// `w / Σw` (`ok`), or `w` unchanged where the sum is not positive and
+/// finite (`!ok`).
+struct PkNormalized {
+    w: vec4<f32>,
+    ok: bool,
+}
+
+fn pk_normalized(w: vec4<f32>) -> PkNormalized {
+    let sum = w.x + w.y + w.z + w.w;
+    if pk_finite(sum) && sum > 0.0 {
+        return PkNormalized(w / sum, true);
+    }
+    return PkNormalized(w, false);
 }

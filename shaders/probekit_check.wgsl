@@ -1,10 +1,16 @@
 // probekit_check.wgsl — the reference compute kernel: calls every function
-// of probekit.wgsl and probekit_buffers.wgsl once per test case. The tests of
+// of probekit.wgsl, probekit_buffers.wgsl, probekit_cloud.wgsl and
+// probekit_bricks.wgsl once per test case. The tests of
 // crates/probekit-shaders run it on wgpu and compare with the Rust functions;
 // the generator compiles it so that naga's HLSL/GLSL/MSL back ends emit the
 // whole library (they only write what an entry point can reach).
 //
-// Case `i` reads PK_CHECK_IN floats at check_in[i·PK_CHECK_IN]:
+// check_params.mode selects what a case checks; every mode reads
+// PK_CHECK_IN floats at check_in[i·PK_CHECK_IN] and writes PK_CHECK_OUT
+// floats at check_out[i·PK_CHECK_OUT].
+//
+// Mode 0 (PK_CHECK_LIBRARY): the pure functions and codecs.
+// Case `i` reads:
 //   [0..3) unit normal n, [3..30) L2 radiance SH (coefficient-major RGB),
 //   [30..33) ZH3 zonal, [33..36) ZH3 unit axis (shared), [36..54) ambient cube
 //   faces RGB, [54..58) cloud probe indices (as floats), [58..62) cloud weights,
@@ -18,9 +24,27 @@
 //   [135..138) radiance of the L2 SH in direction n, [138..150) L1 blend of
 //   (L1 part of the input, decoded L1 probe i, the same two again) with the
 //   cloud weights, [150..168) decoded ambient cube i (faces RGB).
+//
+// Modes 1–3 read [0..3) a position p, [3..6) a unit normal n, and mode 1
+// also [6] a cell index and [7] 1 for a hull face, 0 for a tetrahedron.
+// Mode 1 (PK_CHECK_CLOUD), from pk_cloud: [0..4) the blend's probes,
+//   [4..8) its weights, [8..35) pk_cloud_sh, [35..38) pk_cloud_irradiance,
+//   [38..41) pk_cloud_irradiance_zh3, [41..43) pk_cloud_locate(p) as
+//   (index, hull flag), [43..70) pk_cloud_sh in the located cell.
+// Mode 2 (PK_CHECK_VOLUME), from pk_sh_coeffs/pk_sh_gradients and
+//   check_params.grid: [27k..27k+27) pk_volume_sample with interpolation k
+//   (trilinear, Taylor, tricubic), [81+3k..84+3k) its irradiance,
+//   [90+3k..93+3k) pk_volume_irradiance_zh3.
+// Mode 3 (PK_CHECK_BRICKS), from pk_bricks: [0..27) pk_bricks_sh_l2,
+//   [27..30) pk_bricks_irradiance, [30..33) pk_bricks_irradiance_zh3,
+//   [33..36) the atlas coordinate of pk_bricks_lookup.
 
 const PK_CHECK_IN: u32 = 68u;
 const PK_CHECK_OUT: u32 = 168u;
+const PK_CHECK_LIBRARY: u32 = 0u;
+const PK_CHECK_CLOUD: u32 = 1u;
+const PK_CHECK_VOLUME: u32 = 2u;
+const PK_CHECK_BRICKS: u32 = 3u;
 
 struct PkCheckParams {
     grid: PkVolumeGrid,
@@ -29,11 +53,12 @@ struct PkCheckParams {
     zh3_offset: u32,
     l2_offset: u32,
     cube_offset: u32,
+    mode: u32,
 }
 
-@group(0) @binding(2) var<storage, read> check_in: array<f32>;
-@group(0) @binding(3) var<storage, read_write> check_out: array<f32>;
-@group(0) @binding(4) var<uniform> check_params: PkCheckParams;
+@group(0) @binding(8) var<storage, read> check_in: array<f32>;
+@group(0) @binding(9) var<storage, read_write> check_out: array<f32>;
+@group(0) @binding(10) var<uniform> check_params: PkCheckParams;
 
 fn check_in_vec3(k: u32) -> vec3<f32> {
     return vec3<f32>(check_in[k], check_in[k + 1u], check_in[k + 2u]);
@@ -57,12 +82,50 @@ fn check_put_l2(k: u32, sh: PkShL2) {
     }
 }
 
-@compute @workgroup_size(64)
-fn pk_check(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if i >= check_params.count {
-        return;
+fn check_cloud(a: u32, o: u32) {
+    let p = check_in_vec3(a);
+    let n = check_in_vec3(a + 3u);
+    var cell = u32(check_in[a + 6u]);
+    if check_in[a + 7u] != 0.0 {
+        cell = cell | PK_CLOUD_HULL;
     }
+    let w = pk_cloud_weights(cell, p);
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        check_out[o + k] = f32(w.probes[k]);
+        check_out[o + 4u + k] = w.weights[k];
+    }
+    let sh = pk_cloud_blend(w);
+    check_put_l2(o + 8u, sh);
+    check_put(o + 35u, pk_cloud_irradiance(cell, p, n));
+    check_put(o + 38u, pk_cloud_irradiance_zh3(cell, p, n));
+    let located = pk_cloud_locate(p);
+    check_out[o + 41u] = f32(located & ~PK_CLOUD_HULL);
+    check_out[o + 42u] = f32(located >> 31u);
+    check_put_l2(o + 43u, pk_cloud_sh(located, p));
+}
+
+fn check_volume(a: u32, o: u32) {
+    let p = check_in_vec3(a);
+    let n = check_in_vec3(a + 3u);
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        let sh = pk_volume_sample(check_params.grid, p, k);
+        check_put_l2(o + 27u * k, sh);
+        check_put(o + 81u + 3u * k, pk_irradiance_l2(sh, n));
+        check_put(o + 90u + 3u * k, pk_volume_irradiance_zh3(check_params.grid, p, k, n));
+    }
+}
+
+fn check_bricks(a: u32, o: u32) {
+    let p = check_in_vec3(a);
+    let n = check_in_vec3(a + 3u);
+    check_put_l2(o, pk_bricks_sh_l2(p));
+    check_put(o + 27u, pk_bricks_irradiance(p, n));
+    check_put(o + 30u, pk_bricks_irradiance_zh3(p, n));
+    check_put(o + 33u, pk_bricks_lookup(p).coord);
+}
+
+/// Mode 0 for case `i`.
+fn check_library(i: u32) {
     let a = i * PK_CHECK_IN;
     let o = i * PK_CHECK_OUT;
     let n = check_in_vec3(a);
@@ -104,5 +167,56 @@ fn pk_check(@builtin(global_invocation_id) gid: vec3<u32>) {
     let cq = pk_load_ambient_cube_at(check_params.cube_offset + 24u * i);
     for (var k = 0u; k < 6u; k = k + 1u) {
         check_put(o + 150u + 3u * k, cq.faces[k]);
+    }
+}
+
+/// Every mode, by check_params.mode: the kernel the generated HLSL, GLSL
+/// and MSL are written for (it reaches every function).
+@compute @workgroup_size(64)
+fn pk_check(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= check_params.count {
+        return;
+    }
+    let a = i * PK_CHECK_IN;
+    let o = i * PK_CHECK_OUT;
+    if check_params.mode == PK_CHECK_CLOUD {
+        check_cloud(a, o);
+    } else if check_params.mode == PK_CHECK_VOLUME {
+        check_volume(a, o);
+    } else if check_params.mode == PK_CHECK_BRICKS {
+        check_bricks(a, o);
+    } else {
+        check_library(i);
+    }
+}
+
+// One kernel per mode, so that a test compiles only what it checks.
+
+@compute @workgroup_size(64)
+fn pk_check_library(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < check_params.count {
+        check_library(gid.x);
+    }
+}
+
+@compute @workgroup_size(64)
+fn pk_check_cloud(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < check_params.count {
+        check_cloud(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
+    }
+}
+
+@compute @workgroup_size(64)
+fn pk_check_volume(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < check_params.count {
+        check_volume(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
+    }
+}
+
+@compute @workgroup_size(64)
+fn pk_check_bricks(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < check_params.count {
+        check_bricks(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
     }
 }

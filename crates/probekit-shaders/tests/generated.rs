@@ -1,8 +1,13 @@
 //! The WGSL sources validate with naga, and `shaders/generated/` holds exactly
 //! what the generator produces from them.
 
+use probekit_shaders::layout::{
+    BRICKS_HEADER, CLOUD_FLAG_CELLS, CLOUD_FLAG_PROBE_WEIGHTS, CLOUD_FLAG_VISIBILITY, CLOUD_HEADER,
+    CLOUD_HEADER_WORDS, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
+};
 use probekit_shaders::{
-    full_wgsl, generate, validate_wgsl, PROBEKIT_BUFFERS_WGSL, PROBEKIT_WGSL, REGENERATE_COMMAND,
+    full_wgsl, generate, library_wgsl, validate_wgsl, PROBEKIT_BRICKS_WGSL, PROBEKIT_BUFFERS_WGSL,
+    PROBEKIT_CLOUD_WGSL, PROBEKIT_WGSL, REGENERATE_COMMAND,
 };
 use std::path::PathBuf;
 
@@ -34,12 +39,78 @@ fn wgsl_validates_with_naga() {
         );
     }
     assert!(module.entry_points.is_empty());
-    // … with the buffer access, and the full module with the check kernel.
+    // … with the buffer access, with the cloud and the bricks, and the full
+    // module with the check kernels.
     let lib_buffers = format!("{PROBEKIT_WGSL}\n{PROBEKIT_BUFFERS_WGSL}");
     validate_wgsl("probekit_buffers.wgsl", &lib_buffers).unwrap_or_else(|e| panic!("{e}"));
+    let (library, _) =
+        validate_wgsl("probekit library", &library_wgsl()).unwrap_or_else(|e| panic!("{e}"));
+    for f in [
+        "pk_volume_sample",
+        "pk_volume_irradiance_zh3",
+        "pk_cloud_weights",
+        "pk_cloud_sh",
+        "pk_cloud_irradiance",
+        "pk_cloud_irradiance_zh3",
+        "pk_cloud_locate",
+        "pk_bricks_sh_l2",
+        "pk_bricks_irradiance",
+        "pk_bricks_irradiance_zh3",
+    ] {
+        assert!(
+            library
+                .functions
+                .iter()
+                .any(|(_, g)| g.name.as_deref() == Some(f)),
+            "the library lacks {f}"
+        );
+    }
+    assert!(library.entry_points.is_empty());
     let (full, _) =
         validate_wgsl("probekit_check.wgsl", &full_wgsl()).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(full.entry_points.len(), 1);
+    assert_eq!(full.entry_points.len(), 5);
+}
+
+/// The `u32` value of `const NAME: u32 = Vu;` in `source`.
+fn wgsl_const(source: &str, name: &str) -> u32 {
+    let prefix = format!("const {name}: u32 = ");
+    let start = source
+        .find(&prefix)
+        .unwrap_or_else(|| panic!("no const {name}"))
+        + prefix.len();
+    let end = start + source[start..].find("u;").expect("a u32 literal");
+    let text = &source[start..end];
+    match text.strip_prefix("0x") {
+        Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
+        None => text.parse().unwrap(),
+    }
+}
+
+/// The buffer layouts the packers write are the ones the WGSL reads.
+#[test]
+fn layout_constants_agree_with_the_wgsl() {
+    for (name, word) in CLOUD_HEADER {
+        assert_eq!(wgsl_const(PROBEKIT_CLOUD_WGSL, name), word as u32, "{name}");
+    }
+    assert!(CLOUD_HEADER.iter().all(|&(_, w)| w < CLOUD_HEADER_WORDS));
+    for (name, word) in BRICKS_HEADER {
+        assert_eq!(
+            wgsl_const(PROBEKIT_BRICKS_WGSL, name),
+            word as u32,
+            "{name}"
+        );
+    }
+    for (name, value) in [
+        ("PK_CLOUD_FLAG_VISIBILITY", CLOUD_FLAG_VISIBILITY),
+        ("PK_CLOUD_FLAG_CELLS", CLOUD_FLAG_CELLS),
+        ("PK_CLOUD_FLAG_PROBE_WEIGHTS", CLOUD_FLAG_PROBE_WEIGHTS),
+        ("PK_CLOUD_HULL", CLOUD_HULL),
+        ("PK_CLOUD_NONE", CLOUD_NONE),
+        ("PK_CLOUD_TET_WORDS", CLOUD_TET_WORDS as u32),
+        ("PK_CLOUD_HULL_WORDS", CLOUD_HULL_WORDS as u32),
+    ] {
+        assert_eq!(wgsl_const(PROBEKIT_CLOUD_WGSL, name), value, "{name}");
+    }
 }
 
 #[test]
@@ -53,6 +124,10 @@ fn generated_files_are_up_to_date() {
             "pk_irradiance_geomerics_l1",
             "pk_volume_sh_l2",
             "pk_decode_zh3_window",
+            "pk_volume_sample",
+            "pk_cloud_weights",
+            "pk_cloud_locate",
+            "pk_bricks_sh_l2",
         ] {
             assert!(f.contents.contains(name), "{} lacks {name}", f.name);
         }

@@ -1,6 +1,6 @@
-//! Runs the WGSL library (kernel `pk_check`) through `wgpu` on a CPU Vulkan
-//! adapter (Mesa lavapipe, installed by `.ci/run`) and compares every result
-//! with the Rust evaluation of `probekit-sh` on random inputs. Prints
+//! Runs the WGSL library (kernel `pk_check`, mode 0) through `wgpu` on a CPU
+//! Vulkan adapter (Mesa lavapipe, installed by `.ci/run`) and compares every
+//! result with the Rust evaluation of `probekit-sh` on random inputs. Prints
 //! `SKIPPED: no wgpu adapter` and returns when no adapter exists.
 //!
 //! The volume sampler is checked against an independent fact rather than a
@@ -20,8 +20,10 @@ use probekit_sh::codec::{
 use probekit_sh::convolve::{eval_sh, irradiance_l1, irradiance_l2};
 use probekit_sh::geomerics::irradiance_geomerics_l1;
 use probekit_sh::zh3::{zh3_hallucinate, zh3_hallucinated_irradiance, Zh3};
-use probekit_shaders::{full_wgsl, CHECK_ENTRY_POINT, CHECK_IN_FLOATS, CHECK_OUT_FLOATS};
-use wgpu::util::DeviceExt;
+use probekit_shaders::{CHECK_IN_FLOATS, CHECK_OUT_FLOATS};
+
+mod common;
+use common::{adapter_or_skip, flat, Buffers, Gpu, Report, Rng, MODE_LIBRARY};
 
 const CASES: usize = 256;
 
@@ -46,37 +48,6 @@ const GRIDS: [Grid; 2] = [
         resolution: [1, 3, 2],
     },
 ];
-
-/// xorshift64*: deterministic test inputs without a dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next_f32(&mut self) -> f32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next_f32()
-    }
-    fn unit(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length();
-            if l > 0.1 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-    fn below(&mut self, n: usize) -> usize {
-        ((self.next_f32() * n as f32) as usize).min(n - 1)
-    }
-}
 
 /// Magnitude of case `case`'s SH: 1e-3 … 1e3, so that the RGB9E5 DC of the
 /// codecs runs through many exponents.
@@ -273,11 +244,11 @@ fn make_inputs(g: &Grid) -> Inputs {
     inp
 }
 
-fn params_bytes(g: &Grid, offsets: [u32; 4]) -> Vec<u8> {
-    // PkCheckParams: PkVolumeGrid (min @0, max @16, resolution @32; 48 B),
-    // count @48, l1/zh3/l2/cube offsets @52..68, size rounded to 80.
-    let mut b = vec![0u8; 80];
-    let put_f = |b: &mut Vec<u8>, at: usize, v: Vec3| {
+/// The `PkVolumeGrid` uniform of `g` (min @0, max @16, resolution @32,
+/// no gradients).
+fn grid_bytes(g: &Grid) -> [u8; 48] {
+    let mut b = [0u8; 48];
+    let put_f = |b: &mut [u8; 48], at: usize, v: Vec3| {
         for (k, x) in v.to_array().iter().enumerate() {
             b[at + 4 * k..at + 4 * k + 4].copy_from_slice(&x.to_le_bytes());
         }
@@ -287,206 +258,30 @@ fn params_bytes(g: &Grid, offsets: [u32; 4]) -> Vec<u8> {
     for (k, r) in g.resolution.iter().enumerate() {
         b[32 + 4 * k..36 + 4 * k].copy_from_slice(&r.to_le_bytes());
     }
-    b[48..52].copy_from_slice(&(CASES as u32).to_le_bytes());
-    for (k, o) in offsets.iter().enumerate() {
-        b[52 + 4 * k..56 + 4 * k].copy_from_slice(&o.to_le_bytes());
-    }
     b
-}
-
-/// A CPU (software) Vulkan adapter, else any Vulkan adapter, else `None`.
-fn adapter() -> Option<wgpu::Adapter> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::VULKAN;
-    let instance = wgpu::Instance::new(desc);
-    let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
-    let mut best: Option<wgpu::Adapter> = None;
-    for a in adapters {
-        let cpu = a.get_info().device_type == wgpu::DeviceType::Cpu;
-        if cpu || best.is_none() {
-            best = Some(a);
-            if cpu {
-                break;
-            }
-        }
-    }
-    best.or_else(|| {
-        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            force_fallback_adapter: true,
-            ..Default::default()
-        }))
-        .ok()
-    })
-}
-
-fn run_gpu(adapter: &wgpu::Adapter, g: &Grid, inp: &Inputs) -> Vec<f32> {
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("probekit-shaders test"),
-        required_limits: adapter.limits(),
-        ..Default::default()
-    }))
-    .expect("request_device");
-    let source = full_wgsl();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("probekit"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("pk_check"),
-        layout: None,
-        module: &module,
-        entry_point: Some(CHECK_ENTRY_POINT),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let storage = |label: &str, data: &[u8]| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: data,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
-    let to_bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-    let words: Vec<u8> = inp.words.iter().flat_map(|x| x.to_le_bytes()).collect();
-    let b_words = storage("pk_probe_words", &words);
-    let b_sh = storage("pk_sh_coeffs", &to_bytes(&inp.grid_sh));
-    let b_in = storage("check_in", &to_bytes(&inp.input));
-    let out_size = (CASES * CHECK_OUT_FLOATS * 4) as u64;
-    let b_out = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("check_out"),
-        size: out_size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let b_params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("check_params"),
-        contents: &params_bytes(g, inp.offsets),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let b_read = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: out_size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: b_words.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: b_sh.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: b_in.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: b_out.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: b_params.as_entire_binding(),
-            },
-        ],
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(CASES.div_ceil(64) as u32, 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&b_out, 0, &b_read, 0, out_size);
-    queue.submit([enc.finish()]);
-    let slice = b_read.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |r| r.expect("map_async"));
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("device poll");
-    let data = slice.get_mapped_range().expect("mapped range");
-    data.chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect()
-}
-
-/// Largest error of each quantity, with the first failures.
-#[derive(Default)]
-struct Report {
-    /// Magnitude of the inputs the next checks derive from.
-    unit: f32,
-    rows: Vec<(&'static str, f32)>,
-    failures: Vec<String>,
-}
-
-impl Report {
-    /// Compares `gpu` with `cpu` component-wise:
-    /// |gpu − cpu| ≤ tol·(unit + |cpu|∞).
-    fn check(&mut self, name: &'static str, case: usize, gpu: &[f32], cpu: &[f32], tol: f32) {
-        assert_eq!(gpu.len(), cpu.len());
-        let scale = self.unit + cpu.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-        let err = gpu
-            .iter()
-            .zip(cpu)
-            .fold(0.0f32, |m, (g, c)| m.max((g - c).abs()))
-            / scale;
-        let err = if gpu.iter().all(|x| x.is_finite()) {
-            err
-        } else {
-            f32::INFINITY
-        };
-        match self.rows.iter_mut().find(|r| r.0 == name) {
-            Some(r) => r.1 = r.1.max(err),
-            None => self.rows.push((name, err)),
-        }
-        if (err.is_nan() || err > tol) && self.failures.len() < 20 {
-            self.failures.push(format!(
-                "{name}, case {case}: gpu {gpu:?} vs rust {cpu:?} (rel. error {err:e})"
-            ));
-        }
-    }
-}
-
-fn flat(v: &[Vec3]) -> Vec<f32> {
-    v.iter().flat_map(|x| x.to_array()).collect()
 }
 
 #[test]
 fn wgsl_matches_rust_on_random_inputs() {
-    let Some(adapter) = adapter() else {
-        use std::io::Write;
-        // Straight to stderr: the test harness captures print!, and a skip must show.
-        let _ = writeln!(
-            std::io::stderr(),
-            "SKIPPED: no wgpu adapter (install Mesa lavapipe: apt-get install mesa-vulkan-drivers)"
-        );
+    let Some(adapter) = adapter_or_skip() else {
         return;
     };
-    let info = adapter.get_info();
-    println!(
-        "adapter: {} ({:?}, {:?})",
-        info.name, info.device_type, info.backend
-    );
+    let gpu = Gpu::new(&adapter, "pk_check_library");
     let mut rep = Report::default();
     for g in &GRIDS {
         let inp = make_inputs(g);
-        let out = run_gpu(&adapter, g, &inp);
+        let buffers = Buffers {
+            words: inp.words.clone(),
+            sh: inp.grid_sh.clone(),
+            grid: grid_bytes(g),
+            offsets: inp.offsets,
+            ..Default::default()
+        };
+        let out = gpu.run(MODE_LIBRARY, &inp.input, &buffers);
         assert_eq!(out.len(), CASES * CHECK_OUT_FLOATS);
         compare(g, &inp, &out, &mut rep);
     }
-    for (name, err) in &rep.rows {
-        println!("{name:>30}: max relative error {err:.2e}");
-    }
-    assert!(
-        rep.failures.is_empty(),
-        "WGSL differs from Rust:\n{}",
-        rep.failures.join("\n")
-    );
+    rep.finish("library");
 }
 
 /// Compares one run of `pk_check` with probekit-sh.

@@ -293,6 +293,11 @@ impl VisibilityMaps {
         self.sharpness = k.min(16);
     }
 
+    /// Minimum variance `σ²_min` of the test, m² ([`MIN_VISIBILITY_VARIANCE`]).
+    pub fn min_variance(&self) -> f32 {
+        self.min_variance
+    }
+
     /// Sets the minimum variance `σ²_min` (m²; non-finite or negative values
     /// are ignored).
     pub fn set_min_variance(&mut self, v: f32) {

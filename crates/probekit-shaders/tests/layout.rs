@@ -1,0 +1,412 @@
+//! The packers of `probekit_shaders::layout` on the CPU (no adapter
+//! needed): every section of the cloud buffer holds the runtime's data at
+//! the offsets its header gives, the hull-face rows reproduce the
+//! projection onto a face's plane (checked against a plane computed
+//! independently), the volume and brick buffers hold their inputs where
+//! `docs/shaders.md` says, and bad input is a typed error.
+
+// Index loops over coefficients read like the layout tables.
+#![allow(clippy::needless_range_loop)]
+
+use glam::Vec3;
+use probekit_runtime::cloud::directional::{directions, DirectionTable};
+use probekit_runtime::cloud::{
+    face_neighbors, lattice_tets, CellPlanes, CellVisibility, TetMesh, VisibilityMaps,
+};
+use probekit_runtime::format::{Coefficients, Gradients, ProbeFileKind, VolumeGrid};
+use probekit_runtime::sh::basis::eval_l2;
+use probekit_runtime::sh::LUMINANCE;
+use probekit_runtime::{ProbeCloud, ProbeFile};
+use probekit_shaders::layout::{
+    pack_bricks, pack_cloud, pack_volume_grid, BrickAtlas, BrickEncoding, LayoutError,
+    CLOUD_HEADER, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
+};
+
+/// xorshift32 in [0, 1).
+struct Rng(u32);
+
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        (self.0 >> 8) as f32 / (1 << 24) as f32
+    }
+}
+
+/// Header word `name` of `CLOUD_HEADER`.
+fn h(words: &[u32], name: &str) -> usize {
+    let i = CLOUD_HEADER
+        .iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("{name}"))
+        .1;
+    words[i] as usize
+}
+
+fn f(words: &[u32], i: usize) -> f32 {
+    f32::from_bits(words[i])
+}
+
+fn v3(words: &[u32], i: usize) -> Vec3 {
+    Vec3::new(f(words, i), f(words, i + 1), f(words, i + 2))
+}
+
+/// A cloud on an irregularly spaced 3 × 3 × 2 lattice with random SH,
+/// distance moments, cell visibility, one occluder plane and probe weights.
+fn test_cloud() -> ProbeCloud {
+    let xs = [0.0, 1.0, 2.5];
+    let ys = [0.0, 1.3, 2.0];
+    let zs = [0.0, 0.8];
+    let mut positions = Vec::new();
+    for z in zs {
+        for y in ys {
+            for x in xs {
+                positions.push(Vec3::new(x, y, z));
+            }
+        }
+    }
+    let tets = lattice_tets([3, 3, 2]);
+    let neighbours = face_neighbors(&tets).unwrap();
+    let mesh = TetMesh::new(positions.clone(), tets, neighbours).unwrap();
+    let mut rng = Rng(7);
+    let coeffs: Vec<Vec3> = (0..positions.len() * 9)
+        .map(|i| {
+            let v = Vec3::new(rng.next(), rng.next(), rng.next());
+            if i % 9 == 0 {
+                v + 0.5
+            } else {
+                v - 0.5
+            }
+        })
+        .collect();
+    let mut cloud = ProbeCloud::new(mesh, 3, coeffs).unwrap();
+    let res = 3;
+    let moments = (0..positions.len() * res * res)
+        .map(|_| {
+            let mu = 0.5 + 2.0 * rng.next();
+            [mu, mu * mu + rng.next()]
+        })
+        .collect();
+    cloud
+        .set_visibility_maps(Some(VisibilityMaps::new(res as u32, 5.0, moments).unwrap()))
+        .unwrap();
+    let (t, hf) = (cloud.mesh().tets().len(), cloud.mesh().hull_face_count());
+    let k = 2;
+    let len = probekit_runtime::cloud::cell_visibility::records_len(k, t, hf).unwrap();
+    // Every third record byte random, the rest all ones: some cells clear.
+    let mut bits = vec![0xffu8; len];
+    for (i, b) in bits.iter_mut().enumerate() {
+        if i % 3 == 0 && i < len / 2 {
+            *b = (rng.next() * 255.0) as u8;
+        }
+    }
+    // Clear padding bits so the records are canonical.
+    let dense = CellVisibility::new(k, t, hf, bits).unwrap();
+    let canonical = CellVisibility::new(k, t, hf, dense.to_dense()).unwrap();
+    cloud.set_cell_visibility_bits(Some(canonical)).unwrap();
+    cloud
+        .set_cell_planes(Some(
+            CellPlanes::new(t, vec![3], vec![[1.0, 0.0, 0.0, 0.7]]).unwrap(),
+        ))
+        .unwrap();
+    cloud
+        .set_probe_weights(Some(
+            (0..positions.len()).map(|i| 0.5 + i as f32 * 0.1).collect(),
+        ))
+        .unwrap();
+    cloud.set_brightness_weighting(0.5).unwrap();
+    cloud.set_directional_brightness(0.5).unwrap();
+    cloud
+}
+
+#[test]
+fn cloud_buffer_holds_the_runtime_data() {
+    let cloud = test_cloud();
+    let packed = pack_cloud(&cloud).unwrap();
+    let w = &packed.words;
+    let mesh = cloud.mesh();
+    let probes = cloud.probe_count();
+    let tets = mesh.tets().len();
+    let hull = mesh.hull_face_count();
+    assert_eq!(h(w, "PK_CLOUD_H_PROBES"), probes);
+    assert_eq!(h(w, "PK_CLOUD_H_TETS"), tets);
+    assert_eq!(h(w, "PK_CLOUD_H_HULL_FACES"), hull);
+    assert_eq!(h(w, "PK_CLOUD_H_COEFFS"), 9);
+    assert_eq!(h(w, "PK_CLOUD_H_FLAGS"), 7);
+    assert_eq!(f(w, 5), 0.5);
+    assert_eq!(f(w, 6), 0.5);
+
+    // Per probe: positions, coefficients (the range the struct names),
+    // luminance, directional luminance, weights.
+    let pos = h(w, "PK_CLOUD_H_POSITIONS");
+    let coe = h(w, "PK_CLOUD_H_COEFFICIENTS");
+    assert_eq!(packed.coefficients, coe..coe + probes * 27);
+    let table = DirectionTable::new();
+    for i in 0..probes {
+        assert_eq!(v3(w, pos + 3 * i), mesh.positions()[i]);
+        for c in 0..9 {
+            assert_eq!(v3(w, coe + 27 * i + 3 * c), cloud.probe_sh(i)[c]);
+        }
+        let lum = LUMINANCE.dot(cloud.probe_sh(i)[0]);
+        assert_eq!(f(w, h(w, "PK_CLOUD_H_LUMINANCE") + i), lum);
+        let dl = table.luminance(cloud.probe_sh(i));
+        for (d, l) in dl.iter().enumerate() {
+            assert_eq!(f(w, h(w, "PK_CLOUD_H_DIR_LUMINANCE") + 12 * i + d), *l);
+        }
+        assert_eq!(
+            f(w, h(w, "PK_CLOUD_H_PROBE_WEIGHTS") + i),
+            cloud.probe_weights().unwrap()[i]
+        );
+    }
+
+    // Tetrahedra: probes, barycentric matrix, neighbours (hull faces coded).
+    let tr = h(w, "PK_CLOUD_H_TET_RECORDS");
+    let hr = h(w, "PK_CLOUD_H_HULL_RECORDS");
+    let mut hull_seen = vec![false; hull];
+    for t in 0..tets {
+        let r = tr + CLOUD_TET_WORDS * t;
+        assert_eq!(&w[r..r + 4], &mesh.tets()[t]);
+        let b = mesh.bary(t as u32);
+        for k in 0..3 {
+            assert_eq!(v3(w, r + 4 + 3 * k), b.rows[k]);
+        }
+        assert_eq!(v3(w, r + 13), b.origin);
+        for face in 0..4 {
+            let n = w[r + 16 + face];
+            match mesh.neighbor(t as u32, face) {
+                Some(u) => assert_eq!(n, u),
+                None => {
+                    assert_ne!(n & CLOUD_HULL, 0);
+                    let hf = (n & !CLOUD_HULL) as usize;
+                    hull_seen[hf] = true;
+                    let mut a = mesh.hull_face_probes(hf as u32).unwrap().to_vec();
+                    let mut e: Vec<u32> = (0..4)
+                        .filter(|&k| k != face)
+                        .map(|k| mesh.tets()[t][k])
+                        .collect();
+                    a.sort_unstable();
+                    e.sort_unstable();
+                    assert_eq!(a, e, "tet {t} face {face}");
+                }
+            }
+        }
+    }
+    assert!(hull_seen.iter().all(|&s| s));
+
+    // Hull faces: probes, adjacency, and rows that reproduce the projection
+    // onto the face's plane and the parameter along each edge.
+    let mut rng = Rng(99);
+    for hf in 0..hull {
+        let r = hr + CLOUD_HULL_WORDS * hf;
+        let q = mesh.hull_face_probes(hf as u32).unwrap();
+        assert_eq!(&w[r..r + 3], &q);
+        let [a, b, c] = q.map(|i| mesh.positions()[i as usize]);
+        for k in 0..3 {
+            let g = w[r + 3 + k] as usize;
+            let (u, v) = (q[(k + 1) % 3], q[(k + 2) % 3]);
+            let gq = mesh.hull_face_probes(g as u32).unwrap();
+            let at = |x: u32| gq.iter().position(|&y| y == x).unwrap();
+            assert_eq!((at(v) + 1) % 3, at(u), "face {g} holds edge {v}→{u}");
+        }
+        let n = (b - a).cross(c - a).normalize();
+        for _ in 0..8 {
+            let p = Vec3::new(rng.next(), rng.next(), rng.next()) * 4.0 - 1.0;
+            let proj = p - n * n.dot(p - a);
+            let lb = v3(w, r + 6).dot(p - a);
+            let lc = v3(w, r + 9).dot(p - a);
+            let back = a * (1.0 - lb - lc) + b * lb + c * lc;
+            assert!((back - proj).length() < 1e-5, "{back} {proj}");
+        }
+        for (k, (u, v)) in [(a, b), (a, c), (b, c)].into_iter().enumerate() {
+            let e = v3(w, r + 12 + 3 * k);
+            assert!((e.dot(v - u) - 1.0).abs() < 1e-6);
+            assert!(e.dot((v - u).normalize().any_orthonormal_vector()).abs() < 1e-6);
+        }
+    }
+
+    // Distance moments as the maps hold them, with the test's settings.
+    let maps = cloud.visibility_maps().unwrap();
+    let res = h(w, "PK_CLOUD_H_VIS_RESOLUTION");
+    assert_eq!(res, 3);
+    assert_eq!(f(w, 8), maps.bias());
+    assert_eq!(w[9], maps.sharpness());
+    assert_eq!(f(w, 10), maps.min_variance());
+    let mo = h(w, "PK_CLOUD_H_MOMENTS");
+    for i in 0..probes {
+        for (t, m) in maps.probe_map(i).iter().enumerate() {
+            let k = mo + 2 * (i * res * res + t);
+            assert_eq!([f(w, k), f(w, k + 1)], *m);
+        }
+    }
+
+    // Cells: a record's byte offset into the bits (the dense record there),
+    // the occluder plane, or none for a clear cell.
+    let cells = cloud.cell_visibility_bits().unwrap();
+    let k = cells.subdivision();
+    assert_eq!(h(w, "PK_CLOUD_H_CELL_SUBDIVISION"), k as usize);
+    let dense = cells.to_dense();
+    let bits: Vec<u8> = w[h(w, "PK_CLOUD_H_CELL_BITS")..]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let rb = |v| probekit_runtime::cloud::cell_visibility::record_bytes(v, k);
+    let (mut records, mut clear) = (0, 0);
+    for cell in 0..tets + hull {
+        let e = w[h(w, "PK_CLOUD_H_CELLS") + cell];
+        let (start, len) = if cell < tets {
+            (cell * rb(4), rb(4))
+        } else {
+            (tets * rb(4) + (cell - tets) * rb(3), rb(3))
+        };
+        if cell == 3 {
+            assert_eq!(e, CLOUD_HULL);
+            let p = h(w, "PK_CLOUD_H_PLANES");
+            assert_eq!(
+                [f(w, p), f(w, p + 1), f(w, p + 2), f(w, p + 3)],
+                [1.0, 0.0, 0.0, 0.7]
+            );
+        } else if e == CLOUD_NONE {
+            clear += 1;
+            assert!(dense[start..start + len]
+                .iter()
+                .enumerate()
+                .all(|(i, &b)| { b == 0xff || i == len - 1 }));
+        } else {
+            records += 1;
+            let e = e as usize;
+            assert_eq!(&bits[e..e + len], &dense[start..start + len], "cell {cell}");
+        }
+    }
+    assert!(records > 0 && clear > 0, "{records} records, {clear} clear");
+
+    // The directional tables: A_l·Y_c(d) and (4π/12)·Y_c(d)/A_l, computed
+    // here from the basis and the directions.
+    let dt = h(w, "PK_CLOUD_H_DIR_TABLES");
+    let band = |c: usize| match c {
+        0 => std::f32::consts::PI,
+        1..=3 => 2.0 * std::f32::consts::PI / 3.0,
+        _ => std::f32::consts::PI / 4.0,
+    };
+    for (d, dir) in directions().into_iter().enumerate() {
+        let y = eval_l2(dir);
+        for c in 0..9 {
+            let irr = f(w, dt + 9 * d + c);
+            let proj = f(w, dt + 108 + 9 * d + c);
+            assert!((irr - band(c) * y[c]).abs() < 1e-6);
+            assert!((proj - 4.0 * std::f32::consts::PI / 12.0 * y[c] / band(c)).abs() < 1e-6);
+        }
+    }
+
+    // The start grid: dimensions, then a tetrahedron per cell.
+    let g = h(w, "PK_CLOUD_H_START_GRID");
+    let dims = [w[g + 6], w[g + 7], w[g + 8]];
+    let n = dims.iter().product::<u32>() as usize;
+    assert!(n >= 1);
+    assert_eq!(w.len(), g + 9 + n);
+    assert!(w[g + 9..].iter().all(|&t| (t as usize) < tets));
+}
+
+#[test]
+fn volume_grid_layout() {
+    let res = [3u32, 2, 2];
+    let count = 12;
+    let coeffs: Vec<Vec3> = (0..count * 9).map(|i| Vec3::splat(i as f32)).collect();
+    let mut file = ProbeFile::new(
+        ProbeFileKind::Volume,
+        Coefficients::from_f32(3, &coeffs).unwrap(),
+    );
+    file.positions = vec![Vec3::ZERO; count];
+    file.grid = Some(VolumeGrid {
+        min: Vec3::new(-1.0, 0.0, 1.0),
+        max: Vec3::new(1.0, 2.0, 3.0),
+        resolution: res,
+    });
+    file.gradients = Some(Gradients {
+        order: 2,
+        data: (0..count * 3 * 4)
+            .map(|i| Vec3::splat(-(i as f32)))
+            .collect(),
+    });
+    let v = pack_volume_grid(&file).unwrap();
+    let word = |i: usize| u32::from_le_bytes(v.grid[i..i + 4].try_into().unwrap());
+    assert_eq!(f32::from_bits(word(0)), -1.0);
+    assert_eq!(f32::from_bits(word(16 + 8)), 3.0);
+    assert_eq!([word(32), word(36), word(40)], res);
+    assert_eq!(word(44), 4, "gradient coefficients");
+    for p in 0..count {
+        for c in 0..9 {
+            assert_eq!(v.coefficients[27 * p + 3 * c], (9 * p + c) as f32);
+        }
+        for a in 0..3 {
+            for c in 0..9 {
+                let want = if c < 4 {
+                    -(((p * 3 + a) * 4 + c) as f32)
+                } else {
+                    0.0
+                };
+                assert_eq!(v.gradients[81 * p + 27 * a + 3 * c + 2], want);
+            }
+        }
+    }
+    // A cloud, and a volume without a grid, are refused.
+    let cloud = ProbeFile::cloud(vec![Vec3::ZERO], 1, &[Vec3::ONE]).unwrap();
+    assert!(matches!(
+        pack_volume_grid(&cloud),
+        Err(LayoutError::Volume(_))
+    ));
+    let mut no_grid = file.clone();
+    no_grid.grid = None;
+    assert!(pack_volume_grid(&no_grid).is_err());
+}
+
+#[test]
+fn bricks_layout_and_errors() {
+    // One brick of 5³ texels, L1 in f16: 3 textures of 8 bytes per texel.
+    let texels = 125;
+    let tex: Vec<Vec<u8>> = (0..3)
+        .map(|g| (0..texels * 8).map(|i| (i + g) as u8).collect())
+        .collect();
+    let refs: Vec<&[u8]> = tex.iter().map(|t| &t[..]).collect();
+    let ind = [0u8, 0, 0, 0];
+    let atlas = BrickAtlas {
+        encoding: BrickEncoding::F16,
+        coeffs: 4,
+        min: [0.0, 1.0, 2.0],
+        max: [1.0, 2.0, 3.0],
+        cells: [1, 1, 1],
+        atlas: [5, 5, 5],
+        ratio_bounds: &[],
+        indirection: &ind,
+        textures: &refs,
+    };
+    let w = pack_bricks(&atlas).unwrap();
+    assert_eq!(w[0], 0);
+    assert_eq!(w[1], 4);
+    assert_eq!(f32::from_bits(w[3]), 1.0);
+    assert_eq!(&w[8..14], &[1, 1, 1, 5, 5, 5]);
+    assert_eq!(w[w[14] as usize], 0);
+    let t0 = w[15] as usize;
+    assert_eq!(w[t0], u32::from_le_bytes([0, 1, 2, 3]));
+    assert_eq!(w[t0 + 2 * texels], u32::from_le_bytes([1, 2, 3, 4]));
+    assert_eq!(w.len(), t0 + 3 * 2 * texels);
+    // Wrong texture count, wrong size, a brick outside the atlas.
+    let bad = |a: BrickAtlas| matches!(pack_bricks(&a), Err(LayoutError::Bricks(_)));
+    assert!(bad(BrickAtlas {
+        textures: &refs[..2],
+        ..atlas
+    }));
+    let short = [&tex[0][..8], &tex[1][..], &tex[2][..]];
+    assert!(bad(BrickAtlas {
+        textures: &short,
+        ..atlas
+    }));
+    assert!(bad(BrickAtlas {
+        indirection: &[1, 0, 0, 0],
+        ..atlas
+    }));
+    assert!(bad(BrickAtlas {
+        encoding: BrickEncoding::Quantized,
+        ..atlas
+    }));
+}
