@@ -41,7 +41,7 @@ use probekit_sh::{basis::num_coeffs, convolve, MAX_COEFFS, MAX_ORDER};
 pub const MAX_WEIGHTS: usize = 8;
 
 /// A rig that cannot be used: what is wrong with it or with the input.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RigError {
     /// The rig's SH order is outside `1..=MAX_ORDER`.

@@ -50,6 +50,8 @@
 //! Stored and returned SH is **radiance** SH (crate conventions);
 //! [`Volume::irradiance`] applies the clamped-cosine convolution.
 
+mod cells;
+
 use crate::format::{layout::NONE, FormatError, ProbeFile, ProbeFileKind};
 use crate::prelude::*;
 use crate::{collections::Set, math};
@@ -316,7 +318,15 @@ impl Volume {
         if interp.needs_gradients() && self.grads.is_none() {
             return Err(VolumeError::NoGradients(interp));
         }
-        let out = &mut out[..n];
+        self.sample_into(p, interp, &mut out[..n]);
+        Ok(())
+    }
+
+    /// [`Self::sample_sh`] without its checks: `out` holds exactly
+    /// [`Self::coeffs_per_sample`] coefficients, and the volume has
+    /// gradients if `interp` needs them.
+    pub(crate) fn sample_into(&self, p: Vec3, interp: Interp, out: &mut [Vec3]) {
+        let n = self.n;
         out.fill(Vec3::ZERO);
         let (bmin, bmax) = self.bounds();
         let p = p.clamp(bmin, bmax);
@@ -421,7 +431,6 @@ impl Volume {
                 }
             }
         }
-        Ok(())
     }
 
     /// [`Self::sample_sh`] for many points: `out` holds `n` coefficients per

@@ -184,7 +184,8 @@ impl VisibilityMaps {
         if map.is_empty() || d.is_nan() || d <= 0.0 || len <= 0.0 {
             return 1.0;
         }
-        let [mu, mu2] = sample_oct_bilinear(map, self.resolution, v / len);
+        // The octahedral encoding scales by the L1 norm: no need to normalize.
+        let [mu, mu2] = sample_oct_bilinear(map, self.resolution, v);
         chebyshev_visibility(d, mu, mu2, self.min_variance, self.sharpness)
     }
 }

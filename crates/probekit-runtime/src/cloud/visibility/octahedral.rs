@@ -101,12 +101,19 @@ pub fn sample_oct_bilinear(map: &[[f32; 2]], resolution: u32, dir: Vec3) -> [f32
             .copied()
             .unwrap_or([0.0, 0.0])
     };
-    let (a, b, c, d) = (
-        at(i0, j0),
-        at(i0 + 1, j0),
-        at(i0, j0 + 1),
-        at(i0 + 1, j0 + 1),
-    );
+    let su = s as usize;
+    let (a, b, c, d) = if i0 >= 0 && j0 >= 0 && i0 + 1 < s && j0 + 1 < s && map.len() >= su * su {
+        // Away from the map's edges: no wrap.
+        let k = j0 as usize * su + i0 as usize;
+        (map[k], map[k + 1], map[k + su], map[k + su + 1])
+    } else {
+        (
+            at(i0, j0),
+            at(i0 + 1, j0),
+            at(i0, j0 + 1),
+            at(i0 + 1, j0 + 1),
+        )
+    };
     let mut out = [0.0; 2];
     for k in 0..2 {
         let top = a[k] + (b[k] - a[k]) * fx;
