@@ -4,6 +4,34 @@
 //! point, for this normal" without allocating per query. Conventions are those
 //! of [`probekit_sh`].
 //!
+//! ## Querying any file the same way
+//! [`Probes`] holds a probe cloud, an irradiance volume or a file of rigs
+//! only. Choose what is chosen once per file in [`LoadOptions`] (a volume's
+//! interpolation, how L1 coefficients are evaluated, blend overrides for
+//! diagnostics), give every moving object an [`ObjectState`], and ask for
+//! irradiance (not divided by π) or radiance SH (bands 0–2) at world
+//! positions; bad input is a [`QueryError`], never a panic.
+//!
+//! ```no_run
+//! use glam::Vec3;
+//! use probekit_runtime::{LoadOptions, ObjectState, Probes};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let probes = Probes::load("level.probes", LoadOptions::default())?;
+//! let mut state = ObjectState::new(); // one per moving object
+//! let e = probes.irradiance(&mut state, Vec3::new(1.0, 1.5, -2.0), Vec3::Y)?;
+//! let sh = probes.sh_at(&mut state, Vec3::new(1.0, 1.5, -2.0))?; // 9 RGB coefficients
+//! # let _ = (e, sh);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! Batches ([`Probes::irradiance_many`], [`Probes::sh_at_many`]) share one
+//! state, so an object's vertices walk little. Rigs: [`Probes::rig`],
+//! [`Probes::update_rig`], [`Probes::rig_irradiance`]. The modules below
+//! ([`cloud`], [`volume`], [`format`], [`rig`]) are the parts `Probes` is
+//! built from, for tools and diagnostics.
+//!
 //! ## Features
 //! * `std` (default): [`ProbeFile::load`] from a path, `FormatError::Io`,
 //!   std's float math and hash maps.

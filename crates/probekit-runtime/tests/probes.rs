@@ -504,3 +504,48 @@ fn blend_overrides_take_effect_at_load() {
         Err(LoadError::VisibilityBias(_))
     ));
 }
+
+/// A file built in memory goes through the reader's checks: an order the
+/// runtime cannot query, or indices out of range, are load errors.
+#[test]
+fn files_built_in_memory_are_checked_at_load() {
+    let mut f = cloud_file(3);
+    let n = f.positions.len();
+    f.coefficients = Coefficients::from_f32(9, &vec![Vec3::ONE; n * 81]).unwrap_or(Coefficients {
+        codec: probekit_runtime::format::Codec::F32,
+        order: 9,
+        data: vec![0; n * 81 * 12],
+    });
+    assert!(Probes::from_file(&f, LoadOptions::default()).is_err());
+    let mut f = cloud_file(3);
+    f.tetrahedra.as_mut().unwrap().vertices[0][0] = 1000;
+    assert!(Probes::from_file(&f, LoadOptions::default()).is_err());
+    assert!(Probes::from_file(&cloud_file(3), LoadOptions::default()).is_ok());
+}
+
+/// One `Probes` queried from several threads, each with its own state,
+/// answers as a single thread does.
+#[test]
+fn one_probes_many_threads() {
+    fn shared<T: Send + Sync>(_: &T) {}
+    let probes = load(&cloud_file(3), LoadOptions::default());
+    shared(&probes);
+    shared(&ObjectState::new());
+    let pts = points(&mut Rng(19), 100);
+    let mut s = ObjectState::new();
+    let want: Vec<[f32; 3]> = pts
+        .iter()
+        .map(|&(p, n)| probes.irradiance(&mut s, p, n).unwrap())
+        .collect();
+    std::thread::scope(|scope| {
+        for t in 0..4 {
+            let (probes, pts, want) = (&probes, &pts, &want);
+            scope.spawn(move || {
+                let mut s = ObjectState::new();
+                for (i, &(p, n)) in pts.iter().enumerate().skip(t) {
+                    assert_eq!(probes.irradiance(&mut s, p, n).unwrap(), want[i]);
+                }
+            });
+        }
+    });
+}

@@ -24,9 +24,12 @@ use std::path::Path;
 pub type Sh = [[f32; 3]; 9];
 
 /// A loaded `.probes` file ready for queries: a probe cloud, an irradiance
-/// volume, or a file of rigs only, all queried the same way. Immutable after
-/// loading and `Sync`: share one between threads, give each moving object
-/// its own [`ObjectState`]. No query allocates.
+/// volume, or a file of rigs only, all queried the same way. Position
+/// queries take `&self` and the handle is `Sync`: share one between
+/// threads, give each moving object its own [`ObjectState`]. Only
+/// [`Probes::update_rig`] takes `&mut self`; objects that share a rig each
+/// clone its [`RigState`] ([`Probes::rig`]) and update their own. No query
+/// allocates.
 #[derive(Clone, Debug)]
 pub struct Probes {
     source: Source,
@@ -72,20 +75,30 @@ impl Probes {
     /// Loads a file from its bytes (checked completely first: a corrupt,
     /// truncated or unsupported file is a [`LoadError::Format`]).
     pub fn from_bytes(bytes: &[u8], options: LoadOptions) -> Result<Self, LoadError> {
-        Self::from_file(&ProbeFile::from_bytes(bytes)?, options)
+        Self::build(&ProbeFile::from_bytes(bytes)?, options)
     }
 
     /// Loads the file at `path` (needs the `std` feature).
     #[cfg(feature = "std")]
     pub fn load(path: impl AsRef<Path>, options: LoadOptions) -> Result<Self, LoadError> {
-        Self::from_file(&ProbeFile::load(path)?, options)
+        Self::build(&ProbeFile::load(path)?, options)
     }
 
     /// Builds the query structures of a parsed file: a cloud's mesh and
     /// blend data, or a volume's grid or octree, and its rigs. A file of
     /// kind rig answers rig queries only (position queries are
     /// [`QueryError::NoProbes`]).
+    ///
+    /// The file is checked first ([`ProbeFile::validate`], what the reader
+    /// guarantees of a file read from bytes), so a file built or edited in
+    /// memory is refused rather than queried out of bounds.
     pub fn from_file(file: &ProbeFile, options: LoadOptions) -> Result<Self, LoadError> {
+        file.validate()?;
+        Self::build(file, options)
+    }
+
+    /// [`Probes::from_file`] of a file known to be valid (read and checked).
+    fn build(file: &ProbeFile, options: LoadOptions) -> Result<Self, LoadError> {
         let source = match file.kind {
             ProbeFileKind::Volume => {
                 let volume = Volume::from_file(file)?;
@@ -287,7 +300,9 @@ impl Probes {
     }
 
     /// Rig `index`: its sample points, its current parameters, its
-    /// evaluation ([`RigState`]).
+    /// evaluation ([`RigState`]). Clone it to give an object its own rig
+    /// state ([`RigState::update`] with SH sampled at its sample points,
+    /// then [`RigState::irradiance`] per vertex, unit normals).
     pub fn rig(&self, index: usize) -> Result<&RigState, QueryError> {
         let count = self.rigs.len();
         self.rigs
