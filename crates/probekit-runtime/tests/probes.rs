@@ -438,6 +438,14 @@ fn rigs_only_files_load_and_refuse_position_queries() {
     assert_eq!(probes.probe_count(), 0);
     let mut s = ObjectState::new();
     assert_eq!(probes.sh_at(&mut s, Vec3::ZERO), Err(QueryError::NoProbes));
+    // The kind of file comes before the input's faults.
+    assert_eq!(probes.sh_at(&mut s, Vec3::NAN), Err(QueryError::NoProbes));
+    assert_eq!(probes.query(&mut s, Vec3::NAN), Err(QueryError::NoProbes));
+    let mut out = [[[0.0; 3]; 9]; 1];
+    assert_eq!(
+        probes.sh_at_many(&mut s, &[Vec3::NAN], &mut out),
+        Err(QueryError::NoProbes)
+    );
     assert_eq!(
         probes.irradiance(&mut s, Vec3::ZERO, Vec3::Y),
         Err(QueryError::NoProbes)
@@ -548,4 +556,36 @@ fn one_probes_many_threads() {
             });
         }
     });
+}
+
+/// `Probes::query`'s blend reproduces the point it was asked about: the
+/// weighted sum of the blend's probe positions is the point (clamped to the
+/// box outside it), as barycentric and trilinear weights must, and the
+/// weights sum to 1.
+#[test]
+fn query_weights_reproduce_the_point() {
+    let pos = lattice();
+    for file in [cloud_file(3), volume_file(3)] {
+        let probes = load(&file, LoadOptions::default());
+        let mut s = ObjectState::new();
+        for (p, _) in points(&mut Rng(23), 100) {
+            let q = probes.query(&mut s, p).unwrap();
+            let sum: f32 = q.weights.iter().sum();
+            assert!((sum - 1.0).abs() < 1e-5, "{p}: {sum}");
+            let at: Vec3 = q
+                .probes
+                .iter()
+                .zip(q.weights)
+                .filter(|(_, w)| *w != 0.0)
+                .map(|(&i, w)| pos[i as usize] * w)
+                .sum();
+            let want = p.clamp(Vec3::ZERO, Vec3::splat(2.0));
+            assert!(
+                (at - want).abs().max_element() < 1e-4,
+                "{p}: {at} {:?}",
+                q.cell
+            );
+            assert_eq!(q.sh, probes.sh_at(&mut s, p).unwrap());
+        }
+    }
 }

@@ -223,6 +223,9 @@ impl Probes {
                 results: out.len(),
             });
         }
+        if !positions.is_empty() {
+            self.has_probes()?;
+        }
         for (index, (&p, o)) in positions.iter().zip(out).enumerate() {
             query::check_position(p, index)?;
             let mut sh = [Vec3::ZERO; 9];
@@ -257,6 +260,7 @@ impl Probes {
     /// [`Probes::sh_at`] with what produced it: the cell the point was
     /// found in and the probes and weights of the blend (see [`Query`]).
     pub fn query(&self, state: &mut ObjectState, position: Vec3) -> Result<Query, QueryError> {
+        self.has_probes()?;
         query::check_position(position, 0)?;
         let mut sh = [Vec3::ZERO; 9];
         let mut probes = [0u32; 8];
