@@ -192,7 +192,7 @@ pub unsafe extern "C" fn pk_rig_update(
 /// Convenience update for an object that is only translated: samples
 /// `lighting` (a cloud or volume handle) at `sample point + translation[3]`
 /// (world = mesh + translation, metres) and updates as [`pk_rig_update`].
-/// The lighting's SH (as [`pk_sh`] gives it) is truncated or zero-padded
+/// The lighting's SH (as [`crate::pk_sh`] gives it) is truncated or zero-padded
 /// to the rig's order.
 /// `state` (may be null) is the object's walk state for a cloud. No
 /// allocation. A rotated object must rotate the SH itself and call

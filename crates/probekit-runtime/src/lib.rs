@@ -29,7 +29,7 @@
 //! Batches ([`Probes::irradiance_many`], [`Probes::sh_at_many`]) share one
 //! state, so an object's vertices walk little. Rigs: [`Probes::rig`],
 //! [`Probes::update_rig`], [`Probes::rig_irradiance`]. The modules below
-//! ([`cloud`], [`volume`], [`format`], [`rig`]) are the parts `Probes` is
+//! ([`cloud`], [`volume`], [`format`](mod@format), [`rig`]) are the parts `Probes` is
 //! built from, for tools and diagnostics.
 //!
 //! ## Features

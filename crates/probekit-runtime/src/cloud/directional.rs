@@ -37,7 +37,7 @@
 //! one, and the projection of the plain blend's irradiance is the plain
 //! blend of the SH (the 5-design property). So a query blends the SH
 //! plainly and adds, for the directions where some probe stands out only,
-//! the projection of that direction's change ([`DirectionTable::correct`]).
+//! the projection of that direction's change (`DirectionTable::correct`).
 //! Whether a direction has a factor below 1 needs no division or power:
 //! with `ρ_k = 1/L_k(d)` (per probe, as built) and `m = min_k ρ_k`, the
 //! floored `1/l_k` is `min(ρ_k, 10³·m)` and some probe exceeds

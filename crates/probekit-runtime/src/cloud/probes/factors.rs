@@ -62,11 +62,11 @@ impl ProbeCloud {
 
     /// Sets the directional brightness exponent `γ` (0, the default,
     /// switches it off): [`ProbeCloud::sh_at`] blends the cell per direction,
-    /// the weight of each probe more than [`directional::DIRECTIONAL_RATIO`]
+    /// the weight of each probe more than [`DIRECTIONAL_RATIO`](crate::cloud::directional::DIRECTIONAL_RATIO)
     /// times brighter *for that direction* than the cell (its weighted
     /// harmonic mean) divided by the excess to the power `γ` (luminances as
     /// the cloud was built, so relighting stays linear), and projects the
-    /// twelve directions' blends back to SH ([`directional`]). Where the mean
+    /// twelve directions' blends back to SH ([`directional`](crate::cloud::directional)). Where the mean
     /// brightness ([`ProbeCloud::set_brightness_weighting`]) damps a probe
     /// that is bright on average, this damps a probe bright only towards one
     /// side — a doorway probe seeing a lit corridor, next to a dark closet —
