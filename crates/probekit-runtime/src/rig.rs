@@ -30,6 +30,10 @@
 //! The baker builds its least-squares design matrix from [`rig_weights`], so
 //! fitting and evaluation cannot disagree.
 
+mod lights;
+
+pub use lights::{Light, SphereTable, DISK_POLYGON_EDGES, SPHERE_TABLE_SIZE};
+
 use crate::format::{AxisModel, Rig, RigModel};
 use crate::math;
 use crate::prelude::*;
