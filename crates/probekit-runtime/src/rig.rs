@@ -31,8 +31,10 @@
 //! fitting and evaluation cannot disagree.
 
 mod lights;
+mod split;
 
 pub use lights::{Light, SphereTable, DISK_POLYGON_EDGES, SPHERE_TABLE_SIZE};
+pub use split::{rig_weight, transition_distance, TRANSITION_BAND};
 
 use crate::format::{AxisModel, Rig, RigModel};
 use crate::math;

@@ -173,3 +173,71 @@ fn bad_sh_requests_write_nothing() {
     light.add_sh(9, Vec3::ZERO, 1.0, &mut big);
     assert!(short.iter().chain(&big).all(|c| *c == Vec3::ZERO));
 }
+
+/// The transition distance against a table whose `g` is computed here
+/// from the point light's closed form (`E_near(x) = I/((x − 1)R)²`), a
+/// linear scan for the bracket and interpolation in it.
+#[test]
+fn transition_distances_follow_the_table() {
+    use probekit_runtime::format::Transition;
+    use probekit_runtime::rig::{rig_weight, transition_distance, TRANSITION_BAND};
+    let (center, radius) = (Vec3::new(0.5, 1.0, -0.5), 0.8f32);
+    let distances: Vec<f32> = (0..16).map(|i| 1.1 * 1.3f32.powi(i)).collect();
+    let table: Vec<Transition> = distances
+        .iter()
+        .map(|&x| Transition {
+            distance: x,
+            error: 40.0 / x,
+        })
+        .collect();
+    let intensity = 2.0f32;
+    let white = 0.05f32;
+    let dir = Vec3::new(1.0, 2.0, -0.5).normalize();
+    let light = Light::Point {
+        position: center + dir * 5.0,
+        intensity: Vec3::new(intensity, 0.5, 0.1),
+    };
+    let g = |t: &Transition| {
+        let d = (t.distance - 1.0) * radius;
+        t.error * (intensity / (d * d)) / PI / white
+    };
+    for target in [0.5f32, 1.0, 3.0, 20.0, 1e-6, 1e9] {
+        let got = transition_distance(&table, &light, center, radius, white, target);
+        let gs: Vec<f32> = table.iter().map(g).collect();
+        let want = if gs[0] <= target {
+            distances[0]
+        } else if *gs.last().unwrap() > target {
+            *distances.last().unwrap()
+        } else {
+            let i = gs.iter().position(|&v| v <= target).unwrap();
+            let (g0, g1) = (gs[i - 1], gs[i]);
+            distances[i - 1] + (g0 - target) / (g0 - g1) * (distances[i] - distances[i - 1])
+        };
+        assert!(
+            (got - want).abs() <= 1e-4 * want,
+            "target {target}: {got} {want}"
+        );
+    }
+    // A directional light and an empty table: always the rig.
+    let sun = Light::Directional {
+        direction: -Vec3::Y,
+        irradiance: Vec3::ONE,
+    };
+    assert_eq!(
+        transition_distance(&table, &sun, center, radius, white, 1.0),
+        0.0
+    );
+    assert_eq!(
+        transition_distance(&[], &light, center, radius, white, 1.0),
+        0.0
+    );
+    assert_eq!(rig_weight(f32::INFINITY, 0.0), 1.0);
+    // The cross-fade.
+    let xs = 2.0;
+    assert_eq!(rig_weight(1.9, xs), 0.0);
+    assert_eq!(rig_weight(xs, xs), 0.0);
+    assert!((rig_weight(xs * (1.0 + TRANSITION_BAND) / 2.0, xs) - 0.5).abs() < 1e-6);
+    assert_eq!(rig_weight(xs * TRANSITION_BAND, xs), 1.0);
+    // Degenerate input is an answer, not a panic.
+    let _ = transition_distance(&table, &light, center, 0.0, 0.0, f32::NAN);
+}
