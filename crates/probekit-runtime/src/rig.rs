@@ -16,7 +16,7 @@
 //! | model | parameters | `SH(p)` |
 //! |---|---|---|
 //! | [`RigModel::Constant`] | 1 | `c₀` |
-//! | [`RigModel::Gradient`] | 4 | `c₀ + t_x c₁ + t_y c₂ + t_z c₃` (SH + gradient, seed 000 §2.1) |
+//! | [`RigModel::Gradient`] | 4 | `c₀ + t_x c₁ + t_y c₂ + t_z c₃` (SH + gradient, *Irradiance Rigs* §2.1) |
 //! | [`RigModel::Tensor`] | `n_x·n_y·n_z` | `Σ_{ijk} f_i(x) g_j(y) h_k(z) c_{i + n_x (j + n_y k)}` |
 //!
 //! Per axis of a tensor rig: [`AxisModel::Constant`] is `{1}`,
@@ -242,7 +242,7 @@ impl RigState {
         &self.params
     }
 
-    /// Per-frame fit (seed 000 §2.2): `parameters = L × samples`, where
+    /// Per-frame fit (*Irradiance Rigs* §2.2): `parameters = L × samples`, where
     /// `sample_sh` holds the radiance SH at every sample point, sample-major
     /// (`sample_sh[j·order² + c]`, same order as the rig's sample points),
     /// each coefficient and channel fitted independently. No allocation.

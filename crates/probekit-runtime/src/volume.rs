@@ -1,6 +1,6 @@
-//! Querying an irradiance volume (uniform grid or adaptive octree) — the
-//! engine side of seed 001 (Tatarchuk, *Irradiance Volumes for Games*, after
-//! Greger et al. 1998).
+//! Querying an irradiance volume (uniform grid or adaptive octree), after
+//! Tatarchuk, *Irradiance Volumes for Games* (itself after Greger et al.
+//! 1998).
 //!
 //! A [`Volume`] is built once from a [`ProbeFile`] of kind
 //! [`ProbeFileKind::Volume`]; every query afterwards is allocation free.
@@ -66,11 +66,11 @@ pub enum Interp {
     /// Tent kernels (trilinear on a uniform grid), continuous across levels.
     Trilinear,
     /// First-order Taylor extrapolation from each sample, then trilinear
-    /// weights (seed 001). Needs gradients.
+    /// weights (Tatarchuk). Needs gradients.
     Taylor,
-    /// Tricubic Hermite from values and gradients (seed 001). Needs gradients.
+    /// Tricubic Hermite from values and gradients (Tatarchuk). Needs gradients.
     Tricubic,
-    /// Inverse-distance weights over the containing leaf's 8 corners (seed 001
+    /// Inverse-distance weights over the containing leaf's 8 corners (Tatarchuk
     /// fallback). Continuous only inside a leaf.
     InverseDistance,
     /// Trilinear over the containing leaf's corners only: the naive octree

@@ -272,7 +272,7 @@ pub struct Gradients {
     pub data: Vec<Vec3>,
 }
 
-/// Basis along one axis of a tensor-product rig (seed 000, Yuan et al.).
+/// Basis along one axis of a tensor-product rig (Yuan, Nowrouzezahrai & Sloan, *Irradiance Rigs*, JGT 2011).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AxisModel {
     /// `{1}`: one function.
@@ -294,7 +294,7 @@ impl AxisModel {
     }
 }
 
-/// A rig model M(p, c) over the mesh's bounding box (seed 000).
+/// A rig model M(p, c) over the mesh's bounding box (*Irradiance Rigs*, JGT 2011).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RigModel {
     /// One SH vector.
@@ -320,7 +320,7 @@ impl RigModel {
     }
 }
 
-/// One entry of a rig's analytic/rig transition table (seed 000 §3).
+/// One entry of a rig's analytic/rig transition table (*Irradiance Rigs* §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transition {
     /// Light distance from the object's bounding-sphere centre, in
