@@ -34,7 +34,7 @@ mod lights;
 mod split;
 
 pub use lights::{Light, SphereTable, DISK_POLYGON_EDGES, SPHERE_TABLE_SIZE};
-pub use split::{rig_weight, transition_distance, TRANSITION_BAND};
+pub use split::{rig_weight, transition_distance, SplitRig, TRANSITION_BAND};
 
 use crate::format::{AxisModel, Rig, RigModel};
 use crate::math;
@@ -75,6 +75,10 @@ pub enum RigError {
     /// The bounding box is not finite or has `min > max`.
     #[error("rig bounding box is empty or not finite")]
     BoundingBox,
+    /// [`SplitRig::update`] got an object transform that is not finite or
+    /// not invertible.
+    #[error("the object's transform is not finite or not invertible")]
+    Transform,
 }
 
 /// Normalised box coordinate `u ∈ [0, 1]` of `x` on an axis `[lo, hi]`

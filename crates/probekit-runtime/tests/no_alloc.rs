@@ -186,6 +186,27 @@ fn queries_do_not_allocate() {
                 }
             });
             assert_eq!(n, 0, "rig {r}");
+            // The split rig: after a first update has sized its buffers.
+            let mut split = probes.split_rig(r).unwrap();
+            let lights = [
+                probekit_runtime::rig::Light::Point {
+                    position: Vec3::new(0.5, 0.5, 2.0),
+                    intensity: Vec3::ONE,
+                },
+                probekit_runtime::rig::Light::Directional {
+                    direction: -Vec3::Y,
+                    irradiance: Vec3::ONE,
+                },
+            ];
+            let at = glam::Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.0));
+            split.update(at, &lights, 1e-6, 1.0).unwrap();
+            let n = allocations(|| {
+                split.update(at, &lights, 1e-6, 1.0).unwrap();
+                for (&p, &n) in ps.iter().zip(&ns) {
+                    std::hint::black_box(split.irradiance(p, n));
+                }
+            });
+            assert_eq!(n, 0, "split rig {r}");
         }
     }
 }

@@ -421,6 +421,11 @@ fn bad_queries_are_typed_errors() {
         probes.rig(1),
         Err(QueryError::NoSuchRig { index: 1, count: 1 })
     ));
+    assert!(probes.split_rig(0).is_ok());
+    assert!(matches!(
+        probes.split_rig(1),
+        Err(QueryError::NoSuchRig { index: 1, count: 1 })
+    ));
     assert!(matches!(
         probes.rig_irradiance(7, p, Vec3::Y),
         Err(QueryError::NoSuchRig { index: 7, count: 1 })

@@ -10,10 +10,12 @@ pub use options::{BlendOverrides, LoadOptions};
 pub use query::{Cell, Query};
 
 use crate::cloud::{ProbeCloud, WalkState};
+use crate::format::Rig;
 use crate::format::{L1Mode, ProbeFile, ProbeFileKind};
 use crate::prelude::*;
-use crate::rig::RigState;
+use crate::rig::{RigState, SphereTable, SplitRig};
 use crate::volume::{Interp, Volume, VolumeError};
+use alloc::sync::Arc;
 use glam::Vec3;
 use probekit_sh::MAX_COEFFS;
 #[cfg(feature = "std")]
@@ -39,7 +41,11 @@ pub struct Probes {
     /// The L1 evaluation in effect (linear unless the order is 2).
     l1_mode: L1Mode,
     rigs: Vec<RigState>,
-    rig_names: Vec<String>,
+    /// The file's rigs as stored (names, sample points, transition tables).
+    rig_data: Vec<Rig>,
+    /// The sphere-light table split rigs share; built when the file has
+    /// rigs.
+    sphere_table: Option<Arc<SphereTable>>,
 }
 
 /// What answers position queries.
@@ -125,7 +131,8 @@ impl Probes {
                 _ => L1Mode::Linear,
             },
             rigs,
-            rig_names: file.rigs.iter().map(|r| r.name.clone()).collect(),
+            rig_data: file.rigs.clone(),
+            sphere_table: (!file.rigs.is_empty()).then(|| Arc::new(SphereTable::default())),
         })
     }
 
@@ -300,7 +307,7 @@ impl Probes {
 
     /// The index of the rig for mesh `name`, if the file has one.
     pub fn rig_index(&self, name: &str) -> Option<usize> {
-        self.rig_names.iter().position(|n| n == name)
+        self.rig_data.iter().position(|r| r.name == name)
     }
 
     /// Rig `index`: its sample points, its current parameters, its
@@ -312,6 +319,18 @@ impl Probes {
         self.rigs
             .get(index)
             .ok_or(QueryError::NoSuchRig { index, count })
+    }
+
+    /// A per-object rig with the near/transition/rig split for rig
+    /// `index` ([`SplitRig`]): `update` it once per frame with the object's
+    /// transform and the scene's lights, then ask `irradiance` per vertex.
+    pub fn split_rig(&self, index: usize) -> Result<SplitRig, QueryError> {
+        let count = self.rig_data.len();
+        let (Some(rig), Some(table)) = (self.rig_data.get(index), self.sphere_table.as_ref())
+        else {
+            return Err(QueryError::NoSuchRig { index, count });
+        };
+        Ok(SplitRig::new(rig, table.clone())?)
     }
 
     /// Refits rig `index` to the radiance SH sampled at its sample points

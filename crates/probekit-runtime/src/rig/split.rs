@@ -14,10 +14,12 @@
 //! per vertex, lights between `x*` and [`TRANSITION_BAND`]`·x*` are
 //! cross-faded, farther ones go through the rig ([`rig_weight`]).
 
-use super::Light;
-use crate::format::Transition;
+use super::{Light, RigError, RigState, SphereTable};
+use crate::format::{Rig, Transition};
+use crate::prelude::*;
+use alloc::sync::Arc;
 use core::f32::consts::PI;
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 
 /// The cross-fade band: a light between `x*` and `TRANSITION_BAND · x*`
 /// (bounding radii) is split between the per-vertex path and the rig.
@@ -92,5 +94,177 @@ pub fn rig_weight(x: f32, x_star: f32) -> f32 {
         (x - x_star) / ((TRANSITION_BAND - 1.0) * x_star)
     } else {
         1.0
+    }
+}
+
+/// One object's rig with the split: near lights evaluated exactly per
+/// vertex (spheres and disks through the [`SphereTable`]), lights in the
+/// transition band cross-faded, the rest through the rig (*Irradiance
+/// Rigs* §3). Made from a file's rig ([`SplitRig::new`],
+/// [`crate::Probes::split_rig`]); [`SplitRig::update`] once per frame with
+/// the scene's lights, then [`SplitRig::irradiance`] per vertex.
+///
+/// The bounding sphere the transition distances are measured from is the
+/// rig box's circumscribed sphere (centre the box centre, radius half its
+/// diagonal), in the object's own coordinates.
+#[derive(Clone, Debug)]
+pub struct SplitRig {
+    state: RigState,
+    samples: Vec<Vec3>,
+    sample_sh: Vec<Vec3>,
+    transitions: Vec<Transition>,
+    center: Vec3,
+    radius: f32,
+    table: Arc<SphereTable>,
+    /// This frame's lights in object coordinates with their per-vertex
+    /// share `1 − w` (only those with `w < 1`).
+    near: Vec<(Light, f32)>,
+}
+
+impl SplitRig {
+    /// The per-object state of `rig` (parameters zero until the first
+    /// update), sharing the sphere-light `table`.
+    pub fn new(rig: &Rig, table: Arc<SphereTable>) -> Result<Self, RigError> {
+        let state = RigState::new(rig)?;
+        let n2 = state.order() * state.order();
+        let len = n2
+            .checked_mul(rig.samples.len())
+            .ok_or(RigError::ParameterCount)?;
+        Ok(Self {
+            samples: rig.samples.clone(),
+            sample_sh: vec![Vec3::ZERO; len],
+            transitions: rig.transitions.clone(),
+            center: 0.5 * (rig.bbox_min + rig.bbox_max),
+            radius: (0.5 * (rig.bbox_max - rig.bbox_min).length()).max(f32::MIN_POSITIVE),
+            table,
+            near: Vec::new(),
+            state,
+        })
+    }
+
+    /// The rig alone, with its current parameters.
+    pub fn state(&self) -> &RigState {
+        &self.state
+    }
+
+    /// Per-frame update for the object placed by the rigid transform
+    /// `world_from_object` among `lights` (world coordinates): each light
+    /// is taken into the object's frame, its transition distance found
+    /// ([`transition_distance`], `target` grey levels, `white` the reflected
+    /// radiance shown as white, W/(m²·sr)) and its rig share
+    /// ([`rig_weight`]); the rig is refitted to the weighted lights' SH at
+    /// its sample points, and the near lights are kept for
+    /// [`SplitRig::irradiance`]. Allocates only when more near lights than
+    /// ever before must be kept. A transform that is not finite or not
+    /// invertible is an error, and the state is left unchanged.
+    pub fn update(
+        &mut self,
+        world_from_object: Affine3A,
+        lights: &[Light],
+        target: f32,
+        white: f32,
+    ) -> Result<(), RigError> {
+        let det = world_from_object.matrix3.determinant();
+        if !world_from_object.is_finite() || !det.is_normal() {
+            return Err(RigError::Transform);
+        }
+        let object_from_world = world_from_object.inverse();
+        let order = self.state.order();
+        let n2 = order * order;
+        self.sample_sh.fill(Vec3::ZERO);
+        self.near.clear();
+        for light in lights {
+            let l = transformed(light, &object_from_world);
+            let x_star = transition_distance(
+                &self.transitions,
+                &l,
+                self.center,
+                self.radius,
+                white,
+                target,
+            );
+            let x = l
+                .position()
+                .map_or(f32::INFINITY, |p| p.distance(self.center) / self.radius);
+            let w = rig_weight(x, x_star);
+            if w > 0.0 {
+                for (s, out) in self.samples.iter().zip(self.sample_sh.chunks_exact_mut(n2)) {
+                    l.add_sh(order, *s, w, out);
+                }
+            }
+            if w < 1.0 {
+                self.near.push((l, 1.0 - w));
+            }
+        }
+        self.state.update(&self.sample_sh)
+    }
+
+    /// Irradiance (not divided by π) at `position` (the object's own
+    /// coordinates, m) for unit `normal` (object frame): the rig plus each
+    /// near light's exact irradiance times its per-vertex share. No
+    /// allocation.
+    pub fn irradiance(&self, position: Vec3, normal: Vec3) -> Vec3 {
+        let mut e = self.state.irradiance(position, normal);
+        for (l, share) in &self.near {
+            e += l.irradiance(position, normal, Some(&self.table)) * *share;
+        }
+        e
+    }
+}
+
+/// `light` in the frame `to` maps into (positions as points, directions as
+/// vectors, renormalized; sizes and intensities unchanged: a rigid
+/// transform).
+fn transformed(light: &Light, to: &Affine3A) -> Light {
+    let point = |p: Vec3| to.transform_point3(p);
+    let dir = |d: Vec3| to.transform_vector3(d).normalize_or(d);
+    match *light {
+        Light::Sphere {
+            position,
+            radius,
+            intensity,
+        } => Light::Sphere {
+            position: point(position),
+            radius,
+            intensity,
+        },
+        Light::Point {
+            position,
+            intensity,
+        } => Light::Point {
+            position: point(position),
+            intensity,
+        },
+        Light::Spot {
+            position,
+            direction,
+            inner_deg,
+            outer_deg,
+            intensity,
+        } => Light::Spot {
+            position: point(position),
+            direction: dir(direction),
+            inner_deg,
+            outer_deg,
+            intensity,
+        },
+        Light::Disk {
+            position,
+            direction,
+            radius,
+            intensity,
+        } => Light::Disk {
+            position: point(position),
+            direction: dir(direction),
+            radius,
+            intensity,
+        },
+        Light::Directional {
+            direction,
+            irradiance,
+        } => Light::Directional {
+            direction: dir(direction),
+            irradiance,
+        },
     }
 }
