@@ -277,6 +277,57 @@ PkStatus pk_rig_irradiance_many(const PkRig *rig, size_t count,
                                 const float *positions, const float *normals,
                                 float *out_rgb);
 
+/* ---- irradiance rigs with the near/transition/rig split ---------------- */
+
+/* PkLight.kind */
+#define PK_LIGHT_SPHERE 0      /* position, radius, intensity */
+#define PK_LIGHT_POINT 1       /* position, intensity */
+#define PK_LIGHT_SPOT 2        /* position, direction, inner/outer_deg, intensity */
+#define PK_LIGHT_DISK 3        /* position, direction, radius, intensity */
+#define PK_LIGHT_DIRECTIONAL 4 /* direction; intensity = irradiance facing it (W/m²) */
+
+/* A scene light: world coordinates (m); direction = unit way light travels;
+ * intensity W/sr per RGB channel; unused fields ignored. */
+typedef struct PkLight {
+    uint32_t kind;
+    float position[3];
+    float direction[3];
+    float radius;
+    float inner_deg;
+    float outer_deg;
+    float intensity[3];
+} PkLight;
+
+/* Per-object rig with the split: near lights exact per vertex, lights in
+ * the transition band cross-faded, the rest through the rig. */
+typedef struct PkSplitRig PkSplitRig;
+
+/* Split rig for rig index of the file; NULL on error (PK_ERR_OUT_OF_RANGE
+ * for a bad index). Owns its data. */
+PkSplitRig *pk_split_rig_new(const PkProbes *probes, size_t index,
+                             PkStatus *status);
+
+/* Frees a split rig (NULL is a no-op). */
+void pk_split_rig_free(PkSplitRig *rig);
+
+/* Per-frame update: the object placed by the rigid transform
+ * world_from_object (12 floats, column-major: x, y, z axis columns, then the
+ * translation) among count lights (world coordinates); target = grey levels
+ * of error allowed, white = reflected radiance shown as white. */
+PkStatus pk_split_rig_update(PkSplitRig *rig, const float *world_from_object,
+                             const PkLight *lights, size_t count, float target,
+                             float white);
+
+/* Irradiance (not divided by π) at object-space position[3] for unit
+ * object-space normal[3] into out_rgb[3]. */
+PkStatus pk_split_rig_irradiance(const PkSplitRig *rig, const float *position,
+                                 const float *normal, float *out_rgb);
+
+/* pk_split_rig_irradiance per vertex: 3·count floats in each array. */
+PkStatus pk_split_rig_irradiance_many(const PkSplitRig *rig, size_t count,
+                                      const float *positions,
+                                      const float *normals, float *out_rgb);
+
 #ifdef __cplusplus
 }
 #endif

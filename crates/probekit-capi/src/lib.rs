@@ -40,6 +40,7 @@ mod error;
 mod probes;
 mod query;
 mod rig;
+mod split;
 mod volume;
 
 pub use cloud::{
@@ -56,6 +57,11 @@ pub use rig::{
     pk_rig_count, pk_rig_free, pk_rig_irradiance, pk_rig_irradiance_many, pk_rig_name, pk_rig_new,
     pk_rig_order, pk_rig_sample_count, pk_rig_sample_points, pk_rig_update,
     pk_rig_update_from_probes, PkRig,
+};
+pub use split::{
+    pk_split_rig_free, pk_split_rig_irradiance, pk_split_rig_irradiance_many, pk_split_rig_new,
+    pk_split_rig_update, PkLight, PkSplitRig, PK_LIGHT_DIRECTIONAL, PK_LIGHT_DISK, PK_LIGHT_POINT,
+    PK_LIGHT_SPHERE, PK_LIGHT_SPOT,
 };
 pub use volume::{pk_volume_has_gradients, pk_volume_interp};
 

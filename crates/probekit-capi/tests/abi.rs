@@ -97,6 +97,25 @@ fn queries_do_not_allocate() {
     let ws = pk_walk_state_new();
     let rig = unsafe { pk_rig_new(cloud, 0, null_mut()) };
     assert!(!rig.is_null());
+    let split = unsafe { pk_split_rig_new(cloud, 0, null_mut()) };
+    assert!(!split.is_null());
+    let lamp = PkLight {
+        kind: PK_LIGHT_POINT,
+        position: [0.3, 0.2, 0.4],
+        direction: [0.0; 3],
+        radius: 0.0,
+        inner_deg: 0.0,
+        outer_deg: 0.0,
+        intensity: [1.0; 3],
+    };
+    let world = [
+        1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.0,
+    ];
+    // The first update sizes the split rig's buffers.
+    assert_eq!(
+        unsafe { pk_split_rig_update(split, world.as_ptr(), &lamp, 1, 1e-6, 1.0) },
+        PkStatus::Ok
+    );
     let pts = points();
     let ps = flat(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
     let ns = flat(&pts.iter().map(|p| p.1).collect::<Vec<_>>());
@@ -164,11 +183,20 @@ fn queries_do_not_allocate() {
             pk_rig_irradiance_many(rig, n, ps.as_ptr(), ns.as_ptr(), out.as_mut_ptr()),
             PkStatus::Ok
         );
+        assert_eq!(
+            pk_split_rig_update(split, world.as_ptr(), &lamp, 1, 1e-6, 1.0),
+            PkStatus::Ok
+        );
+        assert_eq!(
+            pk_split_rig_irradiance_many(split, n, ps.as_ptr(), ns.as_ptr(), out.as_mut_ptr()),
+            PkStatus::Ok
+        );
     });
     assert_eq!(count, 0, "queries allocated {count} times");
 
     unsafe {
         pk_rig_free(rig);
+        pk_split_rig_free(split);
         pk_walk_state_free(ws);
         pk_free(cloud);
         pk_free(volume);
