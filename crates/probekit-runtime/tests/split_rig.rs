@@ -242,3 +242,45 @@ fn bad_transforms_and_indices_are_errors() {
         .unwrap();
     let _ = s.irradiance(Vec3::ZERO, Vec3::Y);
 }
+
+/// With a given bounding sphere, a light is per vertex exactly when the
+/// transition distance measured from that sphere says so.
+#[test]
+fn a_given_bounding_sphere_decides_the_zones() {
+    use probekit_runtime::rig::{rig_weight, transition_distance};
+    let table = rig().transitions;
+    let lamp_at = Vec3::new(2.0, 0.5, 0.0);
+    let lamp = Light::Point {
+        position: lamp_at,
+        intensity: Vec3::splat(3.0),
+    };
+    let (p, n) = (Vec3::new(0.2, 0.1, 0.0), Vec3::X);
+    let exact = {
+        let w = lamp_at - p;
+        Vec3::splat(3.0) * (n.dot(w) / w.length().powi(3))
+    };
+    for radius in [0.3f32, 0.9, 1.8] {
+        let center = Vec3::new(0.1, 0.0, 0.0);
+        let target = 2.0;
+        let x_star = transition_distance(&table, &lamp, center, radius, 1.0, target);
+        let share = 1.0 - rig_weight(lamp_at.distance(center) / radius, x_star);
+        let mut s = split().with_bounding_sphere(center, radius).unwrap();
+        s.update(Affine3A::IDENTITY, &[lamp], target, 1.0).unwrap();
+        let rig_only = s.state().irradiance(p, n);
+        let got = s.irradiance(p, n);
+        assert!(
+            close(got, rig_only + exact * share, 1e-5),
+            "r {radius}: {got}"
+        );
+    }
+    for (c, r) in [
+        (Vec3::NAN, 1.0),
+        (Vec3::ZERO, 0.0),
+        (Vec3::ZERO, f32::INFINITY),
+    ] {
+        assert_eq!(
+            split().with_bounding_sphere(c, r).err(),
+            Some(RigError::BoundingBox)
+        );
+    }
+}

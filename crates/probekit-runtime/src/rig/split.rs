@@ -142,6 +142,20 @@ impl SplitRig {
         })
     }
 
+    /// The same rig measuring transition distances from the sphere
+    /// (`center`, `radius`, object coordinates, m) instead of the box's
+    /// circumscribed sphere: for a caller that knows the mesh's own
+    /// bounding sphere (the baker's `rig` command uses the vertices' largest
+    /// distance from the box centre). A radius that is not positive and
+    /// finite, or a centre that is not finite, is an error.
+    pub fn with_bounding_sphere(mut self, center: Vec3, radius: f32) -> Result<Self, RigError> {
+        if !center.is_finite() || !(radius.is_finite() && radius > 0.0) {
+            return Err(RigError::BoundingBox);
+        }
+        (self.center, self.radius) = (center, radius);
+        Ok(self)
+    }
+
     /// The rig alone, with its current parameters.
     pub fn state(&self) -> &RigState {
         &self.state
