@@ -149,7 +149,7 @@ impl SplitRig {
     /// distance from the box centre). A radius that is not positive and
     /// finite, or a centre that is not finite, is an error.
     pub fn with_bounding_sphere(mut self, center: Vec3, radius: f32) -> Result<Self, RigError> {
-        if !center.is_finite() || !(radius.is_finite() && radius > 0.0) {
+        if !(center.is_finite() && radius.is_finite() && radius > 0.0) {
             return Err(RigError::BoundingBox);
         }
         (self.center, self.radius) = (center, radius);
