@@ -18,8 +18,11 @@
  *   - irradiance E(n) = ∫ L(ω) max(0, n·ω) dω, NOT divided by π (divide by π
  *     and multiply by albedo for Lambertian exit radiance), from the
  *     clamped-cosine convolution of the radiance SH;
- *   - points and normals are 3 floats (x, y, z); normals must be unit length
- *     (they are not renormalised); batched arrays are xyz interleaved.
+ *   - points and normals are 3 floats (x, y, z); normals given to a
+ *     PkProbes may have any non-zero finite length (they are normalized; a
+ *     zero, NaN or infinite normal or position is PK_ERR_INVALID_ARGUMENT),
+ *     rig queries take unit normals; batched
+ *     arrays are xyz interleaved.
  *
  * Rules:
  *   - Every pointer is checked for null; bad input returns a PkStatus error
@@ -27,9 +30,12 @@
  *     thread's message, pk_last_error(). Nothing panics or aborts.
  *   - Queries (pk_irradiance*, pk_sh*, pk_rig_irradiance*, pk_rig_update*)
  *     never allocate.
- *   - A PkProbes is read-only after loading (its volume interpolation mode is
- *     atomic), so many threads may query one handle. A PkWalkState or PkRig
- *     belongs to one object and one thread at a time.
+ *   - A PkProbes is read-only after loading (a volume's interpolation and
+ *     the L1 evaluation are chosen at load, PkLoadOptions), so many threads
+ *     may query one handle. A PkWalkState or PkRig belongs to one object and
+ *     one thread at a time.
+ *   - Every query goes through probekit_runtime::Probes: C and Rust give
+ *     the same numbers.
  */
 #ifndef PROBEKIT_H
 #define PROBEKIT_H
@@ -42,7 +48,7 @@ extern "C" {
 #endif
 
 /* Version of this ABI; compare with pk_abi_version() at start-up. */
-#define PK_ABI_VERSION 1
+#define PK_ABI_VERSION 2
 
 /* Result of every fallible call. */
 typedef enum PkStatus {
@@ -66,7 +72,7 @@ typedef enum PkKind {
     PK_KIND_RIG = 2       /* irradiance rigs only, no probes to query */
 } PkKind;
 
-/* Volume interpolation modes for pk_volume_set_interp (Tatarchuk,
+/* Volume interpolation modes for PkLoadOptions.interpolation (Tatarchuk,
  * "Irradiance Volumes for Games"; formulas in probekit_runtime::volume). */
 #define PK_INTERP_TRILINEAR 0        /* tent kernels; trilinear on a grid (default) */
 #define PK_INTERP_TAYLOR 1           /* first-order Taylor per sample; needs gradients */
@@ -74,9 +80,23 @@ typedef enum PkKind {
 #define PK_INTERP_INVERSE_DISTANCE 3 /* 1/distance over the leaf's 8 corners */
 #define PK_INTERP_LEAF_TRILINEAR 4   /* trilinear over the leaf only (pops; for comparison) */
 
+/* PkLoadOptions.l1_mode: how L1 (order-2) coefficients become irradiance. */
+#define PK_L1_MODE_AS_BAKED -1        /* as the bake recorded in the file (default) */
+#define PK_L1_MODE_LINEAR 0           /* plain linear SH */
+#define PK_L1_MODE_ZH3_HALLUCINATED 1 /* hallucinated ZH3 (Roughton et al., I3D 2024) */
+
+/* Choices made once, at load (there are no setters on a loaded handle). */
+typedef struct PkLoadOptions {
+    uint32_t interpolation; /* PK_INTERP_*; ignored by clouds. Taylor and
+                               tricubic need gradients: loading a volume
+                               without them fails with PK_ERR_NO_GRADIENTS */
+    int32_t l1_mode;        /* PK_L1_MODE_*; ignored for other orders */
+} PkLoadOptions;
+
 /* A loaded .probes file. */
 typedef struct PkProbes PkProbes;
-/* Per-object probe-cloud walk cache (last tetrahedron found). */
+/* Per-object query state: a probe cloud's walk cache (last tetrahedron
+ * found); unused by volumes. */
 typedef struct PkWalkState PkWalkState;
 /* Per-object irradiance rig state (its current SH parameters). */
 typedef struct PkRig PkRig;
@@ -107,6 +127,16 @@ PkProbes *pk_load_file(const char *path, PkStatus *status);
 /* As pk_load_file, from len bytes at data (copied; caller keeps them). */
 PkProbes *pk_load_bytes(const uint8_t *data, size_t len, PkStatus *status);
 
+/* Trilinear volumes, L1 files evaluated as baked. */
+PkLoadOptions pk_load_options_default(void);
+
+/* pk_load_file / pk_load_bytes with options (NULL: the defaults). */
+PkProbes *pk_probes_load_file(const char *path, const PkLoadOptions *options,
+                              PkStatus *status);
+PkProbes *pk_probes_load_bytes(const uint8_t *data, size_t len,
+                               const PkLoadOptions *options,
+                               PkStatus *status);
+
 /* Frees a handle (NULL is a no-op). PkRig states made from it stay valid. */
 void pk_free(PkProbes *probes);
 
@@ -119,6 +149,15 @@ size_t pk_probe_count(const PkProbes *probes);
 /* SH order (bands) of the stored radiance, 1..8; order² coefficients per
  * probe; 0 for NULL. */
 uint32_t pk_sh_order(const PkProbes *probes);
+
+/* Coefficients per point pk_sh writes: 9 (bands 0-2) for L2 and higher
+ * orders and for L1 evaluated with hallucinated ZH3, 4 for linear L1, 1 for
+ * L0; 0 for NULL. */
+uint32_t pk_sh_count(const PkProbes *probes);
+
+/* PK_L1_MODE_LINEAR or PK_L1_MODE_ZH3_HALLUCINATED as chosen at load
+ * (linear for every order but L1); -1 for NULL. */
+int32_t pk_l1_mode(const PkProbes *probes);
 
 /* ---- walk state (probe clouds) ---------------------------------------- */
 
@@ -135,8 +174,9 @@ void pk_walk_state_reset(PkWalkState *state);
 
 /* ---- queries (clouds and volumes) -------------------------------------- */
 
-/* Irradiance (not divided by π) at position[3] (metres, world) for unit
- * normal[3] into out_rgb[3]. state may be NULL (cold walk every call) and is
+/* Irradiance (not divided by π) at position[3] (metres, world) for
+ * normal[3] into out_rgb[3]; an L1 file in PK_L1_MODE_ZH3_HALLUCINATED adds
+ * the hallucinated zonal lobe. state may be NULL (cold walk every call) and is
  * ignored for volumes. Outside a cloud's convex hull the closest hull point
  * is used; outside a volume's box the point is clamped to it. */
 PkStatus pk_irradiance(const PkProbes *probes, PkWalkState *state,
@@ -151,11 +191,13 @@ PkStatus pk_irradiance_many(const PkProbes *probes, PkWalkState *state,
                             const float *normals, float *out_rgb);
 
 /* Interpolated radiance SH at position[3] into out (out_len floats, at least
- * 3·order²): out[3k + c] for coefficient k = l(l+1)+m, channel c. */
+ * 3·pk_sh_count): out[3k + c] for coefficient k = l(l+1)+m, channel c;
+ * bands 0-2 at most, with an L1 file's hallucinated zonal lobe in band 2
+ * when it is evaluated that way. */
 PkStatus pk_sh(const PkProbes *probes, PkWalkState *state,
                const float *position, float *out, size_t out_len);
 
-/* pk_sh for count points; out (out_len >= count·3·order² floats) holds
+/* pk_sh for count points; out (out_len >= count·3·pk_sh_count floats) holds
  * point after point. */
 PkStatus pk_sh_many(const PkProbes *probes, PkWalkState *state, size_t count,
                     const float *positions, float *out, size_t out_len);
@@ -177,11 +219,8 @@ PkStatus pk_cloud_weights(const PkProbes *probes, PkWalkState *state,
 
 /* ---- volumes ----------------------------------------------------------- */
 
-/* Sets the interpolation mode (PK_INTERP_*). Taylor and tricubic need
- * gradients (PK_ERR_NO_GRADIENTS otherwise, mode unchanged). Atomic. */
-PkStatus pk_volume_set_interp(const PkProbes *probes, uint32_t mode);
-
-/* Current PK_INTERP_* mode, or -1 if probes is NULL or not a volume. */
+/* The PK_INTERP_* mode chosen at load, or -1 if probes is NULL or not a
+ * volume. */
 int32_t pk_volume_interp(const PkProbes *probes);
 
 /* 1 if the volume stores SH gradients, else 0. */
@@ -222,7 +261,7 @@ PkStatus pk_rig_update(PkRig *rig, const float *sample_sh, size_t len);
 
 /* Update for a translated (not rotated) object: samples lighting (a cloud or
  * volume) at each sample point + translation[3] (metres), truncating or
- * zero-padding its SH to the rig's order. state: the object's walk state
+ * zero-padding its SH (as pk_sh gives it) to the rig's order. state: the object's walk state
  * (may be NULL). */
 PkStatus pk_rig_update_from_probes(PkRig *rig, const PkProbes *lighting,
                                    PkWalkState *state,
@@ -237,6 +276,57 @@ PkStatus pk_rig_irradiance(const PkRig *rig, const float *position,
 PkStatus pk_rig_irradiance_many(const PkRig *rig, size_t count,
                                 const float *positions, const float *normals,
                                 float *out_rgb);
+
+/* ---- irradiance rigs with the near/transition/rig split ---------------- */
+
+/* PkLight.kind */
+#define PK_LIGHT_SPHERE 0      /* position, radius, intensity */
+#define PK_LIGHT_POINT 1       /* position, intensity */
+#define PK_LIGHT_SPOT 2        /* position, direction, inner/outer_deg, intensity */
+#define PK_LIGHT_DISK 3        /* position, direction, radius, intensity */
+#define PK_LIGHT_DIRECTIONAL 4 /* direction; intensity = irradiance facing it (W/m²) */
+
+/* A scene light: world coordinates (m); direction = unit way light travels;
+ * intensity W/sr per RGB channel; unused fields ignored. */
+typedef struct PkLight {
+    uint32_t kind;
+    float position[3];
+    float direction[3];
+    float radius;
+    float inner_deg;
+    float outer_deg;
+    float intensity[3];
+} PkLight;
+
+/* Per-object rig with the split: near lights exact per vertex, lights in
+ * the transition band cross-faded, the rest through the rig. */
+typedef struct PkSplitRig PkSplitRig;
+
+/* Split rig for rig index of the file; NULL on error (PK_ERR_OUT_OF_RANGE
+ * for a bad index). Owns its data. */
+PkSplitRig *pk_split_rig_new(const PkProbes *probes, size_t index,
+                             PkStatus *status);
+
+/* Frees a split rig (NULL is a no-op). */
+void pk_split_rig_free(PkSplitRig *rig);
+
+/* Per-frame update: the object placed by the rigid transform
+ * world_from_object (12 floats, column-major: x, y, z axis columns, then the
+ * translation) among count lights (world coordinates); target = grey levels
+ * of error allowed, white = reflected radiance shown as white. */
+PkStatus pk_split_rig_update(PkSplitRig *rig, const float *world_from_object,
+                             const PkLight *lights, size_t count, float target,
+                             float white);
+
+/* Irradiance (not divided by π) at object-space position[3] for unit
+ * object-space normal[3] into out_rgb[3]. */
+PkStatus pk_split_rig_irradiance(const PkSplitRig *rig, const float *position,
+                                 const float *normal, float *out_rgb);
+
+/* pk_split_rig_irradiance per vertex: 3·count floats in each array. */
+PkStatus pk_split_rig_irradiance_many(const PkSplitRig *rig, size_t count,
+                                      const float *positions,
+                                      const float *normals, float *out_rgb);
 
 #ifdef __cplusplus
 }

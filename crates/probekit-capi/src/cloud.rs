@@ -3,16 +3,17 @@
 
 use crate::args::{floats_out, vec3_in};
 use crate::error::{run, Error};
-use crate::probes::{handle, Body};
+use crate::probes::handle;
 use crate::{PkProbes, PkStatus};
-use probekit_runtime::cloud::WalkState;
+use probekit_runtime::{ObjectState, ProbeFileKind};
 use std::panic::catch_unwind;
 
-/// A per-object probe-cloud walk cache (opaque `PkWalkState` in C): the
-/// runtime's [`WalkState`]. Created by [`pk_walk_state_new`].
-pub struct PkWalkState(WalkState);
+/// A per-object query state (opaque `PkWalkState` in C): the runtime's
+/// [`ObjectState`], the walk cache of a probe cloud (unused by volumes).
+/// Created by [`pk_walk_state_new`].
+pub struct PkWalkState(ObjectState);
 
-pub(crate) fn walk_state<'a>(ws: *mut PkWalkState) -> Option<&'a mut WalkState> {
+pub(crate) fn walk_state<'a>(ws: *mut PkWalkState) -> Option<&'a mut ObjectState> {
     // SAFETY: non-null walk states come from pk_walk_state_new.
     unsafe { ws.as_mut() }.map(|w| &mut w.0)
 }
@@ -21,7 +22,7 @@ pub(crate) fn walk_state<'a>(ws: *mut PkWalkState) -> Option<&'a mut WalkState> 
 /// [`pk_walk_state_free`]. Null only if allocation fails.
 #[no_mangle]
 pub extern "C" fn pk_walk_state_new() -> *mut PkWalkState {
-    catch_unwind(|| Box::into_raw(Box::new(PkWalkState(WalkState::new()))))
+    catch_unwind(|| Box::into_raw(Box::new(PkWalkState(ObjectState::new()))))
         .unwrap_or(std::ptr::null_mut())
 }
 
@@ -39,7 +40,7 @@ pub unsafe extern "C" fn pk_walk_state_free(state: *mut PkWalkState) {
 #[no_mangle]
 pub unsafe extern "C" fn pk_walk_state_reset(state: *mut PkWalkState) {
     if let Some(w) = walk_state(state) {
-        *w = WalkState::new();
+        *w = ObjectState::new();
     }
 }
 
@@ -52,12 +53,12 @@ pub unsafe extern "C" fn pk_walk_state_reset(state: *mut PkWalkState) {
 /// (`PWGT`), renormalized; where the cell visibility hides every probe of
 /// positive weight, the cell's darkest probe alone, and where it leaves
 /// less than a tenth of the weight in sight, a blend towards that probe
-/// (`ProbeCloud::weights_at`). These are the weights the
+/// (`probekit_runtime::Probes::query`). These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
 /// probes equals [`pk_sh`] — except for a file whose `PWGT` stores a
 /// directional brightness exponent (format 1.9): [`pk_sh`] then blends per
-/// direction (`ProbeCloud::set_directional_brightness`), which four weights
-/// cannot express, so use [`pk_sh`] per object. Not a cloud: [`PkStatus::WrongKind`]. `state`
+/// direction, which four weights cannot express, so use [`pk_sh`] per
+/// object. Not a cloud: [`PkStatus::WrongKind`]. `state`
 /// as in [`pk_irradiance`]. No allocation.
 ///
 /// [`pk_sh`]: crate::pk_sh
@@ -72,19 +73,19 @@ pub unsafe extern "C" fn pk_cloud_weights(
 ) -> PkStatus {
     run(|| {
         let h = handle(probes)?;
-        let Body::Cloud(c) = &h.body else {
+        if h.probes.cloud().is_none() || h.probes.kind() != ProbeFileKind::Cloud {
             return Err(Error::new(PkStatus::WrongKind, "not a probe cloud"));
-        };
+        }
         let p = vec3_in(position, "position")?;
         if out_indices.is_null() {
             return Err(Error::null("out_indices"));
         }
         let weights = floats_out(out_weights, 4, "out_weights")?;
-        let mut cold = WalkState::new();
-        let (idx, w) = c.weights_at(p, walk_state(state).unwrap_or(&mut cold));
+        let mut cold = ObjectState::new();
+        let q = h.probes.query(walk_state(state).unwrap_or(&mut cold), p)?;
         // SAFETY: non-null; the header requires 4 writable u32.
-        unsafe { std::slice::from_raw_parts_mut(out_indices, 4) }.copy_from_slice(&idx);
-        weights.copy_from_slice(&w);
+        unsafe { std::slice::from_raw_parts_mut(out_indices, 4) }.copy_from_slice(&q.probes[..4]);
+        weights.copy_from_slice(&q.weights[..4]);
         Ok(())
     })
 }

@@ -16,10 +16,13 @@
 //! * Queries ([`pk_irradiance`], [`pk_sh`], their batched forms, the rig
 //!   queries) never allocate; only loading, state creation and error
 //!   reporting do.
-//! * A [`PkProbes`] is immutable after loading except for its volume
-//!   interpolation mode (an atomic), so it can be queried from many threads
-//!   at once; a [`PkWalkState`] or a [`PkRig`] belongs to one object and
-//!   must not be used by two threads at the same time.
+//! * A [`PkProbes`] is immutable after loading (a volume's interpolation
+//!   and the L1 evaluation are chosen at load, [`PkLoadOptions`]), so it
+//!   can be queried from many threads at once; a [`PkWalkState`] or a
+//!   [`PkRig`] belongs to one object and must not be used by two threads at
+//!   the same time.
+//! * Every query goes through [`probekit_runtime::Probes`]: the C API and
+//!   the Rust runtime give the same numbers.
 //!
 //! Conventions are those of `probekit_sh`: right-handed, +Y up, metres,
 //! linear RGB, real SH indexed `l(l+1)+m` (Sloan's Condon–Shortley phase),
@@ -37,6 +40,7 @@ mod error;
 mod probes;
 mod query;
 mod rig;
+mod split;
 mod volume;
 
 pub use cloud::{
@@ -44,7 +48,9 @@ pub use cloud::{
 };
 pub use error::{pk_last_error, pk_last_error_copy, PkStatus};
 pub use probes::{
-    pk_free, pk_kind, pk_load_bytes, pk_load_file, pk_probe_count, pk_sh_order, PkKind, PkProbes,
+    pk_free, pk_kind, pk_l1_mode, pk_load_bytes, pk_load_file, pk_load_options_default,
+    pk_probe_count, pk_probes_load_bytes, pk_probes_load_file, pk_sh_count, pk_sh_order, PkKind,
+    PkLoadOptions, PkProbes, PK_L1_MODE_AS_BAKED, PK_L1_MODE_LINEAR, PK_L1_MODE_ZH3_HALLUCINATED,
 };
 pub use query::{pk_irradiance, pk_irradiance_many, pk_sh, pk_sh_many};
 pub use rig::{
@@ -52,11 +58,16 @@ pub use rig::{
     pk_rig_order, pk_rig_sample_count, pk_rig_sample_points, pk_rig_update,
     pk_rig_update_from_probes, PkRig,
 };
-pub use volume::{pk_volume_has_gradients, pk_volume_interp, pk_volume_set_interp};
+pub use split::{
+    pk_split_rig_free, pk_split_rig_irradiance, pk_split_rig_irradiance_many, pk_split_rig_new,
+    pk_split_rig_update, PkLight, PkSplitRig, PK_LIGHT_DIRECTIONAL, PK_LIGHT_DISK, PK_LIGHT_POINT,
+    PK_LIGHT_SPHERE, PK_LIGHT_SPOT,
+};
+pub use volume::{pk_volume_has_gradients, pk_volume_interp};
 
 /// Version of this C ABI; `PK_ABI_VERSION` in the header. Bumped when a
 /// signature or a struct/enum value changes.
-pub const PK_ABI_VERSION: u32 = 1;
+pub const PK_ABI_VERSION: u32 = 2;
 
 /// [`PK_ABI_VERSION`]: compare with the header's `PK_ABI_VERSION` at start-up.
 #[no_mangle]

@@ -6,12 +6,18 @@ use crate::error::{run, Error};
 use crate::probes::handle;
 use crate::{PkProbes, PkStatus, PkWalkState};
 use glam::Vec3;
-use probekit_runtime::cloud::WalkState;
-use probekit_runtime::sh::MAX_COEFFS;
+use probekit_runtime::{ObjectState, QueryError};
 
-/// Irradiance at `position[3]` (metres) for unit `normal[3]` into
-/// `out_rgb[3]` (not divided by π). `state` may be null (a cold walk each
-/// call) and is ignored for volumes. No allocation.
+/// `e` with the index of the point of a batch it is about, for the message.
+fn at(e: QueryError, i: usize) -> Error {
+    let Error(status, msg) = Error::from(e);
+    Error(status, format!("point {i}: {msg}"))
+}
+
+/// Irradiance at `position[3]` (metres) for `normal[3]` (any non-zero
+/// length) into `out_rgb[3]` (not divided by π;
+/// `probekit_runtime::Probes::irradiance`). `state` may be null (a cold
+/// walk each call) and is ignored for volumes. No allocation.
 #[no_mangle]
 pub unsafe extern "C" fn pk_irradiance(
     probes: *const PkProbes,
@@ -25,8 +31,9 @@ pub unsafe extern "C" fn pk_irradiance(
         let p = vec3_in(position, "position")?;
         let n = vec3_in(normal, "normal")?;
         let out = floats_out(out_rgb, 3, "out_rgb")?;
-        let e = h.irradiance(p, n, walk_state(state))?;
-        out.copy_from_slice(&e.to_array());
+        let mut cold = ObjectState::new();
+        let ws = walk_state(state).unwrap_or(&mut cold);
+        out.copy_from_slice(&h.probes.irradiance(ws, p, n)?);
         Ok(())
     })
 }
@@ -49,7 +56,7 @@ pub unsafe extern "C" fn pk_irradiance_many(
         let ps = floats_in(positions, count, "positions")?;
         let ns = floats_in(normals, count, "normals")?;
         let out = floats_out(out_rgb, times3(count)?, "out_rgb")?;
-        let mut cold = WalkState::new();
+        let mut cold = ObjectState::new();
         let ws = walk_state(state).unwrap_or(&mut cold);
         for (i, ((p, n), o)) in ps
             .chunks_exact(3)
@@ -59,16 +66,18 @@ pub unsafe extern "C" fn pk_irradiance_many(
         {
             let p = finite(Vec3::from_slice(p), "position", i)?;
             let n = finite(Vec3::from_slice(n), "normal", i)?;
-            let e = h.irradiance(p, n, Some(&mut *ws))?;
-            o.copy_from_slice(&e.to_array());
+            let e = h.probes.irradiance(ws, p, n).map_err(|e| at(e, i))?;
+            o.copy_from_slice(&e);
         }
         Ok(())
     })
 }
 
 /// Interpolated radiance SH at `position[3]` into `out` (`out_len` floats,
-/// at least `3·order²`): coefficient `k = l(l+1)+m`, channel `c` at
-/// `out[3k + c]`. Buffer too short: [`PkStatus::BufferTooSmall`], nothing
+/// at least `3·pk_sh_count`): coefficient `k = l(l+1)+m`, channel `c` at
+/// `out[3k + c]`; bands 0–2 at most (`probekit_runtime::Probes::sh_at`),
+/// with an L1 file's hallucinated zonal lobe in band 2 where it is
+/// evaluated that way. Buffer too short: [`PkStatus::BufferTooSmall`], nothing
 /// written. `state` as in [`pk_irradiance`]. No allocation.
 #[no_mangle]
 pub unsafe extern "C" fn pk_sh(
@@ -81,7 +90,7 @@ pub unsafe extern "C" fn pk_sh(
     run(|| {
         let h = handle(probes)?;
         let p = vec3_in(position, "position")?;
-        let need = 3 * h.coeff_count();
+        let need = 3 * h.sh_count();
         if out_len < need {
             return Err(Error::new(
                 PkStatus::BufferTooSmall,
@@ -89,17 +98,17 @@ pub unsafe extern "C" fn pk_sh(
             ));
         }
         let out = floats_out(out, need, "out")?;
-        let mut buf = [Vec3::ZERO; MAX_COEFFS];
-        h.sh_into(p, walk_state(state), &mut buf)?;
-        for (o, c) in out.chunks_exact_mut(3).zip(&buf) {
-            o.copy_from_slice(&c.to_array());
+        let mut cold = ObjectState::new();
+        let sh = h.probes.sh_at(walk_state(state).unwrap_or(&mut cold), p)?;
+        for (o, c) in out.chunks_exact_mut(3).zip(&sh) {
+            o.copy_from_slice(c);
         }
         Ok(())
     })
 }
 
 /// [`pk_sh`] for `count` points (`positions`: `3·count` floats); `out`
-/// (`out_len` floats, at least `count·3·order²`) holds point after point,
+/// (`out_len` floats, at least `count·3·pk_sh_count`) holds point after point,
 /// each laid out as in [`pk_sh`].
 #[no_mangle]
 pub unsafe extern "C" fn pk_sh_many(
@@ -113,7 +122,7 @@ pub unsafe extern "C" fn pk_sh_many(
     run(|| {
         let h = handle(probes)?;
         let ps = floats_in(positions, count, "positions")?;
-        let per = 3 * h.coeff_count();
+        let per = 3 * h.sh_count();
         let need = count
             .checked_mul(per)
             .ok_or_else(|| Error::new(PkStatus::InvalidArgument, "count too large"))?;
@@ -124,18 +133,17 @@ pub unsafe extern "C" fn pk_sh_many(
             ));
         }
         let out = floats_out(out, need, "out")?;
-        let mut cold = WalkState::new();
+        let mut cold = ObjectState::new();
         let ws = walk_state(state).unwrap_or(&mut cold);
-        let mut buf = [Vec3::ZERO; MAX_COEFFS];
         for (i, (p, o)) in ps
             .chunks_exact(3)
             .zip(out.chunks_exact_mut(per))
             .enumerate()
         {
             let p = finite(Vec3::from_slice(p), "position", i)?;
-            h.sh_into(p, Some(&mut *ws), &mut buf)?;
-            for (o, c) in o.chunks_exact_mut(3).zip(&buf) {
-                o.copy_from_slice(&c.to_array());
+            let sh = h.probes.sh_at(ws, p).map_err(|e| at(e, i))?;
+            for (o, c) in o.chunks_exact_mut(3).zip(&sh) {
+                o.copy_from_slice(c);
             }
         }
         Ok(())

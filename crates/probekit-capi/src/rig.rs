@@ -7,9 +7,8 @@ use crate::error::{run, run_value, Error};
 use crate::probes::handle;
 use crate::{PkProbes, PkStatus, PkWalkState};
 use glam::Vec3;
-use probekit_runtime::cloud::WalkState;
 use probekit_runtime::rig::RigState;
-use probekit_runtime::sh::MAX_COEFFS;
+use probekit_runtime::ObjectState;
 use std::ffi::c_char;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -87,13 +86,13 @@ pub unsafe extern "C" fn pk_rig_new(
 ) -> *mut PkRig {
     run_value(status, std::ptr::null_mut(), || {
         let h = handle(probes)?;
+        let state = h.probes.rig(index)?.clone();
         let rig = h.rigs.get(index).ok_or_else(|| {
             Error::new(
                 PkStatus::OutOfRange,
                 format!("rig {index} of {}", h.rigs.len()),
             )
         })?;
-        let state = RigState::new(rig).map_err(|e| Error::new(PkStatus::Format, e.to_string()))?;
         let len = (state.order() * state.order())
             .checked_mul(rig.samples.len())
             .ok_or_else(|| Error::new(PkStatus::Format, "rig too large"))?;
@@ -193,7 +192,8 @@ pub unsafe extern "C" fn pk_rig_update(
 /// Convenience update for an object that is only translated: samples
 /// `lighting` (a cloud or volume handle) at `sample point + translation[3]`
 /// (world = mesh + translation, metres) and updates as [`pk_rig_update`].
-/// The lighting's SH is truncated or zero-padded to the rig's order.
+/// The lighting's SH (as [`crate::pk_sh`] gives it) is truncated or zero-padded
+/// to the rig's order.
 /// `state` (may be null) is the object's walk state for a cloud. No
 /// allocation. A rotated object must rotate the SH itself and call
 /// [`pk_rig_update`].
@@ -210,14 +210,15 @@ pub unsafe extern "C" fn pk_rig_update_from_probes(
         let h = handle(lighting)?;
         let t = vec3_in(translation, "translation")?;
         let n2 = r.state.order() * r.state.order();
-        let m = n2.min(h.coeff_count());
-        let mut cold = WalkState::new();
+        let m = n2.min(h.sh_count());
+        let mut cold = ObjectState::new();
         let ws = walk_state(state).unwrap_or(&mut cold);
-        let mut buf = [Vec3::ZERO; MAX_COEFFS];
         for (s, dst) in r.samples.iter().zip(r.scratch.chunks_exact_mut(n2.max(1))) {
-            h.sh_into(*s + t, Some(&mut *ws), &mut buf)?;
+            let sh = h.probes.sh_at(ws, *s + t)?;
             dst.fill(Vec3::ZERO);
-            dst[..m].copy_from_slice(&buf[..m]);
+            for (d, c) in dst[..m].iter_mut().zip(&sh) {
+                *d = Vec3::from(*c);
+            }
         }
         r.state
             .update(&r.scratch)

@@ -59,8 +59,17 @@ fn allocations(f: impl FnOnce()) -> usize {
 }
 
 fn load(bytes: &[u8]) -> *mut PkProbes {
+    load_interp(bytes, 0)
+}
+
+/// `bytes` loaded with volume interpolation `mode` (`PK_INTERP_*`).
+fn load_interp(bytes: &[u8], mode: u32) -> *mut PkProbes {
     let mut st = PkStatus::Panic;
-    let h = unsafe { pk_load_bytes(bytes.as_ptr(), bytes.len(), &mut st) };
+    let options = PkLoadOptions {
+        interpolation: mode,
+        ..pk_load_options_default()
+    };
+    let h = unsafe { pk_probes_load_bytes(bytes.as_ptr(), bytes.len(), &options, &mut st) };
     assert_eq!(st, PkStatus::Ok, "{}", last_error());
     assert!(!h.is_null());
     h
@@ -82,10 +91,31 @@ fn queries_do_not_allocate() {
     assert!(allocations(|| drop(std::hint::black_box(vec![1u8; 64]))) >= 1);
 
     let cloud = load(&cloud_file().to_bytes().unwrap());
-    let volume = load(&volume_file().to_bytes().unwrap());
+    let volume_bytes = volume_file().to_bytes().unwrap();
+    let volume = load(&volume_bytes);
+    let volumes: Vec<_> = (0..5).map(|m| load_interp(&volume_bytes, m)).collect();
     let ws = pk_walk_state_new();
     let rig = unsafe { pk_rig_new(cloud, 0, null_mut()) };
     assert!(!rig.is_null());
+    let split = unsafe { pk_split_rig_new(cloud, 0, null_mut()) };
+    assert!(!split.is_null());
+    let lamp = PkLight {
+        kind: PK_LIGHT_POINT,
+        position: [0.3, 0.2, 0.4],
+        direction: [0.0; 3],
+        radius: 0.0,
+        inner_deg: 0.0,
+        outer_deg: 0.0,
+        intensity: [1.0; 3],
+    };
+    let world = [
+        1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.5, 0.0, 0.0,
+    ];
+    // The first update sizes the split rig's buffers.
+    assert_eq!(
+        unsafe { pk_split_rig_update(split, world.as_ptr(), &lamp, 1, 1e-6, 1.0) },
+        PkStatus::Ok
+    );
     let pts = points();
     let ps = flat(&pts.iter().map(|p| p.0).collect::<Vec<_>>());
     let ns = flat(&pts.iter().map(|p| p.1).collect::<Vec<_>>());
@@ -119,17 +149,9 @@ fn queries_do_not_allocate() {
                 PkStatus::Ok
             );
         }
-        for mode in 0..5 {
-            assert_eq!(pk_volume_set_interp(volume, mode), PkStatus::Ok);
+        for &v in &volumes {
             assert_eq!(
-                pk_irradiance_many(
-                    volume,
-                    null_mut(),
-                    n,
-                    ps.as_ptr(),
-                    ns.as_ptr(),
-                    out.as_mut_ptr()
-                ),
+                pk_irradiance_many(v, null_mut(), n, ps.as_ptr(), ns.as_ptr(), out.as_mut_ptr()),
                 PkStatus::Ok
             );
         }
@@ -161,14 +183,26 @@ fn queries_do_not_allocate() {
             pk_rig_irradiance_many(rig, n, ps.as_ptr(), ns.as_ptr(), out.as_mut_ptr()),
             PkStatus::Ok
         );
+        assert_eq!(
+            pk_split_rig_update(split, world.as_ptr(), &lamp, 1, 1e-6, 1.0),
+            PkStatus::Ok
+        );
+        assert_eq!(
+            pk_split_rig_irradiance_many(split, n, ps.as_ptr(), ns.as_ptr(), out.as_mut_ptr()),
+            PkStatus::Ok
+        );
     });
     assert_eq!(count, 0, "queries allocated {count} times");
 
     unsafe {
         pk_rig_free(rig);
+        pk_split_rig_free(split);
         pk_walk_state_free(ws);
         pk_free(cloud);
         pk_free(volume);
+        for v in volumes {
+            pk_free(v);
+        }
     }
 }
 
@@ -215,9 +249,6 @@ unsafe fn hammer(h: *const PkProbes, ws: *mut PkWalkState) {
         let s = unsafe { pk_sh_many(h, ws, count, flat.as_ptr(), out.as_mut_ptr(), 3) };
         assert_ne!(s, PkStatus::Panic);
     }
-    for mode in [0, 1, 2, 3, 4, 5, u32::MAX] {
-        assert_ne!(unsafe { pk_volume_set_interp(h, mode) }, PkStatus::Panic);
-    }
     let mut name = [0 as std::ffi::c_char; 4];
     let mut len = 0usize;
     for i in [0usize, 1, 2, usize::MAX] {
@@ -251,6 +282,8 @@ unsafe fn hammer(h: *const PkProbes, ws: *mut PkWalkState) {
             pk_kind(h),
             pk_probe_count(h),
             pk_sh_order(h),
+            pk_sh_count(h),
+            pk_l1_mode(h),
             pk_rig_count(h),
         );
         let _ = (pk_volume_interp(h), pk_volume_has_gradients(h));
@@ -336,10 +369,10 @@ fn hostile_input_never_panics() {
     );
 }
 
-/// One handle queried from several threads at once (the header allows it),
-/// while another thread flips the volume's interpolation mode: every
-/// thread's answers equal the single-threaded ones for the mode it was in,
-/// and each thread's last error stays its own.
+/// One handle queried from several threads at once (the header allows
+/// it): every thread's answers equal the single-threaded ones, volumes
+/// loaded with two interpolations give the same (exact) field, and each
+/// thread's last error stays its own.
 #[test]
 fn one_handle_many_threads() {
     let cloud = load(&cloud_file().to_bytes().unwrap());
@@ -362,20 +395,10 @@ fn one_handle_many_threads() {
         })
         .collect();
     let handle = cloud as usize;
-    let volume = load(&volume_file().to_bytes().unwrap()) as usize;
-    let stop = std::sync::atomic::AtomicBool::new(false);
+    let volume_bytes = volume_file().to_bytes().unwrap();
+    // Trilinear and tricubic both reproduce the linear field exactly.
+    let volumes = [0, 2].map(|m| load_interp(&volume_bytes, m) as usize);
     std::thread::scope(|scope| {
-        let stop = &stop;
-        // Trilinear and tricubic both reproduce the linear field exactly, so
-        // the answer must not depend on when the mode flips.
-        scope.spawn(move || {
-            let mut mode = 0;
-            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
-                mode = 2 - mode;
-                let s = unsafe { pk_volume_set_interp(volume as *const PkProbes, mode) };
-                assert_eq!(s, PkStatus::Ok);
-            }
-        });
         let mut workers = Vec::new();
         for t in 0..4 {
             let (pts, expect) = (&pts, &expect);
@@ -413,7 +436,7 @@ fn one_handle_many_threads() {
                     }
                     let mut sh = [0.0f32; 3 * N];
                     for (i, (p, _)) in pts.iter().enumerate() {
-                        let v = volume as *const PkProbes;
+                        let v = volumes[(i + t) % 2] as *const PkProbes;
                         let s = unsafe {
                             pk_sh(
                                 v,
@@ -437,17 +460,16 @@ fn one_handle_many_threads() {
                 unsafe { pk_walk_state_free(ws) };
             }));
         }
-        let results: Vec<_> = workers.into_iter().map(|w| w.join()).collect();
-        // Stop the mode flipper before any panic propagates, or the scope hangs.
-        stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        for r in results {
-            if let Err(e) = r {
+        for w in workers {
+            if let Err(e) = w.join() {
                 std::panic::resume_unwind(e);
             }
         }
     });
     unsafe {
         pk_free(cloud);
-        pk_free(volume as *mut PkProbes);
+        for v in volumes {
+            pk_free(v as *mut PkProbes);
+        }
     }
 }

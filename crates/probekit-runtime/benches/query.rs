@@ -1,13 +1,26 @@
-//! Point-location speed on ~100 k probes: the Freudenthal (Kuhn) triangulation
-//! of a 47³ probe grid (103 823 probes, 584 K tetrahedra, maximally
-//! co-spherical). Cold random queries (fresh `WalkState` each: start grid +
-//! walk), coherent queries (one object moving in small steps, warm state),
-//! and batched queries outside the hull (closest-hull-point outer cells);
-//! and the cost of visibility weighting (`cloud_visibility`: distance
-//! moments, cell visibility, both, and both with fitted probe weights; cell
-//! visibility with occluder planes; everything with the brightness
-//! exponent, then with directional brightness on top).
+//! Query speed on ~100 k probes.
+//!
+//! `cloud_100k`: irradiance queries (L2, one thread) on a synthetic default
+//! bake of a 47³ probe lattice in a building of 8 m rooms (`query/scene.rs`:
+//! every section `probekit bake` stores by default): the walk alone
+//! (`TetMesh::weights_at`), the plain barycentric blend (a file with
+//! positions, coefficients and tetrahedra only) and the default blend, each
+//! for coherent queries (one object moving in 5 cm steps through the rooms,
+//! one `ObjectState`) and cold ones (random points, a fresh state each).
+//!
+//! `query_kuhn47`: point location alone on the Freudenthal (Kuhn)
+//! triangulation of a 47³ probe grid (103 823 probes, 584 K tetrahedra,
+//! maximally co-spherical): cold random queries, coherent queries, and
+//! queries outside the hull (closest-hull-point outer cells).
+//!
+//! `cloud_visibility`: the cost of each blend section on a 20³ Kuhn grid
+//! (distance moments, cell visibility, both, and both with fitted probe
+//! weights; cell visibility with occluder planes; everything with the
+//! brightness exponent, then with directional brightness on top).
 //! Random Delaunay clouds are benchmarked in `probekit/benches/delaunay.rs`.
+
+#[path = "query/scene.rs"]
+mod scene;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
@@ -15,6 +28,7 @@ use probekit_runtime::cloud::{
     cell_visibility, face_neighbors, lattice_tets, CellPlanes, CellVisibility, ProbeCloud, TetMesh,
     VisibilityMaps, WalkState,
 };
+use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use std::hint::black_box;
 
 fn kuhn_grid(k: u32) -> TetMesh {
@@ -217,5 +231,92 @@ fn visibility(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, visibility);
+/// `count` random points in the scene's box.
+fn random_points(count: usize, seed: u64) -> Vec<Vec3> {
+    let mut rng = scene::Rng(seed);
+    let hi = (scene::K - 1) as f32;
+    (0..count)
+        .map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * hi)
+        .collect()
+}
+
+/// One object moving in ~5 cm steps through the rooms (bouncing in the
+/// box), with a normal that turns slowly.
+fn coherent_path(count: usize) -> (Vec<Vec3>, Vec<Vec3>) {
+    let mut rng = scene::Rng(7);
+    let hi = (scene::K - 1) as f32;
+    let mut p = Vec3::splat(hi / 2.0);
+    let mut v = Vec3::new(0.04, 0.02, 0.03);
+    let mut points = Vec::with_capacity(count);
+    let mut normals = Vec::with_capacity(count);
+    for i in 0..count {
+        let jitter = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+        p += v + jitter * 0.01;
+        for a in 0..3 {
+            if p[a] < 0.0 || p[a] > hi {
+                v[a] = -v[a];
+                p[a] = p[a].clamp(0.0, hi);
+            }
+        }
+        points.push(p);
+        let t = i as f32 * 1e-3;
+        normals.push(Vec3::new(t.cos(), 0.5, t.sin()).normalize());
+    }
+    (points, normals)
+}
+
+/// Irradiance on a 100 k-probe cloud: walk alone, plain blend, default blend.
+fn cloud_100k(c: &mut Criterion) {
+    const N: usize = 10_000;
+    // Through bytes, as an engine loads them.
+    let load = |plain| {
+        let bytes = scene::default_bake(plain).to_bytes().unwrap();
+        Probes::from_bytes(&bytes, LoadOptions::default()).unwrap()
+    };
+    let (plain, full) = (load(true), load(false));
+    let (path, normals) = coherent_path(N);
+    let cold = random_points(N, 11);
+    let mut g = c.benchmark_group("cloud_100k");
+    g.throughput(Throughput::Elements(N as u64));
+    let mesh = plain.cloud().unwrap().mesh();
+    g.bench_function("walk_coherent", |b| {
+        let mut s = WalkState::new();
+        b.iter(|| {
+            for &q in &path {
+                black_box(mesh.weights_at(q, &mut s));
+            }
+        })
+    });
+    g.bench_function("walk_cold", |b| {
+        b.iter(|| {
+            for &q in &cold {
+                black_box(mesh.weights_at(q, &mut WalkState::new()));
+            }
+        })
+    });
+    for (name, probes) in [("plain", &plain), ("default", &full)] {
+        g.bench_function(format!("{name}_coherent"), |b| {
+            let mut s = ObjectState::new();
+            b.iter(|| {
+                let mut acc = 0.0;
+                for (&q, &n) in path.iter().zip(&normals) {
+                    acc += probes.irradiance(&mut s, q, n).unwrap()[0];
+                }
+                black_box(acc)
+            })
+        });
+        g.bench_function(format!("{name}_cold"), |b| {
+            b.iter(|| {
+                let mut acc = 0.0;
+                for (&q, &n) in cold.iter().zip(&normals) {
+                    acc += probes.irradiance(&mut ObjectState::new(), q, n).unwrap()[0];
+                }
+                black_box(acc)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, cloud_100k, bench, visibility);
 criterion_main!(benches);

@@ -16,7 +16,7 @@
 //! | model | parameters | `SH(p)` |
 //! |---|---|---|
 //! | [`RigModel::Constant`] | 1 | `c₀` |
-//! | [`RigModel::Gradient`] | 4 | `c₀ + t_x c₁ + t_y c₂ + t_z c₃` (SH + gradient, Yuan et al. 2011 §2.1) |
+//! | [`RigModel::Gradient`] | 4 | `c₀ + t_x c₁ + t_y c₂ + t_z c₃` (SH + gradient, *Irradiance Rigs* §2.1) |
 //! | [`RigModel::Tensor`] | `n_x·n_y·n_z` | `Σ_{ijk} f_i(x) g_j(y) h_k(z) c_{i + n_x (j + n_y k)}` |
 //!
 //! Per axis of a tensor rig: [`AxisModel::Constant`] is `{1}`,
@@ -30,6 +30,12 @@
 //! The baker builds its least-squares design matrix from [`rig_weights`], so
 //! fitting and evaluation cannot disagree.
 
+mod lights;
+mod split;
+
+pub use lights::{Light, SphereTable, DISK_POLYGON_EDGES, SPHERE_TABLE_SIZE};
+pub use split::{rig_weight, transition_distance, SplitRig, TRANSITION_BAND};
+
 use crate::format::{AxisModel, Rig, RigModel};
 use crate::math;
 use crate::prelude::*;
@@ -41,7 +47,7 @@ use probekit_sh::{basis::num_coeffs, convolve, MAX_COEFFS, MAX_ORDER};
 pub const MAX_WEIGHTS: usize = 8;
 
 /// A rig that cannot be used: what is wrong with it or with the input.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RigError {
     /// The rig's SH order is outside `1..=MAX_ORDER`.
@@ -69,6 +75,10 @@ pub enum RigError {
     /// The bounding box is not finite or has `min > max`.
     #[error("rig bounding box is empty or not finite")]
     BoundingBox,
+    /// [`SplitRig::update`] got an object transform that is not finite or
+    /// not invertible.
+    #[error("the object's transform is not finite or not invertible")]
+    Transform,
 }
 
 /// Normalised box coordinate `u ∈ [0, 1]` of `x` on an axis `[lo, hi]`
@@ -236,7 +246,7 @@ impl RigState {
         &self.params
     }
 
-    /// Per-frame fit (Yuan et al. 2011 §2.2): `parameters = L × samples`, where
+    /// Per-frame fit (*Irradiance Rigs* §2.2): `parameters = L × samples`, where
     /// `sample_sh` holds the radiance SH at every sample point, sample-major
     /// (`sample_sh[j·order² + c]`, same order as the rig's sample points),
     /// each coefficient and channel fitted independently. No allocation.

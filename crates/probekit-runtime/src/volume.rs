@@ -1,6 +1,6 @@
-//! Querying an irradiance volume (uniform grid or adaptive octree) — the
-//! engine side of irradiance volumes (Tatarchuk, *Irradiance Volumes for Games*, after
-//! Greger et al. 1998).
+//! Querying an irradiance volume (uniform grid or adaptive octree), after
+//! Tatarchuk, *Irradiance Volumes for Games* (itself after Greger et al.
+//! 1998).
 //!
 //! A [`Volume`] is built once from a [`ProbeFile`] of kind
 //! [`ProbeFileKind::Volume`]; every query afterwards is allocation free.
@@ -10,10 +10,10 @@
 //! half-width `h` (a cell size, per axis), with `t_a = |p − c_s|_a / h_a`:
 //!
 //! * [`Interp::Trilinear`]: weight `Π_a (1 − t_a)`, value `v_s` — on a uniform
-//!   grid exactly Tatarchuk's "seven LERPs".
-//! * [`Interp::Taylor`]: same weight, value `v_s + ∇v_s·(p − c_s)`: Tatarchuk's
+//!   grid exactly the seed's "seven LERPs".
+//! * [`Interp::Taylor`]: same weight, value `v_s + ∇v_s·(p − c_s)`: the seed's
 //!   "first-order Taylor expansion, then interpolate as usual".
-//! * [`Interp::Tricubic`]: Tatarchuk's Hermite patches from values and
+//! * [`Interp::Tricubic`]: the seed's Hermite patches from values and
 //!   gradients (no cross derivatives): weight `Π_a H₀(t_a)` with
 //!   `H₀(t) = 1 − 3t² + 2t³`, plus the tangent terms
 //!   `Σ_a (p − c_s)_a (1 − t_a)² Π_{b≠a} H₀(t_b) · ∂_a v_s`. Exact for any
@@ -21,10 +21,10 @@
 //!   stores no gradients for (a lower gradient order) use the trilinear
 //!   weight instead: a Hermite patch with zero slopes is a smoothstep, flat
 //!   at every sample.
-//! * [`Interp::InverseDistance`]: Tatarchuk's fallback, `1/distance` weights over
+//! * [`Interp::InverseDistance`]: the seed's fallback, `1/distance` weights over
 //!   the 8 corners of the leaf containing `p` (continuous inside a leaf only).
 //! * [`Interp::LeafTrilinear`]: the naive octree lookup (trilinear over the
-//!   containing leaf's corners only) that Tatarchuk warns "pops"; kept for
+//!   containing leaf's corners only) that the seed warns "pops"; kept for
 //!   comparison and tests.
 //!
 //! On a uniform grid the kernels of the 8 corners of the containing cell sum
@@ -33,7 +33,7 @@
 //! result is normalised by the sum of weights (a partition of unity). Inside
 //! a leaf whose neighbours have its size this is plain trilinear. Where a
 //! coarse leaf touches finer ones, the finer samples on the shared faces
-//! reach into the coarse leaf through their kernels — Tatarchuk's "continue
+//! reach into the coarse leaf through their kernels — the seed's "continue
 //! using samples from subdivided neighbors" — and since every weight is a
 //! continuous function of `p` and the leaf's own corner kernels keep the
 //! denominator ≥ 1, the interpolated lighting is continuous along any line
@@ -50,6 +50,8 @@
 //! Stored and returned SH is **radiance** SH (crate conventions);
 //! [`Volume::irradiance`] applies the clamped-cosine convolution.
 
+mod cells;
+
 use crate::format::{layout::NONE, FormatError, ProbeFile, ProbeFileKind};
 use crate::prelude::*;
 use crate::{collections::Set, math};
@@ -64,11 +66,11 @@ pub enum Interp {
     /// Tent kernels (trilinear on a uniform grid), continuous across levels.
     Trilinear,
     /// First-order Taylor extrapolation from each sample, then trilinear
-    /// weights (Tatarchuk 2005). Needs gradients.
+    /// weights (Tatarchuk). Needs gradients.
     Taylor,
-    /// Tricubic Hermite from values and gradients (Tatarchuk 2005). Needs gradients.
+    /// Tricubic Hermite from values and gradients (Tatarchuk). Needs gradients.
     Tricubic,
-    /// Inverse-distance weights over the containing leaf's 8 corners (Tatarchuk 2005
+    /// Inverse-distance weights over the containing leaf's 8 corners (Tatarchuk
     /// fallback). Continuous only inside a leaf.
     InverseDistance,
     /// Trilinear over the containing leaf's corners only: the naive octree
@@ -316,7 +318,15 @@ impl Volume {
         if interp.needs_gradients() && self.grads.is_none() {
             return Err(VolumeError::NoGradients(interp));
         }
-        let out = &mut out[..n];
+        self.sample_into(p, interp, &mut out[..n]);
+        Ok(())
+    }
+
+    /// [`Self::sample_sh`] without its checks: `out` holds exactly
+    /// [`Self::coeffs_per_sample`] coefficients, and the volume has
+    /// gradients if `interp` needs them.
+    pub(crate) fn sample_into(&self, p: Vec3, interp: Interp, out: &mut [Vec3]) {
+        let n = self.n;
         out.fill(Vec3::ZERO);
         let (bmin, bmax) = self.bounds();
         let p = p.clamp(bmin, bmax);
@@ -421,7 +431,6 @@ impl Volume {
                 }
             }
         }
-        Ok(())
     }
 
     /// [`Self::sample_sh`] for many points: `out` holds `n` coefficients per

@@ -174,7 +174,16 @@ int main(int argc, char **argv) {
            pk_volume_has_gradients(volume));
     check(pk_irradiance_many(volume, NULL, (size_t)n, pos, nrm, out), "volume irradiance");
     for (i = 0; i < n; i++) print3("V", i, &out[3 * i]);
-    check(pk_volume_set_interp(volume, PK_INTERP_TRICUBIC), "set tricubic");
+    pk_free(volume);
+    {
+        PkLoadOptions options = pk_load_options_default();
+        options.interpolation = PK_INTERP_TRICUBIC;
+        volume = pk_probes_load_file(argv[2], &options, &st);
+        if (!volume) {
+            printf("FAIL load tricubic volume status=%d error=%s\n", (int)st, pk_last_error());
+            return 1;
+        }
+    }
     printf("VINTERP %d\n", pk_volume_interp(volume));
     {
         size_t per = 3u * pk_sh_order(volume) * pk_sh_order(volume);
@@ -185,8 +194,12 @@ int main(int argc, char **argv) {
             printf("\n");
         }
     }
-    printf("VBADMODE %d\n", (int)pk_volume_set_interp(volume, 42));
-    printf("WRONGKIND %d\n", (int)pk_volume_set_interp(cloud, PK_INTERP_TRILINEAR));
+    {
+        PkLoadOptions bad = pk_load_options_default();
+        bad.interpolation = 42;
+        printf("VBADMODE %d\n", pk_probes_load_file(argv[2], &bad, &st) == NULL ? (int)st : -1);
+    }
+    printf("WRONGKIND %d\n", pk_volume_interp(cloud));
     pk_free(volume);
 
     /* ---- bad input: errors, never crashes ---- */

@@ -16,8 +16,7 @@ mod field;
 
 use core::ffi::{c_char, c_int};
 use glam::Vec3;
-use probekit_runtime::format::ProbeFile;
-use probekit_runtime::volume::{Interp, Volume};
+use probekit_runtime::{LoadOptions, ObjectState, Probes};
 
 #[global_allocator]
 static ALLOCATOR: bump::Bump = bump::Bump::new();
@@ -62,18 +61,16 @@ pub extern "C" fn _Unwind_Resume() -> ! {
 /// The C entry point (the C runtime's start files call it).
 #[no_mangle]
 pub extern "C" fn main(_argc: c_int, _argv: *const *const c_char) -> c_int {
-    let Ok(file) = ProbeFile::from_bytes(FILE) else {
+    // Through the engine's entry point: trilinear volumes by default.
+    let Ok(probes) = Probes::from_bytes(FILE, LoadOptions::default()) else {
         say("probekit no_std check: the file does not load\n");
-        return 2;
-    };
-    let Ok(volume) = Volume::from_file(&file) else {
-        say("probekit no_std check: the file is not a volume\n");
         return 2;
     };
     // Inside the box, off the probes, with a normal off every axis.
     let p = Vec3::new(0.25, 1.0, 3.5);
     let n = Vec3::new(1.0, 2.0, 2.0) / 3.0;
-    let Ok(got) = volume.irradiance(p, n, Interp::Trilinear) else {
+    let mut state = ObjectState::new();
+    let Ok(got) = probes.irradiance(&mut state, p, n) else {
         say("probekit no_std check: the query failed\n");
         return 1;
     };

@@ -31,14 +31,24 @@
 //! are (on a face the fourth probe's weight is 0 in every direction).
 //! `L_i(d)` is baked, like the mean brightness, so a cloud relit in place
 //! blends as built and the relit irradiance stays linear in the group
-//! scales. The cost is twelve directional irradiances per probe of the cell
-//! and up to 48 powers per query.
+//! scales.
+//!
+//! **Cost.** Where every factor of a direction is 1 its blend is the plain
+//! one, and the projection of the plain blend's irradiance is the plain
+//! blend of the SH (the 5-design property). So a query blends the SH
+//! plainly and adds, for the directions where some probe stands out only,
+//! the projection of that direction's change (`DirectionTable::correct`).
+//! Whether a direction has a factor below 1 needs no division or power:
+//! with `ρ_k = 1/L_k(d)` (per probe, as built) and `m = min_k ρ_k`, the
+//! floored `1/l_k` is `min(ρ_k, 10³·m)` and some probe exceeds
+//! `t·r(d)` exactly when `Σ_k w_k·min(ρ_k, 10³·m) > t·Σ_k w_k·m`; four
+//! directions are tested at once.
 //!
 //! Our own method, measured in BENCHMARKS.md ("Directional brightness");
 //! the per-direction weighting is in the spirit of DDGI's per-direction
 //! visibility (Majercik et al. 2019), applied to brightness.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Number of quadrature directions ([`directions`]).
 pub const DIRECTIONS: usize = 12;
@@ -119,6 +129,96 @@ impl DirectionTable {
             .map(|e| probekit_sh::LUMINANCE.dot(e))
     }
 
+    /// Adds to `out` (its first `min(out.len(), 9)` coefficients, radiance
+    /// SH holding the plain blend `Σ_k w_k c_k`) the directional blend's
+    /// departure from it: for each direction `d` where some probe's factor
+    /// of [`factors`] is below 1, the projection of
+    /// `Σ_k (u_k(d) − w_k/Σw)·E_k(d)`, `u_k(d)` the per-direction weights
+    /// and `E_k(d)` probe `k`'s irradiance at `d` from its SH `sh[k]`.
+    /// `recip[k]` is probe `k`'s [`reciprocal`] luminances, `weights` the
+    /// blend weights (slots of weight ≤ 0 are unused and not read). No
+    /// direction stands out: `out` is left as it is, the directional blend
+    /// being then the plain one.
+    pub(crate) fn correct(
+        &self,
+        recip: [&[Vec4; 3]; 4],
+        sh: [&[Vec3]; 4],
+        weights: &[f32; 4],
+        gamma: f32,
+        out: &mut [Vec3],
+    ) {
+        let used = weights.map(|w| w > 0.0);
+        let w = weights.map(|x| if x > 0.0 { x } else { 0.0 });
+        let total = w[0] + w[1] + w[2] + w[3];
+        if gamma <= 0.0 || !(total > 0.0 && total.is_finite()) {
+            return;
+        }
+        let tt = DIRECTIONAL_RATIO * total;
+        // `j` also names the directions `4j..4j + 4` below.
+        #[allow(clippy::needless_range_loop)]
+        for j in 0..3 {
+            let r: [Vec4; 4] =
+                core::array::from_fn(|k| if used[k] { recip[k][j] } else { Vec4::INFINITY });
+            // `m = 1/top`; the floored reciprocal luminances; `Σ w/l`.
+            let m = r[0].min(r[1]).min(r[2].min(r[3]));
+            let cap = m * RECIPROCAL_FLOOR;
+            let l: [Vec4; 4] = core::array::from_fn(|k| r[k].min(cap));
+            let inverse = l[0] * w[0] + l[1] * w[1] + l[2] * w[2] + l[3] * w[3];
+            // A probe exceeds `t·r(d)` where `inverse > t·Σw·m` (false for
+            // NaN: no used probe bright in that direction).
+            let mask = inverse.cmpgt(m * tt).bitmask();
+            if mask == 0 {
+                continue;
+            }
+            for lane in 0..4 {
+                if mask & (1 << lane) != 0 {
+                    let d = 4 * j + lane;
+                    let f: [f32; 4] = core::array::from_fn(|k| {
+                        // `l_k / threshold = l_k·Σ(w/l) / (t·Σw)`.
+                        let x = inverse[lane] / (tt * l[k][lane]);
+                        if used[k] && x > 1.0 {
+                            inverse_power(x, gamma)
+                        } else {
+                            1.0
+                        }
+                    });
+                    self.correct_direction(d, &f, &w, total, sh, out);
+                }
+            }
+        }
+    }
+
+    /// The change of direction `d` for factors `f` (see [`Self::correct`]).
+    fn correct_direction(
+        &self,
+        d: usize,
+        f: &[f32; 4],
+        w: &[f32; 4],
+        total: f32,
+        sh: [&[Vec3]; 4],
+        out: &mut [Vec3],
+    ) {
+        let s = w[0] * f[0] + w[1] * f[1] + w[2] * f[2] + w[3] * f[3];
+        if !(s > 0.0 && s.is_finite()) {
+            return;
+        }
+        let t = &self.irradiance[d];
+        let mut delta = Vec3::ZERO;
+        for k in 0..4 {
+            let u = w[k] * f[k] / s - w[k] / total;
+            if u != 0.0 {
+                let c = sh[k];
+                let m = c.len().min(DIRECTIONAL_COEFFS);
+                let e = (0..m).fold(Vec3::ZERO, |e, i| e + c[i] * t[i]);
+                delta += e * u;
+            }
+        }
+        let m = out.len().min(DIRECTIONAL_COEFFS);
+        for (c, o) in out[..m].iter_mut().enumerate() {
+            *o += delta * self.projection[d][c];
+        }
+    }
+
     /// Radiance SH (the first `min(out.len(), 9)` coefficients of `out`,
     /// overwritten) whose irradiance is the projection of `e`, an
     /// irradiance sampled at the twelve directions. Exact for an irradiance
@@ -142,7 +242,8 @@ fn band_factor(c: usize) -> f32 {
     }) as f32
 }
 
-/// `x^−γ` for the common exponents without a `powf`.
+/// `x^−γ` for `x > 0`: square roots for the common exponents, else
+/// [`crate::math::pow`] (exp2 of a log2, no `powf`).
 #[inline]
 fn inverse_power(x: f32, gamma: f32) -> f32 {
     if gamma == 0.25 {
@@ -152,8 +253,27 @@ fn inverse_power(x: f32, gamma: f32) -> f32 {
     } else if gamma == 1.0 {
         1.0 / x
     } else {
-        crate::math::powf(x, -gamma)
+        crate::math::pow(x, -gamma)
     }
+}
+
+/// The luminance floor of [`factors`] as a factor on the reciprocal of the
+/// brightest: `1/(10⁻³·top)`.
+const RECIPROCAL_FLOOR: f32 = 1e3;
+
+/// `1/L(d)` of twelve directional luminances (+∞ where `L(d) ≤ 0`), four
+/// directions to a vector: what [`DirectionTable::correct`] reads per probe.
+pub(crate) fn reciprocal(lum: &[f32; DIRECTIONS]) -> [Vec4; 3] {
+    core::array::from_fn(|j| {
+        Vec4::from_array(core::array::from_fn(|l| {
+            let x = lum[4 * j + l];
+            if x > 0.0 {
+                1.0 / x
+            } else {
+                f32::INFINITY
+            }
+        }))
+    })
 }
 
 /// How much brighter than the cell (for a direction) a probe may be before

@@ -56,7 +56,11 @@ use thiserror::Error;
 use walk::StartGrid;
 
 pub mod cell_visibility;
+#[cfg(feature = "write")]
 pub mod directional;
+#[cfg(not(feature = "write"))]
+#[allow(dead_code)]
+pub(crate) mod directional;
 mod hull;
 pub mod probes;
 mod topology;
@@ -67,6 +71,9 @@ pub use cell_visibility::{CellPlanes, CellVisibility};
 pub use probes::{
     ProbeCloud, ProbeCloudError, HIDDEN_MASS_FLOOR, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE,
 };
+// Connectivity for meshes given without it (feature `write`: the baker,
+// tools and tests).
+#[cfg(feature = "write")]
 pub use topology::{face_neighbors, lattice_tets};
 pub use visibility::VisibilityMaps;
 

@@ -13,12 +13,12 @@ mod blend;
 mod factors;
 
 use super::cell_visibility::{CellPlanes, CellVisibility};
-use super::directional::{self, DirectionTable, DIRECTIONS};
+use super::directional::{self, DirectionTable};
 use super::visibility::VisibilityMaps;
 use super::{CloudError, TetMesh, WalkState};
 use crate::format::{FormatError, ProbeFile};
 use crate::prelude::*;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use thiserror::Error;
 
 /// Why a [`ProbeCloud`] cannot be built from a file.
@@ -100,6 +100,12 @@ pub struct ProbeCloud {
     /// Brightness exponent `α` of [`ProbeCloud::set_brightness_weighting`]
     /// (0: off).
     brightness: f32,
+    /// Each probe's `Ē_i^−α` for the current `α` (+∞ where `Ē_i ≤ 0`);
+    /// empty at `α = 0`.
+    brightness_pow: Vec<f32>,
+    /// `(10⁻³)^−α`: the brightness floor's factor relative to the cell's
+    /// brightest probe's.
+    brightness_floor: f32,
     /// Each probe's `Ē_i` for the brightness weighting: the luminance of
     /// its DC coefficient as built (relighting through
     /// [`ProbeCloud::coefficients_mut`] keeps the blend, so it stays linear).
@@ -119,10 +125,11 @@ pub struct ProbeCloud {
 struct DirectionalData {
     /// The constant tables.
     table: DirectionTable,
-    /// Each probe's `L_i(d)`: the luminance of its irradiance for the twelve
-    /// directions of [`directional::directions`], as built (like
-    /// `ProbeCloud::luminance`).
-    luminance: Vec<[f32; DIRECTIONS]>,
+    /// Each probe's `1/L_i(d)` (+∞ where `L_i(d) ≤ 0`), `L_i(d)` the
+    /// luminance of its irradiance for the twelve directions of
+    /// [`directional::directions`] as built (like `ProbeCloud::luminance`),
+    /// four directions to a vector.
+    reciprocal_luminance: Vec<[Vec4; 3]>,
 }
 
 /// The range a fitted probe weight ([`ProbeCloud::set_probe_weights`], the
@@ -205,12 +212,15 @@ impl ProbeCloud {
             .map(|c| probekit_sh::LUMINANCE.dot(c[0]))
             .collect();
         let table = DirectionTable::new();
-        let luminance_d = coeffs.chunks_exact(n).map(|c| table.luminance(c)).collect();
+        let reciprocal_luminance = coeffs
+            .chunks_exact(n)
+            .map(|c| directional::reciprocal(&table.luminance(c)))
+            .collect();
         Ok(Self {
             directional: 0.0,
             directional_data: Box::new(DirectionalData {
                 table,
-                luminance: luminance_d,
+                reciprocal_luminance,
             }),
             mesh,
             coeffs,
@@ -222,6 +232,8 @@ impl ProbeCloud {
             planes: None,
             cells_on: true,
             brightness: 0.0,
+            brightness_pow: Vec::new(),
+            brightness_floor: 1.0,
             probe_weights: None,
             probe_weights_on: true,
         })
@@ -375,31 +387,45 @@ impl ProbeCloud {
     }
 
     /// Interpolated radiance SH at `p` into `out` (its first
-    /// `min(out.len(), order²)` coefficients): the blend of
-    /// [`ProbeCloud::weights_at`] (visibility-weighted when on), done per
+    /// `min(out.len(), order²)` coefficients; the rest is zeroed): the blend
+    /// of [`ProbeCloud::weights_at`] (visibility-weighted when on), done per
     /// direction for bands ≤ 2 when directional brightness is on
     /// ([`ProbeCloud::set_directional_brightness`]). No allocation.
     pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
+        let (_, probes, weights) = self.blend_at(p, state);
+        self.blend_sh(&probes, &weights, out);
+    }
+
+    /// The SH of blend weights `weights` of `probes` into `out` (see
+    /// [`ProbeCloud::sh_at`]).
+    pub(crate) fn blend_sh(&self, probes: &[u32; 4], weights: &[f32; 4], out: &mut [Vec3]) {
         let n = self.coeffs_per_probe();
         let m = out.len().min(n);
-        out.iter_mut().for_each(|c| *c = Vec3::ZERO);
-        let (probes, weights) = self.weights_at(p, state);
-        // The directional blend writes bands ≤ 2 itself; the plain blend
-        // fills the rest.
-        let first = if self.directional > 0.0 {
-            self.directional_blend(&probes, &weights, &mut out[..m]);
-            m.min(directional::DIRECTIONAL_COEFFS)
-        } else {
-            0
-        };
-        for (&i, &w) in probes.iter().zip(&weights) {
-            if w == 0.0 {
-                continue;
+        out.fill(Vec3::ZERO);
+        let out = &mut out[..m];
+        // As flat `f32` arrays, which vectorize; fixed lengths for L1 and L2.
+        let src: &[f32] = bytemuck::cast_slice(&self.coeffs);
+        let flat: &mut [f32] = bytemuck::cast_slice_mut(out);
+        let stride = 3 * n;
+        match m {
+            9 => flat.copy_from_slice(&blend_fixed::<27>(src, stride, probes, weights)),
+            4 => flat.copy_from_slice(&blend_fixed::<12>(src, stride, probes, weights)),
+            _ => {
+                for (&i, &w) in probes.iter().zip(weights) {
+                    if w != 0.0 {
+                        let c = &src[i as usize * stride..][..flat.len()];
+                        for (o, c) in flat.iter_mut().zip(c) {
+                            *o += *c * w;
+                        }
+                    }
+                }
             }
-            let src = &self.coeffs[i as usize * n + first..i as usize * n + m];
-            for (o, c) in out[first..m].iter_mut().zip(src) {
-                *o += *c * w;
-            }
+        }
+        // The directional blend is the plain one wherever no probe of the
+        // cell stands out in any direction; elsewhere it adds the difference
+        // for the directions where one does.
+        if self.directional > 0.0 {
+            self.directional_correction(probes, weights, out);
         }
     }
 
@@ -407,10 +433,16 @@ impl ProbeCloud {
     /// clamped-cosine convolution ([`probekit_sh::irradiance`]) of the
     /// blended radiance SH. No allocation.
     pub fn irradiance(&self, p: Vec3, n: Vec3, state: &mut WalkState) -> Vec3 {
-        let mut buf = [Vec3::ZERO; probekit_sh::MAX_COEFFS];
         let k = self.coeffs_per_probe();
-        self.sh_at(p, state, &mut buf[..k]);
-        probekit_sh::irradiance(&buf[..k], n)
+        if k <= 9 {
+            let mut buf = [Vec3::ZERO; 9];
+            self.sh_at(p, state, &mut buf[..k]);
+            crate::eval::irradiance(&buf[..k], n)
+        } else {
+            let mut buf = [Vec3::ZERO; probekit_sh::MAX_COEFFS];
+            self.sh_at(p, state, &mut buf[..k]);
+            crate::eval::irradiance(&buf[..k], n)
+        }
     }
 
     /// [`Self::irradiance`] for many `(point, normal)` pairs; `out` is cleared
@@ -430,6 +462,30 @@ impl ProbeCloud {
                 .map(|(&p, &n)| self.irradiance(p, n, state)),
         );
     }
+}
+
+/// `Σ_k weights[k]·src[probes[k]·stride..][..L]` (slots of weight 0
+/// skipped), accumulated in registers.
+#[inline(always)]
+fn blend_fixed<const L: usize>(
+    src: &[f32],
+    stride: usize,
+    probes: &[u32; 4],
+    weights: &[f32; 4],
+) -> [f32; L] {
+    let mut acc = [0.0f32; L];
+    for (&i, &w) in probes.iter().zip(weights) {
+        let start = i as usize * stride;
+        let c = src
+            .get(start..start + L)
+            .and_then(|c| <&[f32; L]>::try_from(c).ok());
+        if let (true, Some(c)) = (w != 0.0, c) {
+            for j in 0..L {
+                acc[j] += c[j] * w;
+            }
+        }
+    }
+    acc
 }
 
 #[cfg(test)]

@@ -2,6 +2,8 @@
 //! table of a list of tetrahedra, and the Kuhn tetrahedralization of a
 //! regular lattice of probes.
 
+#![cfg_attr(not(feature = "write"), allow(dead_code))]
+
 use super::{CloudError, HULL};
 use crate::collections::map_with_capacity;
 use crate::prelude::*;

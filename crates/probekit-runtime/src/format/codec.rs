@@ -4,12 +4,12 @@
 //! |----|--------|-------|-----------------|--------|
 //! | 0  | `f32`  | 1..=8 | `12·order²`     | coefficient-major, RGB interleaved, IEEE binary32 LE |
 //! | 1  | `f16`  | 1..=8 | `6·order²`      | same, IEEE binary16 LE |
-//! | 2  | `l1`   | 2     | 13              | `probekit_sh::codec::encode_l1` (ratio-quantized L1) |
+//! | 2  | `l1`   | 2     | 13              | `probekit_sh::codec::encode_l1` (ratio-quantized L1, Roughton et al. 2024) |
 //! | 3  | `zh3`  | 3     | 16              | `probekit_sh::codec::encode_zh3` (stored ZH3, decoded to L2) |
 //! | 4  | `l2`   | 3     | 28              | `probekit_sh::codec::encode_l2` (ratio-quantized L2) |
 //!
 //! The quantized encodings are the ratio scheme of Roughton, Sloan et al.,
-//! Roughton et al., "ZH3: Quadratic Zonal Harmonics" (I3D 2024): DC per channel, every
+//! "ZH3: Quadratic Zonal Harmonics" (I3D 2024): DC per channel, every
 //! other coefficient stored as a normalised ratio to DC.
 
 use super::error::FormatError;
@@ -26,11 +26,11 @@ pub enum Codec {
     /// IEEE binary16, `3·order²` halves per probe (relative error ≤ 2⁻¹¹,
     /// range ±65504).
     F16,
-    /// Ratio-quantized L1 (order 2) in 13 bytes (Roughton et al., ZH3, I3D 2024).
+    /// Ratio-quantized L1 (order 2) in 13 bytes (Roughton et al. 2024).
     L1Q13,
-    /// Stored ZH3 in 16 bytes, decoded to L2 (order 3) (Roughton et al., ZH3, I3D 2024).
+    /// Stored ZH3 in 16 bytes, decoded to L2 (order 3) (Roughton et al. 2024).
     Zh3Q16,
-    /// Ratio-quantized L2 (order 3) in 28 bytes (Roughton et al., ZH3, I3D 2024).
+    /// Ratio-quantized L2 (order 3) in 28 bytes (Roughton et al. 2024).
     L2Q28,
 }
 
@@ -305,7 +305,7 @@ pub(crate) fn check_finite(coeffs: &Coefficients) -> Result<(), FormatError> {
 }
 
 mod quantized {
-    //! The quantized codecs, through `probekit_sh::codec` (Roughton et al., ZH3, I3D 2024).
+    //! The quantized codecs, through `probekit_sh::codec` (Roughton et al. 2024).
     use super::{Codec, Coefficients, FormatError};
     use glam::Vec3;
     use probekit_sh::codec::{decode_l1, decode_l2, decode_zh3};

@@ -8,7 +8,7 @@
 //! (the rendering equation is linear in `Le`), so `T = Σ_g G_g` up to
 //! rounding, and scaling group `g`'s emission by an RGB factor `s_g` scales
 //! its share of the probe radiance by the same factor — direct and indirect
-//! light alike ("light decoupling", Sukys 2014, "Light probe cloud generation for games", §3.1.2).
+//! light alike ("light decoupling", Sukys 2014, §3.1.2).
 //!
 //! [`Relighter`] computes `T' = T + Σ_g (s_g − 1)·G_g`, which equals
 //! `Σ_g s_g·G_g` when `T = Σ_g G_g` and gives `T` itself, bit for bit, when

@@ -16,12 +16,13 @@ pub const VERSION_MAJOR: u16 = 1;
 /// added `PWGT`, fitted per-probe blend weights; 1.7 added `CPLN`, occluder
 /// planes of cells; 1.8 stores the brightness exponent the weights were
 /// fitted with in `PWGT`'s header word `w1`, [`MINOR_BRIGHTNESS`]; 1.9 the
-/// directional brightness exponent in `w2`, [`MINOR_DIRECTIONAL`]). Files
-/// with a larger minor load; their unknown sections are
-/// skipped. The writer writes the lowest minor that holds the file's
+/// directional brightness exponent in `w2`, [`MINOR_DIRECTIONAL`]; 1.10
+/// the intended evaluation of L1 coefficients in the header's flags,
+/// [`MINOR_L1_MODE`]). Files with a larger minor load; their unknown
+/// sections are skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 9;
+pub const VERSION_MINOR: u16 = 10;
 
 /// Minor version that stores a non-zero brightness exponent in `PWGT`'s
 /// header word `w1` (a reader of 1.6 or 1.7 ignores the word and blends
@@ -32,6 +33,19 @@ pub const MINOR_BRIGHTNESS: u16 = 8;
 /// `PWGT`'s header word `w2` (a reader of 1.6 to 1.8 ignores the word and
 /// blends without it).
 pub const MINOR_DIRECTIONAL: u16 = 9;
+
+/// Minor version that stores a non-linear intended evaluation of L1
+/// coefficients ([`crate::L1Mode`]) in the header's flags,
+/// [`FLAGS_L1_MODE`] (a reader of 1.0 to 1.9 ignores the flags and
+/// evaluates the L1 coefficients linearly).
+pub const MINOR_L1_MODE: u16 = 10;
+
+/// Bits of the header's flags word holding the intended evaluation of L1
+/// (order-2) coefficients: 0 linear, 1 hallucinated ZH3; 2 and 3 are
+/// reserved (a reader refuses them in a file of a minor it knows, and reads
+/// them as linear in a newer one). The other flag bits are not defined
+/// (written 0, ignored).
+pub const FLAGS_L1_MODE: u32 = 0b11;
 
 /// Minor version that introduced octree forests (root grids other than
 /// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
@@ -252,7 +266,9 @@ pub mod header {
     pub const MINOR: usize = 10;
     /// `u32` file kind (0 cloud, 1 volume, 2 rig).
     pub const KIND: usize = 12;
-    /// `u32` flags (none defined; writers write 0, readers ignore).
+    /// `u32` flags: bits 0–1 the intended evaluation of L1 coefficients
+    /// ([`super::FLAGS_L1_MODE`], format 1.10); the other bits are not
+    /// defined (written 0, ignored).
     pub const FLAGS: usize = 16;
     /// `u32` number of section-table entries.
     pub const SECTION_COUNT: usize = 20;

@@ -21,21 +21,36 @@ mod codec;
 mod crc;
 mod error;
 mod groups;
+#[cfg(feature = "write")]
 pub mod layout;
+#[cfg(not(feature = "write"))]
+#[allow(dead_code)]
+pub(crate) mod layout;
 mod octree_compact;
 mod read;
 mod validate;
 mod visibility;
 mod write;
 
-pub use codec::{f16_is_non_finite, f16_to_f32, Codec, Coefficients};
-pub use crc::{crc32, Crc32};
+pub use codec::{Codec, Coefficients};
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
-pub use octree_compact::{lattice_pos, lattice_step};
-pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
+
+// The byte-level reading and writing the baker and tools use (feature
+// `write`); an engine loads through `ProbeFile::from_bytes` or `crate::Probes`.
+#[cfg(feature = "write")]
+pub use codec::{f16_is_non_finite, f16_to_f32};
+#[cfg(feature = "write")]
+pub use crc::{crc32, Crc32};
+#[cfg(not(feature = "write"))]
+use crc::{crc32, Crc32};
+#[cfg(feature = "write")]
+pub use octree_compact::{lattice_pos, lattice_step};
+#[cfg(feature = "write")]
+pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
+#[cfg(feature = "write")]
 pub use write::{assemble_file, SectionBuilder};
 
 use crate::cloud::{CellPlanes, CellVisibility};
@@ -82,6 +97,45 @@ impl ProbeFileKind {
             Self::Cloud => "cloud",
             Self::Volume => "volume",
             Self::Rig => "rig",
+        }
+    }
+}
+
+/// How the coefficients of an L1 file (SH order 2: the 13-byte `l1` codec,
+/// or `f32`/`f16` at order 2) are turned into irradiance. The file states
+/// its intent (the header's flags, format 1.10; older files read
+/// [`L1Mode::Linear`]), and [`crate::LoadOptions::l1_mode`] can override it.
+/// Files of any other order ignore it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum L1Mode {
+    /// The L1 radiance SH as they are: irradiance is the clamped-cosine
+    /// convolution of bands 0 and 1 (Ramamoorthi & Hanrahan 2001).
+    #[default]
+    Linear,
+    /// Hallucinated ZH3 (Roughton et al., "ZH3: Quadratic Zonal Harmonics",
+    /// I3D 2024): the L1 coefficients are blended as usual, then a zonal
+    /// band-2 lobe about the blended luminance axis is derived from them
+    /// ([`probekit_sh::zh3::zh3_hallucinate`]), so the result has the
+    /// sharper falloff of L2 for the storage of L1.
+    Zh3Hallucinated,
+}
+
+impl L1Mode {
+    /// The mode stored in a header's flags word ([`layout::FLAGS_L1_MODE`]
+    /// bits); `None` for the reserved values 2 and 3.
+    pub(crate) fn from_flags(flags: u32) -> Option<Self> {
+        match flags & layout::FLAGS_L1_MODE {
+            0 => Some(Self::Linear),
+            1 => Some(Self::Zh3Hallucinated),
+            _ => None,
+        }
+    }
+
+    /// The header flag bits of this mode.
+    pub(crate) const fn flags(self) -> u32 {
+        match self {
+            Self::Linear => 0,
+            Self::Zh3Hallucinated => 1,
         }
     }
 }
@@ -156,7 +210,7 @@ pub struct OctreeNode {
 /// A single root cell copies the box's aspect ratio into every cell of the
 /// tree (an 8 × 3 × 4 m room gives cells 2.7× longer in x than in y); a
 /// grid of near-cubic roots keeps cells near-cubic at every depth, which is
-/// what interpolation error and Tatarchuk's cell-size heuristics assume
+/// what interpolation error and the seed's cell-size heuristics assume
 /// (format 1.3; see `docs/file-format.md`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Octree {
@@ -218,8 +272,7 @@ pub struct Gradients {
     pub data: Vec<Vec3>,
 }
 
-/// Basis along one axis of a tensor-product rig (Yuan, Nowrouzezahrai & Sloan,
-/// *Irradiance Rigs*, JGT 2011).
+/// Basis along one axis of a tensor-product rig (Yuan, Nowrouzezahrai & Sloan, *Irradiance Rigs*, JGT 2011).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AxisModel {
     /// `{1}`: one function.
@@ -241,7 +294,7 @@ impl AxisModel {
     }
 }
 
-/// A rig model M(p, c) over the mesh's bounding box (Yuan et al., *Irradiance Rigs*, §2).
+/// A rig model M(p, c) over the mesh's bounding box (*Irradiance Rigs*, JGT 2011).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RigModel {
     /// One SH vector.
@@ -267,7 +320,7 @@ impl RigModel {
     }
 }
 
-/// One entry of a rig's analytic/rig transition table (Yuan et al., *Irradiance Rigs*, §3).
+/// One entry of a rig's analytic/rig transition table (*Irradiance Rigs* §3).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transition {
     /// Light distance from the object's bounding-sphere centre, in
@@ -359,6 +412,11 @@ pub struct ProbeFile {
     /// refinement of `cell_visibility` for cells one flat wall cuts; only
     /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
     pub cell_planes: Option<CellPlanes>,
+    /// How the coefficients are meant to be evaluated when they are L1
+    /// (order 2): stored in the header's flags (format 1.10,
+    /// [`layout::MINOR_L1_MODE`]; older files read [`L1Mode::Linear`]).
+    /// Anything but `Linear` needs order-2 coefficients.
+    pub l1_mode: L1Mode,
     /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
     /// placement, tool version; never a wall-clock time).
     pub metadata: String,
@@ -394,6 +452,7 @@ impl ProbeFile {
             brightness_exponent: 0.0,
             directional_exponent: 0.0,
             cell_planes: None,
+            l1_mode: L1Mode::Linear,
             metadata: String::new(),
         }
     }

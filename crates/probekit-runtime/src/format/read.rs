@@ -200,6 +200,7 @@ pub fn read_sections(bytes: &[u8]) -> Result<(FileHeader, Vec<RawSection<'_>>), 
 /// `"coefficients"`, ..., `"header"` for header plus table, unknown ids by
 /// their four-character code). For files written by `probekit` the values
 /// sum to the file length. This is `bytes_by_section` in `inspect --json`.
+#[cfg_attr(not(feature = "write"), allow(dead_code))]
 pub fn file_bytes_by_section(bytes: &[u8]) -> Result<BTreeMap<String, u64>, FormatError> {
     let (_, sections) = read_sections(bytes)?;
     let mut map = BTreeMap::new();
@@ -328,6 +329,18 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     let mut compact = None;
     let mut planes = None;
     let mut file = ProbeFile::new(kind, Coefficients::empty(1));
+    file.l1_mode = match super::L1Mode::from_flags(head.flags) {
+        Some(mode) => mode,
+        // A newer minor may define more modes: evaluate linearly.
+        None if head.minor > VERSION_MINOR => super::L1Mode::Linear,
+        None => {
+            return Err(FormatError::InvalidValue {
+                id: SectionId::HEADER,
+                element: 0,
+                reason: "header flags: reserved L1 evaluation mode (bits 0-1 are 2 or 3)",
+            })
+        }
+    };
     for raw in &sections {
         let s = Sec {
             id: raw.id,

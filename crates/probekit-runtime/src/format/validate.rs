@@ -93,6 +93,13 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         return Err(count_mismatch(SectionId::COEFFICIENTS, probes, c.len()));
     }
     check_finite(c)?;
+    if f.l1_mode != super::L1Mode::Linear && c.order != 2 {
+        return Err(FormatError::InvalidValue {
+            id: SectionId::COEFFICIENTS,
+            element: 0,
+            reason: "an L1 evaluation other than linear needs order-2 (L1) coefficients",
+        });
+    }
 
     if let Some(v) = &f.validity {
         if v.len() != probes {

@@ -340,7 +340,9 @@ impl ProbeFile {
     /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
     /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7), or a
     /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8), or a
-    /// non-zero directional one ([`layout::MINOR_DIRECTIONAL`], 9).
+    /// non-zero directional one ([`layout::MINOR_DIRECTIONAL`], 9), or an
+    /// L1 evaluation other than linear ([`layout::MINOR_L1_MODE`], 10, in
+    /// the header's flags).
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
@@ -356,9 +358,19 @@ impl ProbeFile {
                 layout::MINOR_DIRECTIONAL
             } else {
                 0
+            })
+            .max(if self.l1_mode != super::L1Mode::Linear {
+                layout::MINOR_L1_MODE
+            } else {
+                0
             });
         debug_assert!(minor <= VERSION_MINOR);
-        Ok(assemble_file(self.kind.id(), minor, 0, &sections))
+        Ok(assemble_file(
+            self.kind.id(),
+            minor,
+            self.l1_mode.flags(),
+            &sections,
+        ))
     }
 
     /// Bytes each section takes when written, keyed by section name, plus

@@ -2,6 +2,8 @@
 //! checksum re-sealer so mutations reach the section parsers.
 #![allow(dead_code)]
 
+pub mod clouds;
+
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility;
 use probekit_runtime::format::layout::{self, entry, header, ENTRY_LEN, HEADER_LEN, NONE};

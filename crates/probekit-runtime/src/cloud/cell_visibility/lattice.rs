@@ -3,6 +3,8 @@
 //! the Freudenthal–Kuhn sub-simplex holding a point, whose barycentric
 //! weights interpolate the lattice bits.
 
+#![cfg_attr(not(feature = "write"), allow(dead_code))]
+
 use crate::math;
 use crate::prelude::*;
 use glam::Vec3;

@@ -4,6 +4,7 @@
 
 use super::{ProbeCloud, HIDDEN_MASS_FLOOR};
 use crate::cloud::{CellPlanes, Location, WalkState};
+use crate::Cell;
 use glam::Vec3;
 
 impl ProbeCloud {
@@ -38,18 +39,46 @@ impl ProbeCloud {
     /// [`cell_visibility`]: crate::cloud::cell_visibility
     /// [`visibility`]: crate::cloud::visibility
     pub fn weights_at(&self, p: Vec3, state: &mut WalkState) -> ([u32; 4], [f32; 4]) {
+        let (_, probes, weights) = self.blend_at(p, state);
+        (probes, weights)
+    }
+
+    /// [`ProbeCloud::weights_at`] with the cell the point was found in (a
+    /// tetrahedron, or the hull face of its closest hull point).
+    pub(crate) fn blend_at(&self, p: Vec3, state: &mut WalkState) -> (Cell, [u32; 4], [f32; 4]) {
         let maps = self.visibility.as_ref().filter(|_| self.visibility_on);
         let cells = self.cells.as_ref().filter(|_| self.cells_on);
         let planes = self.planes.as_deref().filter(|_| self.cells_on);
+        let location = self.mesh.locate(p, state);
         if maps.is_none()
             && cells.is_none()
             && planes.is_none()
             && self.brightness <= 0.0
             && !self.probe_weighting_enabled()
         {
-            return self.mesh.weights_at(p, state);
+            return match location {
+                Location::Inside { tet, weights } => (
+                    Cell::Tetrahedron(tet),
+                    self.mesh.tets()[tet as usize],
+                    weights,
+                ),
+                Location::Outside {
+                    hull_face,
+                    probes,
+                    weights,
+                    ..
+                } => (
+                    Cell::HullFace(hull_face),
+                    [probes[0], probes[1], probes[2], 0],
+                    [weights[0], weights[1], weights[2], 0.0],
+                ),
+            };
         }
-        let (probes, bary, c, used) = match self.mesh.locate(p, state) {
+        let cell = match location {
+            Location::Inside { tet, .. } => Cell::Tetrahedron(tet),
+            Location::Outside { hull_face, .. } => Cell::HullFace(hull_face),
+        };
+        let (probes, bary, c, used) = match location {
             Location::Inside { tet, weights } => {
                 let probes = self.mesh.tets()[tet as usize];
                 let c = match planes.and_then(|pl| pl.plane(tet)) {
@@ -115,6 +144,7 @@ impl ProbeCloud {
             if let (Some(r), Some(d)) = (r, darkest()) {
                 let t = mass / HIDDEN_MASS_FLOOR;
                 return (
+                    cell,
                     probes,
                     core::array::from_fn(|k| t * r[k] + (1.0 - t) * d[k]),
                 );
@@ -125,6 +155,6 @@ impl ProbeCloud {
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * v[k] * f[k])))
             .or_else(|| normalized(core::array::from_fn(|k| bary[k] * f[k])))
             .unwrap_or(bary);
-        (probes, w)
+        (cell, probes, w)
     }
 }

@@ -4,9 +4,8 @@
 //! [`ProbeCloud::sh_at`]'s directional blend) and the fitted probe weights.
 
 use super::{ProbeCloud, ProbeCloudError, MAX_BRIGHTNESS_EXPONENT, PROBE_WEIGHT_RANGE};
-use crate::cloud::directional::{self, DIRECTIONS};
 use crate::prelude::*;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 impl ProbeCloud {
     /// Sets the brightness exponent `α` (0, the default, switches it off):
@@ -34,6 +33,24 @@ impl ProbeCloud {
             return Err(ProbeCloudError::BrightnessExponent(alpha));
         }
         self.brightness = alpha;
+        // What does not depend on the query point, once: each probe's
+        // `Ē_i^−α` (+∞ where `Ē_i ≤ 0`, which the floor replaces), and the
+        // floor's `(10⁻³)^−α`.
+        self.brightness_pow = if alpha > 0.0 {
+            self.luminance
+                .iter()
+                .map(|&e| {
+                    if e > 0.0 {
+                        crate::math::powf(e, -alpha)
+                    } else {
+                        f32::INFINITY
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        self.brightness_floor = crate::math::powf(1e3, alpha);
         Ok(())
     }
 
@@ -45,11 +62,11 @@ impl ProbeCloud {
 
     /// Sets the directional brightness exponent `γ` (0, the default,
     /// switches it off): [`ProbeCloud::sh_at`] blends the cell per direction,
-    /// the weight of each probe more than [`directional::DIRECTIONAL_RATIO`]
+    /// the weight of each probe more than [`DIRECTIONAL_RATIO`](crate::cloud::directional::DIRECTIONAL_RATIO)
     /// times brighter *for that direction* than the cell (its weighted
     /// harmonic mean) divided by the excess to the power `γ` (luminances as
     /// the cloud was built, so relighting stays linear), and projects the
-    /// twelve directions' blends back to SH ([`directional`]). Where the mean
+    /// twelve directions' blends back to SH ([`directional`](crate::cloud::directional)). Where the mean
     /// brightness ([`ProbeCloud::set_brightness_weighting`]) damps a probe
     /// that is bright on average, this damps a probe bright only towards one
     /// side — a doorway probe seeing a lit corridor, next to a dark closet —
@@ -125,8 +142,36 @@ impl ProbeCloud {
     /// `s_i·Ē_i^−α` for the cell's probes with a non-zero weight in `bary`:
     /// the fitted probe weight (1 when absent or off) times the brightness
     /// factor (1 when off or when no probe is bright); 1 in unused slots.
+    ///
+    /// The brightness factor of [`ProbeCloud::set_brightness_weighting`],
+    /// `max(Ē_k, 10⁻³·top)^−α` with `top` the brightest used probe's `Ē`,
+    /// is `min(Ē_k^−α, 10^{3α}·top^−α)`, and `top^−α` is the smallest
+    /// `Ē_k^−α` of the cell: both come from the per-probe powers computed
+    /// when the exponent is set, so a query takes no power.
     pub(super) fn probe_factors(&self, probes: &[u32; 4], bary: &[f32; 4]) -> [f32; 4] {
-        let mut f = self.brightness_factors(probes, bary);
+        let mut f = [1.0f32; 4];
+        if self.brightness > 0.0 {
+            let pow = &self.brightness_pow;
+            let b: [f32; 4] = core::array::from_fn(|k| {
+                if bary[k] != 0.0 {
+                    pow[probes[k] as usize]
+                } else {
+                    f32::INFINITY
+                }
+            });
+            let top = b[0].min(b[1]).min(b[2].min(b[3]));
+            // `top` is the brightest's `Ē^−α`: +∞ when no used probe is
+            // bright, 0 when one is too bright for `f32`; both mean no
+            // brightness weighting.
+            if top > 0.0 && top < f32::INFINITY {
+                let floor = self.brightness_floor * top;
+                for k in 0..4 {
+                    if bary[k] != 0.0 {
+                        f[k] = b[k].min(floor);
+                    }
+                }
+            }
+        }
         if let Some(s) = self
             .probe_weights
             .as_ref()
@@ -141,61 +186,33 @@ impl ProbeCloud {
         f
     }
 
-    /// `Ē_i^−α` for the cell's probes with a non-zero weight in `bary`
-    /// (1 elsewhere, and everywhere when off or when no probe is bright).
-    fn brightness_factors(&self, probes: &[u32; 4], bary: &[f32; 4]) -> [f32; 4] {
-        let mut f = [1.0f32; 4];
-        if self.brightness <= 0.0 {
-            return f;
-        }
-        let lum = |k: usize| self.luminance[probes[k] as usize];
-        let e: [f32; 4] = core::array::from_fn(|k| if bary[k] != 0.0 { lum(k) } else { 0.0 });
-        let top = e.iter().copied().fold(0.0f32, f32::max);
-        if !(top > 0.0 && top.is_finite()) {
-            return f;
-        }
-        for k in 0..4 {
-            if bary[k] != 0.0 {
-                f[k] = crate::math::powf(e[k].max(1e-3 * top), -self.brightness);
-            }
-        }
-        f
-    }
-
-    /// Overwrites bands ≤ 2 of `out` with the directional blend of the cell
-    /// `probes` with blend weights `weights` (see [`directional`]).
-    pub(super) fn directional_blend(
+    /// Adds to `out` (bands ≤ 2) the directional blend's departure from the
+    /// plain blend of the cell `probes` with blend weights `weights` (see
+    /// [`directional`]); `out` holds the plain blend.
+    pub(super) fn directional_correction(
         &self,
         probes: &[u32; 4],
         weights: &[f32; 4],
         out: &mut [Vec3],
     ) {
-        let active = weights.map(|w| w > 0.0);
+        const NONE: [Vec4; 3] = [Vec4::INFINITY; 3];
         let data = &self.directional_data;
-        let lum = probes.map(|i| &data.luminance[i as usize]);
-        let f = directional::factors(lum, *weights, self.directional);
-        let e: [[Vec3; DIRECTIONS]; 4] = core::array::from_fn(|k| {
-            if active[k] {
-                data.table.irradiance(self.probe_sh(probes[k] as usize))
+        let used = weights.map(|w| w > 0.0);
+        let recip = core::array::from_fn(|k| {
+            if used[k] {
+                &data.reciprocal_luminance[probes[k] as usize]
             } else {
-                [Vec3::ZERO; DIRECTIONS]
+                &NONE
             }
         });
-        let blended: [Vec3; DIRECTIONS] = core::array::from_fn(|d| {
-            let (mut sum, mut acc) = (0.0f32, Vec3::ZERO);
-            for k in 0..4 {
-                if active[k] {
-                    let u = weights[k] * f[d][k];
-                    sum += u;
-                    acc += e[k][d] * u;
-                }
-            }
-            if sum > 0.0 && sum.is_finite() {
-                acc / sum
+        let sh = core::array::from_fn(|k| {
+            if used[k] {
+                self.probe_sh(probes[k] as usize)
             } else {
-                (0..4).fold(Vec3::ZERO, |a, k| a + e[k][d] * weights[k])
+                &[]
             }
         });
-        data.table.project(&blended, out);
+        data.table
+            .correct(recip, sh, weights, self.directional, out);
     }
 }
