@@ -3,7 +3,8 @@
 // for path-traced truth. URL parameters (all optional) set the start:
 // obj=x,y,z  shape=sphere|car  eye=x,y,z  target=x,y,z  focus=1  ev=stops
 // geom=0|1  shade=probes|flat  probes=0|1  tets=0|1  hull=0|1  lights=0|1
-// cut=height  truth=1 (ask for the truth at the object on load).
+// cut=height  truth=1 (ask for the truth at the object on load)
+// size=WxH (a canvas of that many CSS pixels instead of the window's).
 
 import { Renderer } from "./scene.js";
 import { Panel } from "./panel.js";
@@ -352,7 +353,17 @@ function installInput() {
     panel.sync();
     requestDraw();
   });
-  window.addEventListener("resize", requestDraw);
+  // A resize redraws, and reports the new layout (once it settles) so that
+  // what the log says lies where matches what is on screen.
+  let settle = null;
+  window.addEventListener("resize", () => {
+    requestDraw();
+    clearTimeout(settle);
+    settle = setTimeout(() => {
+      draw();
+      log("status", "view", report());
+    }, 100);
+  });
 }
 
 // --- start --------------------------------------------------------------------------------
@@ -376,6 +387,13 @@ function startPosition(positions, bounds) {
 
 async function start() {
   canvas = document.getElementById("canvas");
+  // size=WxH: a canvas of fixed CSS size, whatever the window does (for
+  // screenshots whose pixels must match the page's report).
+  const size = /^(\d{2,4})x(\d{2,4})$/.exec(param("size") || "");
+  if (size) {
+    canvas.style.width = `${size[1]}px`;
+    canvas.style.height = `${size[2]}px`;
+  }
   gl = canvas.getContext("webgl2", { antialias: true, preserveDrawingBuffer: true });
   if (!gl) {
     fail("WebGL2 is not available in this browser: the viewer needs it.");
@@ -392,8 +410,12 @@ async function start() {
   renderer = new Renderer(gl, { summary, probes, tetrahedra, geometry, car });
 
   // State from the data, then from the URL.
-  const mean = Math.max(summary.mean_irradiance, 1e-9);
-  state.ev = Math.round(Math.log2((0.18 * Math.PI) / mean) * 10) / 10;
+  // Exposure: the median probe's mean irradiance (π·Y00·c0) shows as 18 %
+  // grey. The median, not the mean: adaptive placement crowds probes round
+  // the lamps, whose irradiance would darken everything else.
+  const dc = probes.probes.map((p) => Math.PI * 0.2820948 * luminance(p.sh[0] || [0, 0, 0])).filter((x) => x > 0).sort((a, b) => a - b);
+  const typical = Math.max(dc.length ? dc[Math.floor(dc.length / 2)] : summary.mean_irradiance, 1e-9);
+  state.ev = Math.round(Math.log2((0.18 * Math.PI) / typical) * 10) / 10;
   state.probeRadius = renderer.probeRadius;
   if (summary.scene) state.section = Math.min(summary.scene.bake_box.max[1], summary.scene.bounds.max[1]) - 0.01;
   const ev = Number(param("ev"));

@@ -116,7 +116,8 @@ export class Panel {
       });
       return inp;
     });
-    r.append(el("div", { class: "row" }, "Position", ...this.posInputs.flatMap((x, i) => [["x", "y", "z"][i], x])));
+    r.append(el("div", { class: "row" }, el("span", {}, "Position"),
+      ...this.posInputs.map((x, i) => el("label", {}, ["x", "y", "z"][i], x))));
     this.queryBox = el("div");
     r.append(this.queryBox);
 
