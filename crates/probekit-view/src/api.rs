@@ -98,7 +98,10 @@ impl Params {
     }
 
     fn get(&self, key: &str) -> Option<&str> {
-        self.0.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+        self.0
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
     }
 
     /// Refuses keys other than `known`, so a typo is not silently ignored.
@@ -227,9 +230,9 @@ fn route(
         }
         "probes" => {
             params.only(&[])?;
-            let body = state.probes_json.get_or_init(|| {
-                serde_json::to_vec(&probes(d)).unwrap_or_default()
-            });
+            let body = state
+                .probes_json
+                .get_or_init(|| serde_json::to_vec(&probes(d)).unwrap_or_default());
             Ok(Reply {
                 status: 200,
                 content_type: "application/json",
@@ -436,7 +439,9 @@ fn query(d: &ViewData, p: Vec3, n: Option<Vec3>) -> Result<Reply, String> {
     let a = d.probes.sh_at(p).map_err(|e| e.to_string())?;
     let axes = probes_answer(&d.probes, p).map_err(|e| e.to_string())?;
     let cell = match a.cell {
-        crate::query::Cell::Tetrahedron(i) => serde_json::json!({"kind": "tetrahedron", "index": i}),
+        crate::query::Cell::Tetrahedron(i) => {
+            serde_json::json!({"kind": "tetrahedron", "index": i})
+        }
         crate::query::Cell::HullFace(i) => serde_json::json!({"kind": "hull_face", "index": i}),
         crate::query::Cell::Volume => serde_json::json!({"kind": "volume"}),
     };
@@ -508,7 +513,9 @@ fn log_post(state: &State, body: &[u8]) -> Result<Reply, String> {
         .ok_or("log: expected {\"level\": \"info\"|\"status\"|\"error\", \"message\": …}")?
         .to_string();
     if !["info", "status", "error"].contains(&level.as_str()) {
-        return Err(format!("log: level {level:?}: expected info, status or error"));
+        return Err(format!(
+            "log: level {level:?}: expected info, status or error"
+        ));
     }
     if level == "error" {
         let msg = v.get("message").and_then(|m| m.as_str()).unwrap_or("");

@@ -71,7 +71,10 @@ fn material_color(scene: &Scene, material: u32) -> [f32; 4] {
     };
     let mut rgb = m.base_color;
     let mut alpha = m.alpha;
-    if let Some(t) = m.base_color_texture.and_then(|i| scene.textures.get(i as usize)) {
+    if let Some(t) = m
+        .base_color_texture
+        .and_then(|i| scene.textures.get(i as usize))
+    {
         let mean = t.mean();
         rgb *= mean.truncate();
         alpha *= mean.w;

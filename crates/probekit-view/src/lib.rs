@@ -112,7 +112,9 @@ pub enum ViewError {
         scene_hash: String,
     },
     /// The port is taken by another program.
-    #[error("port {port} on {addr} is already in use; give another with --port (0 picks a free one)")]
+    #[error(
+        "port {port} on {addr} is already in use; give another with --port (0 picks a free one)"
+    )]
     PortInUse {
         /// The address.
         addr: IpAddr,

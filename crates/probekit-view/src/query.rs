@@ -55,8 +55,8 @@ pub struct Probes {
 impl Probes {
     /// Builds the query structure of a cloud or a volume (trilinear).
     pub fn from_file(file: &ProbeFile) -> Result<Self, QueryError> {
-        let predictor = Predictor::from_file(file, Interp::Trilinear)
-            .map_err(|e| QueryError(e.to_string()))?;
+        let predictor =
+            Predictor::from_file(file, Interp::Trilinear).map_err(|e| QueryError(e.to_string()))?;
         let order = predictor.order();
         Ok(Probes { predictor, order })
     }
@@ -83,7 +83,11 @@ impl Probes {
                 let mut st = WalkState::new();
                 let (probes, weights) = c.weights_at(p, &mut st);
                 // A hull face blends three probes: the fourth slot is unused.
-                let used = if matches!(cell, Cell::HullFace(_)) { 3 } else { 4 };
+                let used = if matches!(cell, Cell::HullFace(_)) {
+                    3
+                } else {
+                    4
+                };
                 (cell, probes[..used].to_vec(), weights[..used].to_vec())
             }
             Predictor::Volume(..) => (Cell::Volume, Vec::new(), Vec::new()),

@@ -121,10 +121,26 @@ fn generate() -> String {
             format!("{{ {} }}", items.join(", "))
         };
         let _ = writeln!(out, "  {name}: {{");
-        let _ = writeln!(out, "    vertexEntry: {},", serde_json::to_string(vs).unwrap());
-        let _ = writeln!(out, "    fragmentEntry: {},", serde_json::to_string(fs).unwrap());
-        let _ = writeln!(out, "    vertex: {},", serde_json::to_string(&vtext).unwrap());
-        let _ = writeln!(out, "    fragment: {},", serde_json::to_string(&ftext).unwrap());
+        let _ = writeln!(
+            out,
+            "    vertexEntry: {},",
+            serde_json::to_string(vs).unwrap()
+        );
+        let _ = writeln!(
+            out,
+            "    fragmentEntry: {},",
+            serde_json::to_string(fs).unwrap()
+        );
+        let _ = writeln!(
+            out,
+            "    vertex: {},",
+            serde_json::to_string(&vtext).unwrap()
+        );
+        let _ = writeln!(
+            out,
+            "    fragment: {},",
+            serde_json::to_string(&ftext).unwrap()
+        );
         let _ = writeln!(out, "    uniformBlocks: {},", json(&blocks));
         out.push_str("  },\n");
     }

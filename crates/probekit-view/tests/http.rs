@@ -33,7 +33,10 @@ fn page_and_assets_are_served_from_the_binary() {
     let a = server();
     let page = get(a, "/");
     assert_eq!(page.status, 200);
-    assert!(page.header("content-type").unwrap().starts_with("text/html"));
+    assert!(page
+        .header("content-type")
+        .unwrap()
+        .starts_with("text/html"));
     let html = page.text();
     // Every script and style the page loads is served here, none from elsewhere.
     for src in ["/style.css", "/main.js"] {
@@ -50,10 +53,19 @@ fn page_and_assets_are_served_from_the_binary() {
     ] {
         let r = get(a, path);
         assert_eq!(r.status, 200, "{path}");
-        assert!(r.header("content-type").unwrap().starts_with("text/javascript"));
+        assert!(r
+            .header("content-type")
+            .unwrap()
+            .starts_with("text/javascript"));
         let js = r.text();
-        assert!(!js.contains("https://") && !js.contains("http://"), "{path} reaches out");
-        assert!(js.lines().count() <= 800 || path == "/shaders.gen.js", "{path} over 800 lines");
+        assert!(
+            !js.contains("https://") && !js.contains("http://"),
+            "{path} reaches out"
+        );
+        assert!(
+            js.lines().count() <= 800 || path == "/shaders.gen.js",
+            "{path} over 800 lines"
+        );
     }
     assert_eq!(get(a, "/index.html").status, 200);
     assert_eq!(get(a, "/style.css").status, 200);
@@ -113,7 +125,11 @@ fn bad_queries_are_400_with_a_message() {
         let r = post(a, path, b"");
         assert_eq!(r.status, 400, "POST {path}: {}", r.text());
     }
-    for body in [&b"not json"[..], b"{}", br#"{"level":"loud","message":"x"}"#] {
+    for body in [
+        &b"not json"[..],
+        b"{}",
+        br#"{"level":"loud","message":"x"}"#,
+    ] {
         let r = post(a, "/api/log", body);
         assert_eq!(r.status, 400, "log {:?}", String::from_utf8_lossy(body));
     }
@@ -144,7 +160,10 @@ fn oversized_bodies_and_garbage_do_not_stop_the_server() {
     let _ = raw(a, b"\x00\x01\x02 garbage\r\n\r\n");
     let _ = raw(a, b"GET /api/summ");
     let long = format!("/api/query?p={}", "1".repeat(20_000));
-    let _ = raw(a, format!("GET {long} HTTP/1.1\r\nHost: x\r\n\r\n").as_bytes());
+    let _ = raw(
+        a,
+        format!("GET {long} HTTP/1.1\r\nHost: x\r\n\r\n").as_bytes(),
+    );
     assert_eq!(get(a, "/api/summary").status, 200);
 }
 
@@ -263,7 +282,11 @@ fn query_is_the_runtimes_answer() {
         Vec3::new(6.0, 1.0, 2.0),
         Vec3::new(-3.0, 9.0, 1.0),
     ] {
-        let q = get(a, &format!("/api/query?p={},{},{}&n=0,0.5,0", p.x, p.y, p.z)).json();
+        let q = get(
+            a,
+            &format!("/api/query?p={},{},{}&n=0,0.5,0", p.x, p.y, p.z),
+        )
+        .json();
         let sh: Vec<[f32; 3]> = serde_json::from_value(q["sh"].clone()).unwrap();
         let mut expected = vec![Vec3::ZERO; sh.len()];
         cloud.sh_at(p, &mut fresh(), &mut expected);
@@ -317,7 +340,10 @@ fn truth_is_the_reference_and_leaks_are_flagged() {
         if job["status"] == "done" {
             break;
         }
-        assert!(job["status"] == "queued" || job["status"] == "running", "{job}");
+        assert!(
+            job["status"] == "queued" || job["status"] == "running",
+            "{job}"
+        );
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
     // The truth is the library's reference at the same settings.
@@ -346,14 +372,22 @@ fn truth_is_the_reference_and_leaks_are_flagged() {
             assert_eq!(j["leak"][n], leak, "{n}");
             let rel = j["relative_error"][n].as_f64().unwrap() as f32;
             let want = (pr - tr).length() / tr.length().max(0.01 * mean);
-            assert!((rel - want).abs() <= 1e-4 * (1.0 + want), "{n}: {rel} {want}");
+            assert!(
+                (rel - want).abs() <= 1e-4 * (1.0 + want),
+                "{n}: {rel} {want}"
+            );
         }
     }
     // The lamp is far brighter than the closet, in truth.
     let up = |j: &serde_json::Value| {
         Vec3::from_array(serde_json::from_value(j["truth"]["+y"].clone()).unwrap()).length()
     };
-    assert!(up(&job) > 10.0 * up(&closet), "{} {}", up(&job), up(&closet));
+    assert!(
+        up(&job) > 10.0 * up(&closet),
+        "{} {}",
+        up(&job),
+        up(&closet)
+    );
     // Every job is listed.
     let all = get(a, "/api/truth").json();
     assert!(all["jobs"].as_array().unwrap().len() >= 2);
@@ -406,7 +440,10 @@ fn several_clients_at_once() {
         .map(|i| {
             std::thread::spawn(move || {
                 for k in 0..5 {
-                    let r = get(a, &format!("/api/query?p={},1.0,{}", 1.0 + i as f32 * 0.5, k));
+                    let r = get(
+                        a,
+                        &format!("/api/query?p={},1.0,{}", 1.0 + i as f32 * 0.5, k),
+                    );
                     assert_eq!(r.status, 200);
                     assert_eq!(get(a, "/").status, 200);
                 }
@@ -501,7 +538,13 @@ fn bad_files_and_scenes_fail_before_serving() {
     let demo_hash = probekit::scene::Scene::load(DEMO)
         .unwrap()
         .lighting_hash_hex();
-    for part in ["other.obj", DEMO, &other_hash, &demo_hash, "--allow-other-scene"] {
+    for part in [
+        "other.obj",
+        DEMO,
+        &other_hash,
+        &demo_hash,
+        "--allow-other-scene",
+    ] {
         assert!(msg.contains(part), "{msg} lacks {part}");
     }
     cfg.allow_other_scene = true;
@@ -529,7 +572,10 @@ fn without_a_scene_the_probes_are_served_alone() {
     let a = running.local_addr();
     let s = get(a, "/api/summary").json();
     assert!(s["scene"].is_null());
-    assert!(s["banner"].as_str().unwrap().contains("geometry and truth are off"));
+    assert!(s["banner"]
+        .as_str()
+        .unwrap()
+        .contains("geometry and truth are off"));
     assert_eq!(s["truth"]["available"], false);
     assert_eq!(get(a, "/api/geometry").status, 404);
     assert_eq!(post(a, "/api/truth?p=1,1,1", b"").status, 409);
