@@ -103,12 +103,14 @@ function matrices() {
   return { viewProj, inv: invert(viewProj), w, h };
 }
 
-/// The whole bake from above and in front.
+/// The whole bake from above, a little in front.
 function resetView() {
   const b = summary.scene ? summary.scene.bounds : summary.bounds;
   const centre = b.min.map((m, k) => (m + b.max[k]) / 2);
   const size = length(sub(b.max, b.min));
-  state.camera = { target: centre, distance: Math.max(1, 0.95 * size), yaw: 0.35, pitch: 0.95 };
+  // Steep enough to look over the outer walls into the rooms (the cut
+  // removes the ceiling).
+  state.camera = { target: centre, distance: Math.max(1, 0.9 * size), yaw: 0.3, pitch: 1.2 };
 }
 
 /// Close to the object, a little above it.
