@@ -8,6 +8,9 @@
 
 mod cmd;
 mod progress;
+// `probekit view` (its own module file beside the others in `cmd/`).
+#[path = "cmd/view.rs"]
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -50,6 +53,9 @@ enum Command {
     Eval(cmd::eval::EvalArgs),
     /// Picture: the scene lit by the probes beside path-traced truth, and the error.
     Render(cmd::render::RenderArgs),
+    /// Look at a bake in the browser: probes, tetrahedra, a test object lit by
+    /// the runtime's query, and path-traced truth at any point (docs/view.md).
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -68,6 +74,7 @@ fn main() -> ExitCode {
         Command::Rig(args) => cmd::rig::run(args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Render(args) => cmd::render::run(&args),
+        Command::View(args) => view::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
