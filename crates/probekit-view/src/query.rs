@@ -45,6 +45,9 @@ pub struct Answer {
     pub weights: Vec<f32>,
 }
 
+/// A cloud's tetrahedra (four probe indices each) and hull faces (three).
+pub type CloudCells = (Vec<[u32; 4]>, Vec<[u32; 3]>);
+
 /// A probe file ready for queries. Queries take `&self`: one value serves
 /// every HTTP thread.
 pub struct Probes {
@@ -125,7 +128,7 @@ impl Probes {
 
     /// The cloud's tetrahedra and hull faces (probe indices), `None` for a
     /// volume.
-    pub fn cells(&self) -> Option<(Vec<[u32; 4]>, Vec<[u32; 3]>)> {
+    pub fn cells(&self) -> Option<CloudCells> {
         match &self.predictor {
             Predictor::Cloud(c) => {
                 let mesh = c.mesh();
