@@ -99,6 +99,13 @@ impl Running {
             let _ = w.join();
         }
         self.state.truth.stop();
+        // The last worker dropped the server; its accept thread lets go of
+        // the listener a moment later. Wait for that (briefly), so that the
+        // port is free when this returns.
+        let deadline = std::time::Instant::now() + Duration::from_secs(2);
+        while TcpListener::bind(self.addr).is_err() && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 }
 
