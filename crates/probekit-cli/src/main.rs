@@ -51,6 +51,9 @@ enum Command {
     Eval(cmd::eval::EvalArgs),
     /// Picture: the scene lit by the probes beside path-traced truth, and the error.
     Render(cmd::render::RenderArgs),
+    /// Look at a bake in the browser: probes, tetrahedra, a test object lit by
+    /// the runtime's query, and path-traced truth at any point (docs/view.md).
+    View(cmd::view::ViewArgs),
     /// Print docs/cli.md, the command-line reference, from these definitions.
     #[command(hide = true)]
     MarkdownHelp,
@@ -104,6 +107,7 @@ fn main() -> ExitCode {
         Command::Rig(args) => cmd::rig::run(args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Render(args) => cmd::render::run(&args),
+        Command::View(args) => cmd::view::run(&args),
         Command::MarkdownHelp => {
             let mut cli = Cli::command();
             cli.build();

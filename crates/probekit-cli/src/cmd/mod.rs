@@ -1,6 +1,7 @@
 //! One module per subcommand; each exposes `Args` (clap derive) and `run`.
 
 pub mod bake;
+pub mod blend_args;
 pub mod convert;
 pub mod eval;
 pub mod export;
@@ -10,4 +11,5 @@ pub mod render;
 pub mod rig;
 pub mod sh;
 pub mod util;
+pub mod view;
 pub mod volume;
