@@ -34,7 +34,8 @@ pub fn cli_markdown(cmd: &Command) -> String {
 
 /// The subcommands shown in help.
 fn visible(cmd: &Command) -> impl Iterator<Item = &Command> {
-    cmd.get_subcommands().filter(|s| !s.is_hide_set())
+    cmd.get_subcommands()
+        .filter(|s| !s.is_hide_set() && s.get_name() != "help")
 }
 
 /// A help text on one line.

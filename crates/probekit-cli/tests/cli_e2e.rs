@@ -430,13 +430,13 @@ fn ignored_flags_are_refused() {
         "probe cloud",
     );
     for flag in [
-        &["--no-visibility"][..],
-        &["--no-cell-visibility"],
-        &["--no-probe-weights"],
-        &["--visibility-bias", "0.1"],
-        &["--visibility-sharpness", "4"],
-        &["--brightness-weight", "1"],
-        &["--directional-brightness", "1"],
+        &["--blend", "visibility=off"][..],
+        &["--blend", "cell-visibility=off"],
+        &["--blend", "probe-weights=off"],
+        &["--blend", "bias=0.1"],
+        &["--blend", "sharpness=4"],
+        &["--blend", "brightness=1"],
+        &["--blend", "directional=1"],
     ] {
         let args = [&["query", "v.probes"][..], flag, &at].concat();
         fails_one_line(d, &args, &format!("{} applies to probe clouds", flag[0]));

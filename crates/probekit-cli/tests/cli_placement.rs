@@ -321,7 +321,10 @@ fn eval_compare_and_sweep_plot() {
         "--json",
     ]));
     assert_eq!(
-        eval_compare(p, &["--no-visibility", "--no-probe-weights"])["compare"]["grid"],
+        eval_compare(
+            p,
+            &["--blend", "visibility=off", "--blend", "probe-weights=off"]
+        )["compare"]["grid"],
         eval_compare(plain.to_str().unwrap(), &[])["compare"]["grid"]
     );
     let o = probekit(&[

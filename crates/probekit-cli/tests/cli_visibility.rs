@@ -176,28 +176,38 @@ fn bake_inspect_query_with_and_without_visibility() {
     // off; --no-visibility on the file with moments equals the file without.
     write_points(d);
     let q = |f: &str, extra: &[&str]| query(d, f, extra);
-    assert_eq!(q("v.probes", &["--no-visibility"]), q("n.probes", &[]));
     assert_eq!(
-        q("n.probes", &[]),
-        q("n.probes", &["--visibility-bias", "0.2"])
-    );
-    assert_ne!(q("v.probes", &[]), q("n.probes", &[]));
-    // Each weighting alone differs from both together.
-    assert_ne!(q("v.probes", &["--no-cell-visibility"]), q("v.probes", &[]));
-    assert_ne!(q("v.probes", &["--no-cell-visibility"]), q("n.probes", &[]));
-    assert_ne!(
-        q("v.probes", &["--visibility-bias", "0.01"]),
+        q("v.probes", &["--blend", "visibility=off"]),
         q("n.probes", &[])
     );
+    assert_eq!(q("n.probes", &[]), q("n.probes", &["--blend", "bias=0.2"]));
+    assert_ne!(q("v.probes", &[]), q("n.probes", &[]));
+    // Each weighting alone differs from both together.
+    assert_ne!(
+        q("v.probes", &["--blend", "cell-visibility=off"]),
+        q("v.probes", &[])
+    );
+    assert_ne!(
+        q("v.probes", &["--blend", "cell-visibility=off"]),
+        q("n.probes", &[])
+    );
+    assert_ne!(q("v.probes", &["--blend", "bias=0.01"]), q("n.probes", &[]));
 
     fails_one_line(
         d,
         &[
             &common[..],
-            &["-o", "x.probes", "--set", "blend.distance_moments=0"],
+            &["-o", "x.probes", "--set", "blend.distance_moments=65"],
         ]
         .concat(),
-        "visibility",
+        "blend.distance_moments",
+    );
+    fails_one_line(
+        d,
+        &[
+            "query", "v.probes", "--points", "pts.csv", "--blend", "bias=nan", "--json",
+        ],
+        "--blend bias",
     );
     fails_one_line(
         d,
@@ -206,33 +216,20 @@ fn bake_inspect_query_with_and_without_visibility() {
             "v.probes",
             "--points",
             "pts.csv",
-            "--visibility-bias",
-            "nan",
+            "--blend",
+            "sharpness=17",
             "--json",
         ],
-        "visibility-bias",
-    );
-    fails_one_line(
-        d,
-        &[
-            "query",
-            "v.probes",
-            "--points",
-            "pts.csv",
-            "--visibility-sharpness",
-            "17",
-            "--json",
-        ],
-        "visibility-sharpness",
+        "--blend sharpness",
     );
     // Brightness weighting changes the blend; 0 is the default; out of
     // range is refused.
     assert_ne!(
-        q("v.probes", &["--brightness-weight", "1"]),
+        q("v.probes", &["--blend", "brightness=1"]),
         q("v.probes", &[])
     );
     assert_eq!(
-        q("v.probes", &["--brightness-weight", "0"]),
+        q("v.probes", &["--blend", "brightness=0"]),
         q("v.probes", &[])
     );
     for bad in ["4.5", "nan", "-0.5"] {
@@ -243,10 +240,10 @@ fn bake_inspect_query_with_and_without_visibility() {
                 "v.probes",
                 "--points",
                 "pts.csv",
-                &format!("--brightness-weight={bad}"),
+                &format!("--blend=brightness={bad}"),
                 "--json",
             ],
-            "brightness-weight",
+            "--blend brightness",
         );
     }
     // The flags are checked for volumes too (they ignore them), so a bad
@@ -272,18 +269,18 @@ fn bake_inspect_query_with_and_without_visibility() {
             "vol.probes",
             "--at",
             "0,0,0",
-            "--visibility-bias",
-            "inf",
+            "--blend",
+            "bias=inf",
             "--json",
         ],
-        "visibility-bias",
+        "--blend bias",
     );
     // Sharpness 0 switches the moments' test off: with cell visibility off
     // too, the plain barycentric blend.
     assert_eq!(
         q(
             "v.probes",
-            &["--visibility-sharpness", "0", "--no-cell-visibility"]
+            &["--blend", "sharpness=0", "--blend", "cell-visibility=off"]
         ),
         q("n.probes", &[])
     );
@@ -404,29 +401,32 @@ fn bake_fits_probe_weights_and_query_uses_them() {
 
     write_points(d);
     let q = |f: &str, extra: &[&str]| query(d, f, extra);
-    assert_eq!(q("w.probes", &["--no-probe-weights"]), q("p.probes", &[]));
+    assert_eq!(
+        q("w.probes", &["--blend", "probe-weights=off"]),
+        q("p.probes", &[])
+    );
     assert_ne!(q("w.probes", &[]), q("p.probes", &[]));
     assert_eq!(
         q("h.probes", &[]),
-        q("h.probes", &["--brightness-weight", "0.75"])
+        q("h.probes", &["--blend", "brightness=0.75"])
     );
     assert_ne!(
         q("h.probes", &[]),
-        q("h.probes", &["--brightness-weight", "0"])
+        q("h.probes", &["--blend", "brightness=0"])
     );
     // The file's directional exponent is the default; the weights are the
     // same with or without it (not fitted for).
     assert_eq!(
         q("w.probes", &[]),
-        q("w.probes", &["--directional-brightness", "0.5"])
+        q("w.probes", &["--blend", "directional=0.5"])
     );
     assert_ne!(
         q("w.probes", &[]),
-        q("w.probes", &["--directional-brightness", "0"])
+        q("w.probes", &["--blend", "directional=0"])
     );
     assert_eq!(
         q("g.probes", &[]),
-        q("w.probes", &["--directional-brightness", "0"])
+        q("w.probes", &["--blend", "directional=0"])
     );
     fails_one_line(
         d,
@@ -435,10 +435,10 @@ fn bake_fits_probe_weights_and_query_uses_them() {
             "w.probes",
             "--points",
             "pts.csv",
-            "--directional-brightness",
-            "9",
+            "--blend",
+            "directional=9",
         ],
-        "--directional-brightness",
+        "--blend directional",
     );
 
     for (flag, bad) in [

@@ -21,18 +21,13 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::capture::{Baker, ReferenceSettings};
-use probekit::eval::{
-    leaks_at, mean_luminance, metrics, reference_with_progress, region_leaks_at, region_metrics,
-    unlit_points, worst_points, Metrics,
-};
+use probekit::eval::{evaluate, reference_with_progress};
 use probekit::pipeline::sweep::{plot_sweep, sweep, SWEEP_METHODS};
 use probekit::pipeline::Bake;
 use probekit::query::Predictor;
 use probekit::recipe::{BakeRecord, CellVisibility, Placement};
-use probekit::scene::{Aabb, Scene};
-use probekit::trace::free_space::{sample_points, EvalPoint};
-use probekit::trace::Tracer;
-use probekit_runtime::cloud::WalkState;
+use probekit::scene::Aabb;
+use probekit::trace::free_space::sample_points;
 use std::path::PathBuf;
 
 /// Arguments of `probekit eval`.
@@ -66,9 +61,9 @@ pub struct EvalArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-    /// Clouds: query-time visibility weighting.
+    /// Clouds: blend overrides for diagnosis.
     #[command(flatten)]
-    pub visibility: super::util::VisibilityArgs,
+    pub blend: super::blend_args::BlendArgs,
     /// Also evaluate a uniform `grid` with the same probe count.
     #[arg(long)]
     pub compare: Option<String>,
@@ -119,10 +114,6 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
     Ok(())
 }
 
-fn to_json(m: &Metrics) -> serde_json::Value {
-    serde_json::json!({"points": m.points, "rel_rmse": m.rel_rmse, "p95_rel_error": m.p95_rel_error, "leaks": m.leaks})
-}
-
 /// Runs `probekit eval`.
 pub fn run(a: &EvalArgs) -> Result<()> {
     let name = a.probes.display().to_string();
@@ -131,7 +122,8 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     super::util::check_outputs(&[a.plot.as_deref()])?;
     let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
     let mut predictor = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
-    a.visibility
+    let overrides = a
+        .blend
         .apply(&mut predictor)
         .with_context(|| name.clone())?;
     let (scene, scene_name) =
@@ -169,7 +161,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let truth = reference_with_progress(&baker, &pts, &rs, &|d, t| progress("ground truth", d, t))
         .with_context(|| scene_name.clone())?;
     let pred = predictor.predict(&pts).with_context(|| name.clone())?;
-    let mut out = figures(
+    let mut out = serde_json::to_value(evaluate(
         &scene,
         &pts,
         &pred,
@@ -178,7 +170,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         file.positions.len(),
         a.worst,
         &predictor,
-    );
+    ))?;
     // The recipe the file was baked with (the defaults for a file that
     // records none), with `--samples` for the bakes below.
     let mut recipe = BakeRecord::from_json(&file.metadata)
@@ -203,9 +195,9 @@ pub fn run(a: &EvalArgs) -> Result<()> {
                 .with_context(ctx)?
                 .file;
             let mut gpred = Predictor::from_file(&g, interp).with_context(ctx)?;
-            a.visibility.apply(&mut gpred)?;
+            overrides.set(&mut gpred);
             let gp = gpred.predict(&pts).with_context(ctx)?;
-            let gf = figures(
+            let gf = evaluate(
                 &scene,
                 &pts,
                 &gp,
@@ -232,13 +224,13 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         // what the flags turn off) and its query flags, so the curves blend
         // as the file does (the flags were checked by `apply` above).
         let blend = &mut recipe.blend;
-        if a.visibility.no_visibility {
+        if overrides.no_visibility {
             blend.distance_moments = 0;
             blend.cell_visibility = CellVisibility::Subdivision(0);
-        } else if a.visibility.no_cell_visibility {
+        } else if overrides.no_cell_visibility {
             blend.cell_visibility = CellVisibility::Subdivision(0);
         }
-        if a.visibility.no_probe_weights {
+        if overrides.no_probe_weights {
             blend.probe_weights = false;
         }
         let rows = sweep(
@@ -247,7 +239,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             &recipe,
             &methods,
             &budgets,
-            &|p| a.visibility.set(p),
+            &|p| overrides.set(p),
             &pts,
             &truth,
             &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),
@@ -267,97 +259,4 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&out)?);
     }
     Ok(())
-}
-
-/// Overall figures, `"probes"`, `"unlit_points"` and `"leaks_unlit"`
-/// ([`unlit_points`]) and per-region figures of a prediction;
-/// for a cloud, also `"leaks_through_geometry"`
-/// ([`Predictor::blends_hidden_probes`], segment tests with `tracer`),
-/// `"points_outside_hull"` and `"leaks_outside_hull"`
-/// ([`Predictor::outside_hull`]), overall and per region; with `worst` > 0,
-/// the `worst` points of [`worst_points`] under `"worst"`, for a cloud with
-/// the probes of each point's blend.
-#[allow(clippy::too_many_arguments)]
-fn figures(
-    scene: &Scene,
-    pts: &[EvalPoint],
-    pred: &[Vec3],
-    truth: &[Vec3],
-    tracer: &Tracer,
-    probes: usize,
-    worst: usize,
-    predictor: &Predictor,
-) -> serde_json::Value {
-    let mean = mean_luminance(truth);
-    let mut out = to_json(&metrics(pred, truth, mean));
-    out["probes"] = probes.into();
-    let (unlit, unlit_leaks) = unlit_points(pred, truth, mean);
-    out["unlit_points"] = unlit.into();
-    out["leaks_unlit"] = unlit_leaks.into();
-    let hidden = predictor.blends_hidden_probes(tracer, pts);
-    if let Some(h) = &hidden {
-        out["leaks_through_geometry"] = leaks_at(pred, truth, mean, h).into();
-    }
-    let outside = predictor.outside_hull(pts);
-    if let Some(o) = &outside {
-        out["points_outside_hull"] = o.iter().filter(|&&f| f).count().into();
-        out["leaks_outside_hull"] = leaks_at(pred, truth, mean, o).into();
-    }
-    let per_region =
-        |flags: &[bool]| region_leaks_at(&scene.regions, pts, pred, truth, mean, flags);
-    let through = hidden.as_deref().map(per_region);
-    let beyond = outside.as_deref().map(per_region);
-    let mut regions = serde_json::Map::new();
-    for (i, (r, m)) in region_metrics(&scene.regions, pts, pred, truth, mean)
-        .into_iter()
-        .enumerate()
-    {
-        let mut j = to_json(&m);
-        if let Some(t) = &through {
-            j["leaks_through_geometry"] = t[i].into();
-        }
-        if let Some(b) = &beyond {
-            j["leaks_outside_hull"] = b[i].into();
-        }
-        regions.insert(r.name.clone(), j);
-    }
-    out["regions"] = regions.into();
-    if worst > 0 {
-        let v3 = |v: Vec3| [v.x, v.y, v.z];
-        out["worst"] = worst_points(pred, truth, worst)
-            .into_iter()
-            .map(|w| {
-                let p = &pts[w.index];
-                let mut j = serde_json::json!({
-                    "position": v3(p.position),
-                    "normal": v3(p.normal),
-                    "truth": v3(truth[w.index]),
-                    "irradiance": v3(pred[w.index]),
-                    "share": w.share,
-                    "regions": scene.region_names_at(p.position),
-                });
-                if let Predictor::Cloud(c) = predictor {
-                    // The blend weights (before any directional brightness)
-                    // and each probe's own irradiance for the point's normal.
-                    let (idx, wt) = c.weights_at(p.position, &mut WalkState::new());
-                    j["blend"] = (0..4)
-                        .filter(|&k| wt[k] > 0.0)
-                        .map(|k| {
-                            let i = idx[k] as usize;
-                            serde_json::json!({
-                                "probe": i,
-                                "position": v3(c.mesh().positions()[i]),
-                                "weight": wt[k],
-                                "irradiance": v3(probekit_sh::irradiance(c.probe_sh(i), p.normal)),
-                            })
-                        })
-                        .collect::<Vec<_>>()
-                        .into();
-                }
-                j
-            })
-            .collect::<Vec<_>>()
-            .into();
-    }
-    out
 }

@@ -136,9 +136,9 @@ pub struct QueryArgs {
     /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
     #[arg(long)]
     pub group_scale: Vec<String>,
-    /// Clouds: query-time visibility weighting.
+    /// Clouds: blend overrides for diagnosis.
     #[command(flatten)]
-    pub visibility: super::util::VisibilityArgs,
+    pub blend: super::blend_args::BlendArgs,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
@@ -205,9 +205,7 @@ pub fn query(a: &QueryArgs) -> Result<()> {
         }
         dst.copy_from_slice(&coeffs);
     }
-    a.visibility
-        .apply(&mut probes)
-        .with_context(|| name.clone())?;
+    a.blend.apply(&mut probes).with_context(|| name.clone())?;
     let mut st = WalkState::new();
     match (&a.at, &a.points) {
         (Some(at), None) => {

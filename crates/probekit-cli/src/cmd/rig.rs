@@ -85,20 +85,8 @@ pub struct RigArgs {
     pub out: Option<PathBuf>,
 }
 
-fn parse_vec3(s: &str) -> anyhow::Result<Vec3> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| anyhow!("--at {s:?}: expected x,y,z"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
-        _ => Err(anyhow!("--at {s:?}: expected three finite numbers x,y,z")),
-    }
-}
-
-/// The JSON line of the issue (exactly its keys; whether a baked file was
-/// used is the caller's to know).
+/// The `--json` line: the rig, its error, its light zones and its cost per
+/// frame (whether a baked file was used is the caller's to know).
 fn json(spec: &RigSpec, r: &RunReport) -> String {
     let (a, t, g) = r.zone_counts();
     serde_json::json!({
@@ -124,7 +112,7 @@ fn kind_name(p: &ProbeSource) -> &'static str {
 pub fn run(a: RigArgs) -> anyhow::Result<()> {
     super::util::check_outputs(&[a.out.as_deref(), a.render.as_deref()])?;
     let spec: RigSpec = a.rig.parse().map_err(|e| anyhow!("--rig: {e}"))?;
-    let at = parse_vec3(&a.at)?;
+    let at = super::util::parse_vec3(&a.at, "--at")?;
     // The loader's errors name the file already; validation errors do not.
     let mesh = load_mesh(&a.mesh).map_err(|e| match e {
         RigSetupError::Scene(_) | RigSetupError::UnknownBuiltin(_) => anyhow!("{e}"),
@@ -324,17 +312,4 @@ fn render(
         .collect();
     zones_figure(&zones_path, &world, &report.approx, l_white, &lw)?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn at_parses_and_rejects() {
-        assert_eq!(parse_vec3("1,-2, 3.5").unwrap(), Vec3::new(1.0, -2.0, 3.5));
-        assert!(parse_vec3("1,2").is_err());
-        assert!(parse_vec3("1,2,x").is_err());
-        assert!(parse_vec3("1,2,inf").is_err());
-    }
 }

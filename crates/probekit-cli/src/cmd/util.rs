@@ -166,49 +166,6 @@ pub fn parse_interp(file: &ProbeFile, s: Option<&str>) -> Result<probekit_runtim
     })
 }
 
-/// Query-time visibility settings of a probe cloud, shared by `query` and
-/// `eval` (`#[command(flatten)]`).
-#[derive(clap::Args, Debug, Clone, Default)]
-pub struct VisibilityArgs {
-    /// Clouds: blend without any of the file's visibility weighting
-    /// (distance moments and cell visibility).
-    #[arg(long)]
-    pub no_visibility: bool,
-    /// Clouds: blend without the file's cell visibility (`CVSP`) weighting.
-    #[arg(long)]
-    pub no_cell_visibility: bool,
-    /// Clouds: blend without the file's fitted probe weights (`PWGT`; they
-    /// apply with or without `--no-visibility` otherwise).
-    #[arg(long)]
-    pub no_probe_weights: bool,
-    /// Clouds: distance bias of the visibility test in metres (default
-    /// 0.05): a point this much beyond the surface a probe sees still counts
-    /// as seen.
-    #[arg(long)]
-    pub visibility_bias: Option<f32>,
-    /// Clouds: exponent of the Chebyshev visibility (default 3, as DDGI;
-    /// at most 16): higher drops partly hidden probes faster.
-    #[arg(long)]
-    pub visibility_sharpness: Option<u32>,
-    /// Clouds: brightness exponent α, 0 to 4 (default: the one the file's
-    /// probe weights were fitted with, 0 without them or with
-    /// `--no-probe-weights`): each probe's weight is divided by its mean
-    /// irradiance to the power α, so one bright probe does not light a dark
-    /// cell (1: harmonic mean; fewer leaks, a low bias next to lights; see
-    /// `ProbeCloud::set_brightness_weighting`).
-    #[arg(long)]
-    pub brightness_weight: Option<f32>,
-    /// Clouds: directional brightness exponent γ, 0 to 4 (default: the one
-    /// stored with the file's probe weights, 0 without them or with
-    /// `--no-probe-weights`): per normal direction, the weight of a probe
-    /// more than 3× brighter than its cell for that direction is divided by
-    /// the excess to the power γ, so a probe bright only towards a doorway
-    /// does not light the dark side of its cell (see
-    /// `ProbeCloud::set_directional_brightness`).
-    #[arg(long)]
-    pub directional_brightness: Option<f32>,
-}
-
 /// Checks a `--brightness-weight` value: the range
 /// `ProbeCloud::set_brightness_weighting` accepts (NaN refused), so a bad
 /// value fails before any work, for volumes too.
@@ -224,7 +181,7 @@ pub fn check_directional_brightness(g: f32) -> Result<()> {
 
 /// Checks that `flag`'s value `x` lies in
 /// `0..=`[`probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT`].
-fn check_exponent(flag: &str, x: f32) -> Result<()> {
+pub fn check_exponent(flag: &str, x: f32) -> Result<()> {
     let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
     if !(0.0..=max).contains(&x) {
         bail!("{flag} {x}: expected 0 to {max}");
@@ -232,85 +189,19 @@ fn check_exponent(flag: &str, x: f32) -> Result<()> {
     Ok(())
 }
 
-impl VisibilityArgs {
-    /// Checks the values (a finite bias, a sharpness of at most 16,
-    /// brightness exponents in 0..=4).
-    fn check(&self) -> Result<()> {
-        if let Some(b) = self.visibility_bias.filter(|b| !b.is_finite()) {
-            bail!("--visibility-bias {b}: expected a finite distance in metres");
-        }
-        if let Some(k) = self.visibility_sharpness.filter(|&k| k > 16) {
-            bail!("--visibility-sharpness {k}: expected 0 to 16");
-        }
-        if let Some(a) = self.brightness_weight {
-            check_brightness_weight(a)?;
-        }
-        if let Some(g) = self.directional_brightness {
-            check_directional_brightness(g)?;
-        }
-        Ok(())
-    }
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-    /// The first of these flags given on the command line, if any.
-    fn first_given(&self) -> Option<&'static str> {
-        first_given([
-            (self.no_visibility, "--no-visibility"),
-            (self.no_cell_visibility, "--no-cell-visibility"),
-            (self.no_probe_weights, "--no-probe-weights"),
-            (self.visibility_bias.is_some(), "--visibility-bias"),
-            (
-                self.visibility_sharpness.is_some(),
-                "--visibility-sharpness",
-            ),
-            (self.brightness_weight.is_some(), "--brightness-weight"),
-            (
-                self.directional_brightness.is_some(),
-                "--directional-brightness",
-            ),
-        ])
-    }
-
-    /// Applies the settings to a cloud predictor, after [`Self::check`].
-    /// They are the cloud's blend: given with a volume they are an error
-    /// rather than ignored.
-    pub fn apply(&self, p: &mut probekit::query::Predictor) -> Result<()> {
-        self.check()?;
-        if let (Some(flag), probekit::query::Predictor::Volume(..)) = (self.first_given(), &*p) {
-            return Err(cloud_flag_on_volume(flag));
-        }
-        self.set(p);
-        Ok(())
-    }
-
-    /// [`Self::apply`] without the check, for settings already checked.
-    pub fn set(&self, p: &mut probekit::query::Predictor) {
-        if let probekit::query::Predictor::Cloud(c) = p {
-            c.set_visibility(!self.no_visibility);
-            c.set_cell_visibility(!self.no_visibility && !self.no_cell_visibility);
-            c.set_probe_weighting(!self.no_probe_weights);
-            if let Some(b) = self.visibility_bias {
-                c.set_visibility_bias(b);
-            }
-            if let Some(k) = self.visibility_sharpness {
-                if let Some(m) = c.visibility_maps_mut() {
-                    m.set_sharpness(k);
-                }
-            }
-            // The file's exponent belongs to its fitted weights.
-            let a = self
-                .brightness_weight
-                .or(self.no_probe_weights.then_some(0.0));
-            if let Some(a) = a {
-                let in_range = c.set_brightness_weighting(a).is_ok();
-                debug_assert!(in_range, "checked by VisibilityArgs::check");
-            }
-            let g = self
-                .directional_brightness
-                .or(self.no_probe_weights.then_some(0.0));
-            if let Some(g) = g {
-                let in_range = c.set_directional_brightness(g).is_ok();
-                debug_assert!(in_range, "checked by VisibilityArgs::check");
-            }
+    #[test]
+    fn parse_vec3_parses_and_rejects() {
+        assert_eq!(
+            parse_vec3("1,-2, 3.5", "--at").unwrap(),
+            Vec3::new(1.0, -2.0, 3.5)
+        );
+        for bad in ["1,2", "1,2,x", "1,2,inf", "1,2,3,4"] {
+            let e = parse_vec3(bad, "--at").unwrap_err().to_string();
+            assert!(e.starts_with("--at ") && e.contains("x,y,z"), "{e}");
         }
     }
 }

@@ -27,6 +27,7 @@
 #[cfg(test)]
 mod tests;
 
+mod report;
 use crate::capture::{BakeError, Baker, ReferenceSettings};
 use crate::query::blend_sh;
 use crate::scene::Region;
@@ -34,6 +35,7 @@ use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
 use probekit_runtime::cloud::{TetMesh, WalkState};
 use probekit_sh::ShRgb;
+pub use report::{evaluate, BlendProbe, EvalReport, RegionReport, WorstReport};
 
 /// Reference irradiance at each point (index = row number).
 pub fn reference(
@@ -126,7 +128,7 @@ pub fn reference_cache_path(scene_hash: u64, points: &[EvalPoint]) -> std::path:
 pub const REFERENCE_VERSION: u32 = 1;
 
 /// Error figures of a prediction against ground truth.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Metrics {
     /// Points evaluated.
     pub points: usize,
