@@ -2,14 +2,14 @@
 //! SH at this point", with the cell and the weights it blended.
 //!
 //! This is the one module that knows which type serves queries (today
-//! `probekit::placement::eval::Predictor`, over `probekit_runtime`'s
+//! `probekit::query::Predictor`, over `probekit_runtime`'s
 //! `ProbeCloud` and `Volume`), so that replacing it touches this file only.
 //! A cloud answers as an engine's `ProbeCloud` does, with every blend
 //! setting the file stores (distance moments, cell visibility, fitted
 //! weights, directional brightness); a volume interpolates trilinearly.
 
 use glam::Vec3;
-use probekit::placement::eval::Predictor;
+use probekit::query::Predictor;
 use probekit_runtime::cloud::{Location, WalkState};
 use probekit_runtime::{Interp, ProbeFile};
 

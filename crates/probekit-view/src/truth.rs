@@ -8,7 +8,7 @@
 
 use crate::query::Probes;
 use glam::Vec3;
-use probekit::bake::{Baker, ReferenceSettings};
+use probekit::capture::{Baker, ReferenceSettings};
 use probekit::scene::Scene;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{channel, Sender};
@@ -67,7 +67,7 @@ pub struct Job {
 
 /// The leak floor's `mean` and the test itself (see the module docs).
 pub fn is_leak(probes: Vec3, truth: Vec3, mean_irradiance: f32) -> bool {
-    probekit::placement::eval::is_leak(probes, truth, mean_irradiance)
+    probekit::eval::is_leak(probes, truth, mean_irradiance)
 }
 
 /// `|probes − truth| / |truth|` (RGB lengths), with the denominator kept at

@@ -348,8 +348,8 @@ fn truth_is_the_reference_and_leaks_are_flagged() {
     }
     // The truth is the library's reference at the same settings.
     let scene = probekit::scene::Scene::load(DEMO).unwrap();
-    let baker = probekit::bake::Baker::new(&scene).unwrap();
-    let s = probekit::bake::ReferenceSettings {
+    let baker = probekit::capture::Baker::new(&scene).unwrap();
+    let s = probekit::capture::ReferenceSettings {
         relative_precision: 0.0,
         min_samples: 512,
         max_samples: 512,
