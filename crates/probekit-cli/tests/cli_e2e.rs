@@ -161,7 +161,7 @@ fn json_shapes_and_bad_input() {
         i["bytes"].as_u64().unwrap(),
         std::fs::metadata(d.join("c.probes")).unwrap().len()
     );
-    assert_eq!(i["placement"]["method"], "grid");
+    assert_eq!(i["recipe"]["placement"]["method"], "grid");
 
     let q = json(
         d,

@@ -380,12 +380,21 @@ fn requests_are_not_silently_changed() {
             "--budget",
             "1",
         ],
-        "a grid has at least 2 probes per axis, 8 in all",
+        "`placement.budget`: 1: expected at least 8",
     );
     fails_one_line(
         d,
-        &["volume", "lights.toml", "-o", "v.probes"],
-        "choose a volume: --adaptive (an octree), or --uniform",
+        &[
+            "volume",
+            "lights.toml",
+            "-o",
+            "v.probes",
+            "--layout",
+            "octree",
+            "--cell",
+            "0.5",
+        ],
+        "`volume.cell`",
     );
 }
 

@@ -216,7 +216,7 @@ fn rig_interp_needs_a_volume() {
         .args(["--scene", "builtin:rig-demo", "--interp", "taylor"])
         .output()
         .unwrap();
-    assert_eq!(no_probes.status.code(), Some(2));
+    assert_eq!(no_probes.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&no_probes.stderr).contains("--probes"));
     let on_cloud = probekit()
         .args(rig)

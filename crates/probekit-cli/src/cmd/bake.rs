@@ -159,17 +159,19 @@ fn parse_shard(s: &str) -> Result<(usize, usize)> {
 /// Runs `probekit bake`.
 pub fn run(a: &BakeArgs) -> Result<()> {
     let shard = a.shard.as_deref().map(parse_shard).transpose()?;
+    let output = a
+        .output
+        .clone()
+        .unwrap_or_else(|| super::util::output_named_after(&a.scene, "probes"));
+    if !a.recipe.print_recipe {
+        check_outputs(&[Some(&output), a.render.as_deref()])?;
+    }
     let scene = load_scene(&a.scene)?;
     let recipe = a.recipe.resolve(&a.scene, &scene, a.flag_layer())?;
     if a.recipe.print_recipe {
         print!("{}", recipe.resolved_for(&scene).to_toml());
         return Ok(());
     }
-    let output = a
-        .output
-        .clone()
-        .unwrap_or_else(|| super::util::output_named_after(&a.scene, "probes"));
-    check_outputs(&[Some(&output), a.render.as_deref()])?;
     let outname = output.display().to_string();
     let progress = crate::progress::Progress::new();
     let bake = Bake::new(&scene, &a.scene, &recipe).with_context(|| a.scene.clone())?;

@@ -113,6 +113,9 @@ impl VolumeArgs {
 
 /// Runs `probekit volume`.
 pub fn run(a: &VolumeArgs) -> Result<()> {
+    if !a.recipe.print_recipe {
+        check_outputs(&[Some(&a.output), a.plot.as_deref()])?;
+    }
     let progress = crate::progress::Progress::new();
     let (file, report) = if a.scene == LIGHTS_DEMO {
         let mut layers = RecipeLayers::new();
@@ -124,7 +127,6 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             print!("{}", recipe.to_toml());
             return Ok(());
         }
-        check_outputs(&[Some(&a.output), a.plot.as_deref()])?;
         let src = LightsDemo::demo(recipe.capture.order);
         let record = BakeRecord::without_scene(LIGHTS_DEMO, recipe.clone());
         bake_volume_from(&src, &recipe.recorded_box(), &recipe, 0.5, record)
@@ -135,7 +137,6 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             print!("{}", recipe.resolved_for(&scene).to_toml());
             return Ok(());
         }
-        check_outputs(&[Some(&a.output), a.plot.as_deref()])?;
         bake_volume(&scene, &a.scene, &recipe, &progress.callback())
     }
     .with_context(|| a.scene.clone())?;

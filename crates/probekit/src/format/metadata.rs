@@ -92,11 +92,20 @@ pub struct SceneMismatch {
     pub scene_hash: String,
 }
 
+/// The `scene` and `scene_hash` a file's metadata records: the top-level
+/// keys of every bake record (`probekit::recipe::BakeRecord`, and the
+/// metadata of files from before it).
+fn recorded(metadata: &str) -> Option<(String, String)> {
+    let v: serde_json::Value = serde_json::from_str(metadata).ok()?;
+    let text = |k: &str| v.get(k).and_then(|x| x.as_str()).unwrap_or("").to_string();
+    Some((text("scene"), text("scene_hash")))
+}
+
 /// The scene a probe file's metadata recorded (as it was named when
 /// baking), if any.
 pub fn recorded_scene(metadata: &str) -> Option<String> {
-    BakeMetadata::from_json(metadata)
-        .map(|m| m.scene)
+    recorded(metadata)
+        .map(|(scene, _)| scene)
         .filter(|s| !s.is_empty())
 }
 
@@ -120,21 +129,21 @@ pub fn check_scene_hash(
     hash: &str,
     scene_name: &str,
 ) -> Result<(), SceneMismatch> {
-    let Some(meta) = BakeMetadata::from_json(metadata) else {
+    let Some((baked_scene, baked_hash)) = recorded(metadata) else {
         return Ok(());
     };
     let hash = hash.to_string();
-    if meta.scene_hash.is_empty() || meta.scene_hash == hash {
+    if baked_hash.is_empty() || baked_hash == hash {
         return Ok(());
     }
     Err(SceneMismatch {
         file: file_name.into(),
-        baked_scene: if meta.scene.is_empty() {
+        baked_scene: if baked_scene.is_empty() {
             "an unrecorded scene".into()
         } else {
-            meta.scene
+            baked_scene
         },
-        baked_hash: meta.scene_hash,
+        baked_hash,
         scene: scene_name.into(),
         scene_hash: hash,
     })

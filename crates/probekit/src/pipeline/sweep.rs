@@ -136,11 +136,15 @@ pub fn sweep(
                 let mut p = Predictor::from_file(&file, Interp::Trilinear)?;
                 configure(&mut p);
                 let pred = p.predict(points)?;
-                Ok((file.positions.len(), metrics(&pred, truth, mean)))
+                Ok((
+                    r.placement.method(),
+                    file.positions.len(),
+                    metrics(&pred, truth, mean),
+                ))
             });
             match r {
-                Ok((probes, metrics)) => rows.push(SweepRow {
-                    method: m.into(),
+                Ok((method, probes, metrics)) => rows.push(SweepRow {
+                    method: method.into(),
                     budget: b,
                     probes,
                     metrics,

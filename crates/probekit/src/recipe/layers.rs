@@ -170,7 +170,7 @@ impl RecipeLayers {
             let text = e.to_string();
             // toml's value errors end with "in `a.b`".
             let (message, key) = match text.rsplit_once("\nin `") {
-                Some((m, k)) => (m.to_string(), k.trim_end_matches('`').to_string()),
+                Some((m, k)) => (m.to_string(), k.trim().trim_end_matches('`').to_string()),
                 None => (text.clone(), String::new()),
             };
             RecipeError::Value {
