@@ -14,7 +14,7 @@ fn stdout(o: &Output) -> String {
     String::from_utf8(o.stdout.clone()).unwrap()
 }
 
-/// `--json` on the built-in sky: the issue's shape, N² finite coefficients,
+/// `--json` on the built-in sky: the documented shape, N² finite coefficients,
 /// and the DC term is the mean radiance × √(4π) (positive for a lit sky).
 #[test]
 fn sh_json_on_builtin_sky() {
@@ -36,7 +36,7 @@ fn sh_json_on_builtin_sky() {
     assert_eq!(stdout(&o).lines().count(), 1 + 9);
 }
 
-/// `--compare --json` has every key of the issue; measured errors are in
+/// `--compare --json` has every documented key; measured errors are in
 /// (0, 1); `--plot` writes a PNG; the table form lists every basis.
 #[test]
 fn sh_compare_on_builtin_sky() {

@@ -134,7 +134,7 @@ fn bake_inspect_query_with_and_without_visibility() {
     assert_eq!(file.cell_planes.as_ref(), Some(&planes));
     assert_eq!(v["cell_visibility"]["planes"], planes.len());
     assert!(planes.len() as u64 <= stored);
-    assert!(String::from_utf8_lossy(&meta).contains("\"cell_planes\":true"));
+    assert_eq!(v["recipe"]["blend"]["occluder_planes"], true, "{v}");
     json(
         d,
         &[

@@ -6,7 +6,7 @@ fn probekit() -> Command {
     Command::new(env!("CARGO_BIN_EXE_probekit"))
 }
 
-/// `--json` prints exactly the issue's object, with plausible values.
+/// `--json` prints exactly the documented object, with plausible values.
 #[test]
 fn rig_json_has_the_issue_shape() {
     let out = probekit()

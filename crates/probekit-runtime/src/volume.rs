@@ -10,10 +10,10 @@
 //! half-width `h` (a cell size, per axis), with `t_a = |p − c_s|_a / h_a`:
 //!
 //! * [`Interp::Trilinear`]: weight `Π_a (1 − t_a)`, value `v_s` — on a uniform
-//!   grid exactly the seed's "seven LERPs".
-//! * [`Interp::Taylor`]: same weight, value `v_s + ∇v_s·(p − c_s)`: the seed's
+//!   grid exactly Tatarchuk's "seven LERPs".
+//! * [`Interp::Taylor`]: same weight, value `v_s + ∇v_s·(p − c_s)`: Tatarchuk's
 //!   "first-order Taylor expansion, then interpolate as usual".
-//! * [`Interp::Tricubic`]: the seed's Hermite patches from values and
+//! * [`Interp::Tricubic`]: Tatarchuk's Hermite patches from values and
 //!   gradients (no cross derivatives): weight `Π_a H₀(t_a)` with
 //!   `H₀(t) = 1 − 3t² + 2t³`, plus the tangent terms
 //!   `Σ_a (p − c_s)_a (1 − t_a)² Π_{b≠a} H₀(t_b) · ∂_a v_s`. Exact for any
@@ -21,7 +21,7 @@
 //!   stores no gradients for (a lower gradient order) use the trilinear
 //!   weight instead: a Hermite patch with zero slopes is a smoothstep, flat
 //!   at every sample.
-//! * [`Interp::InverseDistance`]: the seed's fallback, `1/distance` weights over
+//! * [`Interp::InverseDistance`]: Tatarchuk's fallback, `1/distance` weights over
 //!   the 8 corners of the leaf containing `p` (continuous inside a leaf only).
 //! * [`Interp::LeafTrilinear`]: the naive octree lookup (trilinear over the
 //!   containing leaf's corners only) that the seed warns "pops"; kept for
@@ -33,7 +33,7 @@
 //! result is normalised by the sum of weights (a partition of unity). Inside
 //! a leaf whose neighbours have its size this is plain trilinear. Where a
 //! coarse leaf touches finer ones, the finer samples on the shared faces
-//! reach into the coarse leaf through their kernels — the seed's "continue
+//! reach into the coarse leaf through their kernels — Tatarchuk's "continue
 //! using samples from subdivided neighbors" — and since every weight is a
 //! continuous function of `p` and the leaf's own corner kernels keep the
 //! denominator ≥ 1, the interpolated lighting is continuous along any line

@@ -65,7 +65,7 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
     let by = file.bytes_by_section()?;
     let bytes = by.values().sum();
     let meta = BakeRecord::from_json(&file.metadata);
-    let part = meta.as_ref().and_then(|m| m.part.clone());
+    let part = meta.as_ref().and_then(|m| m.part);
     let invalid = file.validity.as_ref().map_or(0, |v| {
         v.iter().filter(|x| x.flags & VALIDITY_INVALID != 0).count()
     });

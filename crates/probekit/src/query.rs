@@ -29,6 +29,9 @@ pub enum PredictError {
 /// `probekit query`, `probekit eval` and the renderer all go through it, so
 /// clouds and volumes are measured the same way.
 #[derive(Clone, Debug)]
+// One per loaded file, never in bulk: boxing the cloud would only add an
+// indirection to every query.
+#[allow(clippy::large_enum_variant)]
 pub enum Predictor {
     /// A probe cloud.
     Cloud(ProbeCloud),

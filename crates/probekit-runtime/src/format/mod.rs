@@ -210,7 +210,7 @@ pub struct OctreeNode {
 /// A single root cell copies the box's aspect ratio into every cell of the
 /// tree (an 8 × 3 × 4 m room gives cells 2.7× longer in x than in y); a
 /// grid of near-cubic roots keeps cells near-cubic at every depth, which is
-/// what interpolation error and the seed's cell-size heuristics assume
+/// what interpolation error and Tatarchuk's cell-size heuristics assume
 /// (format 1.3; see `docs/file-format.md`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Octree {

@@ -7,12 +7,12 @@
 //!    [`Directions::TwentySix`] (seed §3.1.3: six directions "converged very
 //!    slowly"); the gradient is Chajdas et al.'s sum of the directions
 //!    weighted by their luminance, `g = (1/26) Σ_d d·I(d)` — it points to where
-//!    the light comes from. (This is the seed's sampling of one probe's SH,
+//!    the light comes from. (This is Sukys's sampling of one probe's SH,
 //!    not a finite difference between neighbouring probes.)
 //! 3. **Ascent.** Each probe moves by its step length along `g/|g|`
 //!    (initial step `step` × the grid's cell edge) and is recaptured there.
 //!    The move is **stepped back** (the probe returns to where it was and its
-//!    step is halved — the seed's "second order" ascent) when the new point
+//!    step is halved — Sukys's "second order" ascent) when the new point
 //!    is outside the bake box, inside geometry or invalid, *dark* (its mean
 //!    sampled luminance below `dark_threshold` × the mean of the initial
 //!    lit probes), or not brighter than before. The last condition goes

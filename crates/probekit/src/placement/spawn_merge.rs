@@ -18,13 +18,13 @@
 //! Contrast: the irradiance luminance `I(d)` of each probe's radiance SH
 //! (clamped-cosine convolution, [`ShRgb::irradiance`]) is sampled in 6 (±axes)
 //! or 26 (the directions to the 26 neighbours of a cube cell: 6 faces, 12
-//! edges, 8 corners — the seed's "pairs of the six directions" plus its "20
+//! edges, 8 corners — Sukys's "pairs of the six directions" plus its "20
 //! additional directions") directions; per direction the contrast of two
 //! probes is `|I_a − I_b| / (I_a + I_b + floor)` (bounded in `[0, 1]`; the
 //! floor, 2 % of the mean sampled luminance over all probes, keeps Monte
 //! Carlo noise in unlit areas from reading as contrast). Two probes are
 //! *different* when any direction's contrast exceeds the threshold and
-//! *similar* otherwise (the seed's "if any of these values rise above or all
+//! *similar* otherwise (Sukys's "if any of these values rise above or all
 //! of these values fall below the given contrast threshold").
 //!
 //! Merges never join probes whose connecting segment crosses geometry, and

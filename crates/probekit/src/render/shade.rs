@@ -10,6 +10,8 @@ use probekit_runtime::cloud::WalkState;
 use probekit_runtime::{Interp, ProbeCloud, ProbeFile, ProbeFileKind, Volume};
 
 /// The probes, ready to answer irradiance queries.
+// One per render, never in bulk.
+#[allow(clippy::large_enum_variant)]
 pub(super) enum Source {
     Cloud(ProbeCloud),
     Volume(Volume),
