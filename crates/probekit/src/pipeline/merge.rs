@@ -3,9 +3,10 @@
 use super::{PipelineError, Progress};
 use crate::blend::cell_planes::bake_file_cell_planes;
 use crate::blend::cell_visibility::bake_file_cell_visibility;
+use crate::format::check_scene_hash;
 use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
 use crate::format::ProbeFile;
-use crate::recipe::{check_scene, BakeRecord};
+use crate::recipe::BakeRecord;
 use crate::scene::Scene;
 use probekit_sh::ShRgb;
 
@@ -170,7 +171,7 @@ pub fn merge(
                 first.name
             )));
         };
-        check_scene(
+        check_scene_hash(
             &head.file.metadata,
             head.name,
             &scene.lighting_hash_hex(),

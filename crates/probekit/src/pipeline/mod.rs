@@ -86,7 +86,7 @@ pub enum PipelineError {
     Parts(String),
     /// A scene other than the one the parts were baked from.
     #[error(transparent)]
-    SceneMismatch(#[from] crate::recipe::SceneMismatch),
+    SceneMismatch(#[from] crate::format::SceneMismatch),
 }
 
 /// Placed positions and what placement did.

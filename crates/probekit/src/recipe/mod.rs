@@ -31,7 +31,7 @@ mod tests;
 
 pub use convert::VolumeSettings;
 pub use layers::{RecipeError, RecipeLayers};
-pub use record::{check_scene, recorded_scene, BakeRecord, Part, PlacementReport, SceneMismatch};
+pub use record::{BakeRecord, Part, PlacementReport};
 
 use serde::{Deserialize, Serialize};
 

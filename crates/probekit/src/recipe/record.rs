@@ -6,7 +6,6 @@
 use super::Recipe;
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
 /// The `META` JSON of a file baked by probekit.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -98,60 +97,4 @@ impl BakeRecord {
     pub fn from_json(text: &str) -> Option<Self> {
         serde_json::from_str(text).ok()
     }
-}
-
-/// A probe file used with a scene whose lighting differs from the one it
-/// was baked from ([`check_scene`]).
-#[derive(Clone, Debug, PartialEq, Eq, Error)]
-#[error(
-    "{file} was baked from {baked_scene} (lighting hash {baked_hash}), not from {scene} \
-     (lighting hash {scene_hash}); give the scene it was baked from, or --allow-other-scene"
-)]
-pub struct SceneMismatch {
-    /// The probe file, as named.
-    pub file: String,
-    /// The scene the file recorded.
-    pub baked_scene: String,
-    /// The lighting hash the file recorded.
-    pub baked_hash: String,
-    /// The scene given, as named.
-    pub scene: String,
-    /// Its lighting hash.
-    pub scene_hash: String,
-}
-
-/// The scene a file's metadata recorded (as named when baking), if any.
-pub fn recorded_scene(metadata: &str) -> Option<String> {
-    BakeRecord::from_json(metadata)
-        .map(|r| r.scene)
-        .filter(|s| !s.is_empty())
-}
-
-/// Checks that the scene named `scene_name`, of lighting hash `hash` (16
-/// hex digits), lights the probes as the scene `file_name` was baked from.
-/// A file that records no hash (written by another tool) passes: there is
-/// nothing to compare.
-pub fn check_scene(
-    metadata: &str,
-    file_name: &str,
-    hash: &str,
-    scene_name: &str,
-) -> Result<(), SceneMismatch> {
-    let Some(r) = BakeRecord::from_json(metadata) else {
-        return Ok(());
-    };
-    if r.scene_hash.is_empty() || r.scene_hash == hash {
-        return Ok(());
-    }
-    Err(SceneMismatch {
-        file: file_name.into(),
-        baked_scene: if r.scene.is_empty() {
-            "an unrecorded scene".into()
-        } else {
-            r.scene
-        },
-        baked_hash: r.scene_hash,
-        scene: scene_name.into(),
-        scene_hash: hash.to_string(),
-    })
 }
