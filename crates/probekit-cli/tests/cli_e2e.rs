@@ -505,3 +505,61 @@ fn outputs_are_checked_before_the_work() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+#[test]
+fn l1_files_record_how_an_engine_evaluates_them() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let bake = |extra: &[&str], out: &str| {
+        let mut args = vec![
+            "bake",
+            "--placement",
+            "grid",
+            "--budget",
+            "24",
+            "--samples",
+            "32",
+            "--set",
+            "capture.bounces=1",
+            "--set",
+            "blend.distance_moments=0",
+            "--set",
+            "blend.cell_visibility=0",
+            "--set",
+            "blend.probe_weights=false",
+            "-o",
+            out,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(d, &args)
+    };
+    bake(
+        &["--codec", "l1", "--set", "l1_evaluation=zh3-hallucinated"],
+        "zh3.probes",
+    );
+    let i = json(d, &["inspect", "zh3.probes", "--json"]);
+    assert_eq!(i["basis"], "sh2/l1");
+    assert_eq!(i["l1_evaluation"], "zh3-hallucinated");
+    assert_eq!(i["recipe"]["l1_evaluation"], "zh3-hallucinated");
+    bake(&["--codec", "l1"], "l1.probes");
+    let i = json(d, &["inspect", "l1.probes", "--json"]);
+    assert_eq!(i["l1_evaluation"], "linear");
+    // Asking for it on an L2 bake is an error that names the key.
+    fails_one_line(
+        d,
+        &[
+            "bake",
+            "--placement",
+            "grid",
+            "--budget",
+            "24",
+            "--set",
+            "l1_evaluation=zh3-hallucinated",
+            "-o",
+            "bad.probes",
+        ],
+        "l1_evaluation",
+    );
+    assert!(!d.join("bad.probes").exists());
+}

@@ -2,8 +2,8 @@
 //! ([`FileSummary`]) that serialises to JSON and prints as a few lines for
 //! people ([`FileSummary`]'s `Display`).
 
-use crate::format::ProbeFileKind;
 use crate::format::{layout::VALIDITY_INVALID, FormatError, ProbeFile};
+use crate::format::{L1Mode, ProbeFileKind};
 use crate::recipe::{BakeRecord, Part, PlacementReport, Recipe};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -26,6 +26,10 @@ pub struct FileSummary {
     pub unused_probes: usize,
     /// `sh{order}/{codec}`.
     pub basis: String,
+    /// For L1 files (order 2): how the header says an engine evaluates the
+    /// coefficients, `linear` or `zh3-hallucinated` (`None` for other orders).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub l1_evaluation: Option<&'static str>,
     /// Probes flagged invalid by the capture.
     pub invalid: usize,
     /// File size in bytes.
@@ -101,6 +105,10 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
             file.coefficients.order,
             file.coefficients.codec.name()
         ),
+        l1_evaluation: (file.coefficients.order == 2).then_some(match file.l1_mode {
+            L1Mode::Linear => "linear",
+            L1Mode::Zh3Hallucinated => "zh3-hallucinated",
+        }),
         invalid,
         bytes,
         bytes_by_section: by.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
@@ -176,6 +184,9 @@ impl fmt::Display for FileSummary {
                 }
             }
             write!(f, ", {}", self.basis.replace('/', " "))?;
+            if self.l1_evaluation == Some("zh3-hallucinated") {
+                write!(f, " (evaluated with hallucinated ZH3)")?;
+            }
         }
         writeln!(f, ", {:.1} KiB", self.bytes as f64 / 1024.0)?;
         if let Some(s) = &self.scene {

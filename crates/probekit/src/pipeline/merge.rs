@@ -158,6 +158,7 @@ pub fn merge(
     let mut file = cloud_file(&positions, &sh, &validity, codec, &record.to_json())?;
     let order = head.file.coefficients.order as usize;
     file.groups = light_groups(&groups, order, codec)?;
+    file.l1_mode = recipe.l1_evaluation.l1_mode();
     file.visibility = moments;
     let Some(first) = read.first() else {
         return Err(bad("no parts to merge".into()));

@@ -282,6 +282,7 @@ impl<'s> Bake<'s> {
             &record.to_json(),
         )?;
         f.groups = light_groups(&groups, out.settings.order, codec)?;
+        f.l1_mode = self.recipe.l1_evaluation.l1_mode();
         Ok(f)
     }
 

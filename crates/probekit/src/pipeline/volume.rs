@@ -87,6 +87,7 @@ pub fn bake_volume_from(
         truncate_gradients(&mut file, g)?;
     }
     file.metadata = record.to_json();
+    file.l1_mode = recipe.l1_evaluation.l1_mode();
     file.validate()?;
     Ok((
         file,

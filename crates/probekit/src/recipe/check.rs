@@ -2,11 +2,21 @@
 //! that name the key, the method and the valid choices.
 
 use super::layers::RecipeError;
-use super::{CellVisibility, Exponent, GradientModeName, Placement, Recipe, VolumeLayout};
+use super::{
+    CellVisibility, Exponent, GradientModeName, L1Evaluation, Placement, Recipe, VolumeLayout,
+};
 use toml::{Table, Value};
 
 /// Top-level keys.
-const TOP: [&str; 6] = ["box", "codec", "placement", "capture", "blend", "volume"];
+const TOP: [&str; 7] = [
+    "box",
+    "codec",
+    "l1_evaluation",
+    "placement",
+    "capture",
+    "blend",
+    "volume",
+];
 /// `[capture]` keys.
 const CAPTURE: [&str; 8] = [
     "samples",
@@ -366,6 +376,16 @@ impl Recipe {
                     "{}: expected 1 to {} bands (3 = L2)",
                     c.order,
                     probekit_sh::MAX_ORDER
+                ),
+            ));
+        }
+        let stored_order = self.codec.codec().fixed_order().unwrap_or(c.order as u32);
+        if self.l1_evaluation != L1Evaluation::Linear && stored_order != 2 {
+            return Err(bad(
+                "l1_evaluation",
+                format!(
+                    "\"zh3-hallucinated\" evaluates L1 coefficients, and this recipe stores order \
+                     {stored_order}: use codec = \"l1\" or capture.order = 2, or \"linear\""
                 ),
             ));
         }

@@ -1,8 +1,8 @@
 //! From a recipe to the settings each stage of the library takes.
 
 use super::{
-    CellVisibility, CodecName, Exponent, GradientModeName, LightShellsName, Placement, Recipe,
-    VolumeLayout,
+    CellVisibility, CodecName, Exponent, GradientModeName, L1Evaluation, LightShellsName,
+    Placement, Recipe, VolumeLayout,
 };
 use crate::blend::blend_fit::BlendFitSettings;
 use crate::blend::cell_visibility::CellLattice;
@@ -29,6 +29,16 @@ pub enum VolumeSettings {
     },
     /// An adaptive octree forest.
     Octree(AdaptiveSettings),
+}
+
+impl L1Evaluation {
+    /// The header's intended evaluation of L1 coefficients.
+    pub fn l1_mode(self) -> probekit_runtime::format::L1Mode {
+        match self {
+            L1Evaluation::Linear => probekit_runtime::format::L1Mode::Linear,
+            L1Evaluation::Zh3Hallucinated => probekit_runtime::format::L1Mode::Zh3Hallucinated,
+        }
+    }
 }
 
 impl CodecName {

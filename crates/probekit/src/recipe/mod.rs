@@ -46,6 +46,10 @@ pub struct Recipe {
     pub bake_box: Option<[[f32; 3]; 2]>,
     /// Coefficient codec of the file.
     pub codec: CodecName,
+    /// How an engine should turn the file's L1 coefficients into
+    /// irradiance (stored in the file's header; only for files whose
+    /// coefficients are L1: `codec = "l1"` or `capture.order = 2`).
+    pub l1_evaluation: L1Evaluation,
     /// Where the probes of a cloud go (`probekit bake`).
     pub placement: Placement,
     /// How each probe's light is captured (clouds and volumes).
@@ -61,6 +65,7 @@ impl Default for Recipe {
         Recipe {
             bake_box: None,
             codec: CodecName::F32,
+            l1_evaluation: L1Evaluation::Linear,
             placement: Placement::default(),
             capture: Capture::default(),
             blend: Blend::default(),
@@ -84,6 +89,21 @@ pub enum CodecName {
     Zh3,
     /// Ratio-quantized L2 in 28 bytes per probe (order 3).
     L2,
+}
+
+/// How the L1 coefficients of a file are meant to be evaluated
+/// (`probekit_runtime::format::L1Mode`, which the file's header records and
+/// a loader may override).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum L1Evaluation {
+    /// Plain linear SH: the clamped-cosine convolution of bands 0 and 1.
+    #[default]
+    Linear,
+    /// Hallucinated ZH3 (Roughton et al., "ZH3: Quadratic Zonal
+    /// Harmonics", I3D 2024): a zonal band-2 lobe about the blended
+    /// luminance axis, derived from the L1 coefficients at query time.
+    Zh3Hallucinated,
 }
 
 /// How light shells are used by adaptive placement.

@@ -219,10 +219,33 @@ fn values_out_of_range_or_of_the_wrong_type_name_the_key() {
             "central",
         ),
         ("codec = \"l3\"\n", "codec", "unknown variant"),
+        (
+            "l1_evaluation = \"zh3-hallucinated\"\n",
+            "l1_evaluation",
+            "stores order 3",
+        ),
+        (
+            "l1_evaluation = \"zh3\"\n",
+            "l1_evaluation",
+            "unknown variant",
+        ),
     ] {
         let e = err(&[("r.toml", text)]);
         assert!(e.contains(&format!("`{key}`")), "{text:?}: {e}");
         assert!(e.contains(needle), "{text:?}: {e}");
+    }
+}
+
+#[test]
+fn hallucinated_zh3_is_for_l1_coefficients() {
+    use probekit_runtime::format::L1Mode;
+    assert_eq!(Recipe::default().l1_evaluation.l1_mode(), L1Mode::Linear);
+    for text in [
+        "codec = \"l1\"\nl1_evaluation = \"zh3-hallucinated\"\n",
+        "l1_evaluation = \"zh3-hallucinated\"\n[capture]\norder = 2\n",
+    ] {
+        let r = resolve(&[("r.toml", text)]).unwrap();
+        assert_eq!(r.l1_evaluation.l1_mode(), L1Mode::Zh3Hallucinated, "{text}");
     }
 }
 
