@@ -320,6 +320,7 @@ mod tests {
             order: 3,
             bbox_min: Vec3::new(-1.0, 0.0, -0.5),
             bbox_max: Vec3::new(3.0, 2.0, 0.5),
+            bounding_radius: 0.0,
             samples: vec![Vec3::ZERO; samples],
             fitting: vec![0.0; k * samples],
             transitions: Vec::new(),

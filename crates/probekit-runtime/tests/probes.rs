@@ -81,6 +81,7 @@ fn rig() -> Rig {
         order: 2,
         bbox_min: Vec3::ZERO,
         bbox_max: Vec3::ONE,
+        bounding_radius: 0.0,
         samples: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
         fitting: (0..16).map(|i| ((i * 5 % 7) as f32 - 3.0) / 7.0).collect(),
         transitions: Vec::new(),

@@ -231,6 +231,7 @@ prop_compose! {
             order: 2,
             bbox_min: Vec3::ZERO,
             bbox_max: Vec3::ONE,
+            bounding_radius: 0.0,
             fitting: (0..params as usize * rig_samples.len()).map(|i| i as f32 * 0.25).collect(),
             samples: rig_samples,
             transitions: vec![Transition { distance: 1.0, error: 2.0 }],

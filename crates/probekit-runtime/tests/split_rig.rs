@@ -80,6 +80,7 @@ fn rig() -> Rig {
         order: ORDER,
         bbox_min: lo,
         bbox_max: hi,
+        bounding_radius: 0.0,
         samples,
         fitting,
         transitions: (0..12)

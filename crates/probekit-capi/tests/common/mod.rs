@@ -85,6 +85,7 @@ pub fn cloud_file() -> ProbeFile {
         order: ORDER,
         bbox_min: Vec3::ZERO,
         bbox_max: Vec3::new(0.5, 0.5, 0.6),
+        bounding_radius: 0.0,
         fitting: (0..4 * samples.len())
             .map(|i| ((i * 7 % 11) as f32 - 3.0) / 10.0)
             .collect(),

@@ -18,11 +18,18 @@ pub const VERSION_MAJOR: u16 = 1;
 /// fitted with in `PWGT`'s header word `w1`, [`MINOR_BRIGHTNESS`]; 1.9 the
 /// directional brightness exponent in `w2`, [`MINOR_DIRECTIONAL`]; 1.10
 /// the intended evaluation of L1 coefficients in the header's flags,
-/// [`MINOR_L1_MODE`]). Files with a larger minor load; their unknown
+/// [`MINOR_L1_MODE`]; 1.11 a rig's bounding radius in its record header,
+/// [`MINOR_RIG_RADIUS`]). Files with a larger minor load; their unknown
 /// sections are skipped. The writer writes the lowest minor that holds the file's
 /// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
 /// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 10;
+pub const VERSION_MINOR: u16 = 11;
+
+/// Minor version that stores a rig's bounding radius
+/// ([`crate::format::Rig::bounding_radius`]) in the record header's first
+/// reserved word (a reader of 1.10 or older ignores it and measures light
+/// distances from the box's circumscribed sphere).
+pub const MINOR_RIG_RADIUS: u16 = 11;
 
 /// Minor version that stores a non-zero brightness exponent in `PWGT`'s
 /// header word `w1` (a reader of 1.6 or 1.7 ignores the word and blends

@@ -346,6 +346,12 @@ pub struct Rig {
     pub bbox_min: Vec3,
     /// Mesh bounding box maximum.
     pub bbox_max: Vec3,
+    /// Radius of the sphere, centred on the box centre, that holds every
+    /// vertex of the mesh (metres): the sphere the rig's transition table
+    /// measures light distances from (`probekit::rig::split`). 0 when
+    /// unknown (files before format 1.11): readers then use the box's
+    /// circumscribed sphere, half its diagonal.
+    pub bounding_radius: f32,
     /// Sample points on the mesh surface (mesh coordinates).
     pub samples: Vec<Vec3>,
     /// Row-major `parameters × samples` fitting matrix `L = (MᵀM)⁻¹Mᵀ`:

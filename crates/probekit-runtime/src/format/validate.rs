@@ -330,6 +330,9 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             return Err(bad("rig fitting matrix is not parameters × samples"));
         }
         check_box(id, r, rig.bbox_min, rig.bbox_max)?;
+        if !(rig.bounding_radius.is_finite() && rig.bounding_radius >= 0.0) {
+            return Err(bad("rig bounding radius is negative or not finite"));
+        }
         if !rig.samples.iter().all(|p| p.is_finite())
             || !rig.fitting.iter().all(|x| x.is_finite())
             || !rig

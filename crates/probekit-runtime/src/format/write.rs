@@ -238,7 +238,8 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
                 count(r.transitions.len(), "rig transitions")?,
                 count(r.name.len(), "rig name")?,
             ]);
-            s.vec3s([&r.bbox_min, &r.bbox_max]).u32s([0, 0]);
+            s.vec3s([&r.bbox_min, &r.bbox_max])
+                .u32s([r.bounding_radius.to_bits(), 0]);
             s.bytes(r.name.as_bytes()).pad();
             s.vec3s(&r.samples).pad();
             s.f32s(r.fitting.iter().copied()).pad();
@@ -361,6 +362,11 @@ impl ProbeFile {
             })
             .max(if self.l1_mode != super::L1Mode::Linear {
                 layout::MINOR_L1_MODE
+            } else {
+                0
+            })
+            .max(if self.rigs.iter().any(|r| r.bounding_radius != 0.0) {
+                layout::MINOR_RIG_RADIUS
             } else {
                 0
             });

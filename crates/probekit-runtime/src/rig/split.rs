@@ -104,9 +104,11 @@ pub fn rig_weight(x: f32, x_star: f32) -> f32 {
 /// [`crate::Probes::split_rig`]); [`SplitRig::update`] once per frame with
 /// the scene's lights, then [`SplitRig::irradiance`] per vertex.
 ///
-/// The bounding sphere the transition distances are measured from is the
-/// rig box's circumscribed sphere (centre the box centre, radius half its
-/// diagonal), in the object's own coordinates.
+/// The bounding sphere the transition distances are measured from is
+/// centred on the rig box's centre with the rig's
+/// [`bounding_radius`](crate::format::Rig::bounding_radius) (the sphere the
+/// baker measured its transition table from), or half the box's diagonal
+/// where the file does not record it, in the object's own coordinates.
 #[derive(Clone, Debug)]
 pub struct SplitRig {
     state: RigState,
@@ -135,7 +137,11 @@ impl SplitRig {
             sample_sh: vec![Vec3::ZERO; len],
             transitions: rig.transitions.clone(),
             center: 0.5 * (rig.bbox_min + rig.bbox_max),
-            radius: (0.5 * (rig.bbox_max - rig.bbox_min).length()).max(f32::MIN_POSITIVE),
+            radius: if rig.bounding_radius > 0.0 {
+                rig.bounding_radius
+            } else {
+                (0.5 * (rig.bbox_max - rig.bbox_min).length()).max(f32::MIN_POSITIVE)
+            },
             table,
             near: Vec::new(),
             state,
@@ -143,10 +149,9 @@ impl SplitRig {
     }
 
     /// The same rig measuring transition distances from the sphere
-    /// (`center`, `radius`, object coordinates, m) instead of the box's
-    /// circumscribed sphere: for a caller that knows the mesh's own
-    /// bounding sphere (the baker's `rig` command uses the vertices' largest
-    /// distance from the box centre). A radius that is not positive and
+    /// (`center`, `radius`, object coordinates, m) instead of the one the
+    /// file records: for a rig fitted elsewhere whose transition table was
+    /// measured from another sphere. A radius that is not positive and
     /// finite, or a centre that is not finite, is an error.
     pub fn with_bounding_sphere(mut self, center: Vec3, radius: f32) -> Result<Self, RigError> {
         if !(center.is_finite() && radius.is_finite() && radius > 0.0) {

@@ -115,6 +115,7 @@ pub fn full_file() -> ProbeFile {
             order: 3,
             bbox_min: Vec3::new(-2.0, 0.0, -1.0),
             bbox_max: Vec3::new(2.0, 1.5, 1.0),
+            bounding_radius: 0.0,
             samples: (0..7).map(|_| rng.vec3()).collect(),
             fitting: (0..6 * 7).map(|_| rng.f32()).collect(),
             transitions: vec![
@@ -138,6 +139,7 @@ pub fn full_file() -> ProbeFile {
             order: 2,
             bbox_min: Vec3::ZERO,
             bbox_max: Vec3::ONE,
+            bounding_radius: 0.0,
             samples: (0..3).map(|_| rng.vec3()).collect(),
             fitting: (0..4 * 3).map(|_| rng.f32()).collect(),
             transitions: vec![],

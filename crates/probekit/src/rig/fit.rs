@@ -95,7 +95,8 @@ impl FittedRig {
         let pts = sample::distribute_samples(mesh, samples, seed);
         let (lo, hi) = mesh.bbox();
         let positions: Vec<Vec3> = pts.iter().map(|s| s.position).collect();
-        Ok(Self::fit_points(
+        let (_, radius) = mesh.bounding_sphere();
+        let mut fitted = Self::fit_points(
             spec,
             order,
             lo,
@@ -103,7 +104,9 @@ impl FittedRig {
             positions,
             pts.iter().map(|s| s.normal).collect(),
             name,
-        ))
+        );
+        fitted.rig.bounding_radius = radius;
+        Ok(fitted)
     }
 
     /// Fits `spec` to given sample points (box `[lo, hi]`).
@@ -133,6 +136,9 @@ impl FittedRig {
                 order: order as u32,
                 bbox_min: lo,
                 bbox_max: hi,
+                // The sphere `split` measures light distances from; the
+                // mesh's own where `fit` knows the mesh (else unknown).
+                bounding_radius: 0.0,
                 samples: positions,
                 fitting,
                 transitions: Vec::new(),
