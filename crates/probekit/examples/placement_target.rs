@@ -1,6 +1,7 @@
 //! The placement target, measured: for each level N of `--budgets`, a
-//! uniform grid of about `GF·N` cell centres over the bake box (those inside
-//! geometry dropped: `G` probes) against `adaptive` with budget `⌊G / GF⌋`,
+//! uniform grid of about `GF·N` cell centres over the bake box (`G` probes:
+//! `probekit bake`'s grid, whose cells inside geometry the virtual offset
+//! moves out) against `adaptive` with budget `⌊G / GF⌋`,
 //! which places at most that many (the budget is a hard cap), so adaptive
 //! never has more than `1/GF` of the grid's probes; on the same evaluation
 //! points and the same cached ground truth.
@@ -100,7 +101,7 @@ use probekit::recipe::{
     Blend, CellVisibility, Exponent, LightShellsName, Placement, Recipe, RecipeLayers,
 };
 use probekit::scene::Scene;
-use probekit::trace::free_space::{inside_geometry, segment_clear, EvalPoint};
+use probekit::trace::free_space::{segment_clear, EvalPoint};
 use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use std::error::Error;
 use toml::Value;
@@ -288,11 +289,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                 cell: None,
             }),
         )?;
-        let mut placed = grid.place(&quiet)?;
-        placed
-            .positions
-            .retain(|p| !inside_geometry(grid.baker().tracer(), *p));
-        placed.report.count = placed.positions.len();
+        let placed = grid.place(&quiet)?;
         if !o.skip_grid {
             ev.report("grid", &finish(&grid, &placed)?)?;
         }
