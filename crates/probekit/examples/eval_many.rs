@@ -15,19 +15,22 @@
 //! the point sets of all the seeds are pooled into one evaluation (figures
 //! over all their points, the leak floor from the pooled mean), and each
 //! seed's own `rel_rmse` follows in brackets: one 2000-point set can be
-//! decided by a handful of points next to a light.
+//! decided by a handful of points next to a light. Each file is queried
+//! through [`probekit_runtime::Probes`], loaded with `--interp` (volumes).
 
+use glam::Vec3;
 use probekit::capture::Baker;
 use probekit::eval::metrics;
 use probekit::format::ProbeFile;
-use probekit::query::Predictor;
 use probekit::scene::Scene;
 use probekit::volume::Interp;
+use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use std::error::Error;
 use std::path::Path;
 
 mod common;
 use common::{eval_set, pooled, seed_list, EvalSet};
+
 fn main() -> Result<(), Box<dyn Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut scene = None;
@@ -66,9 +69,20 @@ fn main() -> Result<(), Box<dyn Error>> {
         pts.len(),
         t.elapsed().as_secs_f32()
     );
+    let mut options = LoadOptions::default();
+    options.interpolation = interp;
     for f in &files {
         let file = ProbeFile::load(f)?;
-        let pred = Predictor::from_file(&file, interp)?.predict(&pts)?;
+        let probes = Probes::from_file(&file, options)?;
+        let mut state = ObjectState::new();
+        let pred = pts
+            .iter()
+            .map(|p| {
+                Ok(Vec3::from(
+                    probes.irradiance(&mut state, p.position, p.normal)?,
+                ))
+            })
+            .collect::<Result<Vec<_>, Box<dyn Error>>>()?;
         let m = metrics(&pred, &truth, mean);
         let per_seed: Vec<String> = if sets.len() > 1 {
             let mut at = 0;

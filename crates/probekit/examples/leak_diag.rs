@@ -16,16 +16,19 @@
 //! plus each vertex: weight, irradiance in the file and at `--hi`, and
 //! whether the segment point→vertex is blocked by geometry. A last line
 //! counts the leaks shown and those (e) leaves.
+//!
+//! The file is queried through [`probekit_runtime::Probes`] (the weights
+//! before visibility: the same file loaded with every blend factor off,
+//! `LoadOptions::blend`); the `--hi` captures use the capture settings the
+//! file records (the scene's for a file without a record).
 
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings};
 use probekit::eval::{is_leak, leak_threshold};
-use probekit::query::Predictor;
+use probekit::pipeline::recorded_capture;
 use probekit::scene::Scene;
 use probekit::trace::free_space::segment_clear;
-use probekit::trace::Ray;
-use probekit_runtime::cloud::WalkState;
-use probekit_runtime::{Interp, ProbeFile};
+use probekit_runtime::{LoadOptions, ObjectState, ProbeFile, Probes};
 use probekit_sh::ShRgb;
 use std::error::Error;
 
@@ -54,21 +57,35 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = Scene::load(std::path::Path::new(&scene_name))?;
     let baker = Baker::new(&scene)?;
     let file = ProbeFile::load(&file_name)?;
-    let pred = Predictor::from_file(&file, Interp::Trilinear)?;
-    let Predictor::Cloud(cloud) = &pred else {
-        return Err("not a cloud".into());
-    };
+    let probes = Probes::from_file(&file, LoadOptions::default())?;
+    let cloud = probes.cloud().ok_or("not a cloud")?;
+    // The same file blended with its barycentric weights alone.
+    let mut plain = LoadOptions::default();
+    plain.blend.distance_moments = Some(false);
+    plain.blend.cell_visibility = Some(false);
+    plain.blend.probe_weights = Some(false);
+    plain.blend.brightness_exponent = Some(0.0);
+    plain.blend.directional_exponent = Some(0.0);
+    let barycentric = Probes::from_file(&file, plain)?;
     let EvalSet {
         points: pts,
         truth,
         mean,
     } = eval_seeds(&baker, &scene, npts, &seeds)?;
-    let predicted = pred.predict(&pts)?;
-    let mut s = CaptureSettings::from_scene(&scene);
+    let mut state = ObjectState::new();
+    let predicted = pts
+        .iter()
+        .map(|p| {
+            Ok(Vec3::from(
+                probes.irradiance(&mut state, p.position, p.normal)?,
+            ))
+        })
+        .collect::<Result<Vec<_>, Box<dyn Error>>>()?;
+    // The file's own capture at `--hi` samples.
+    let mut s = recorded_capture(&file).unwrap_or_else(|| CaptureSettings::from_scene(&scene));
     s.samples = hi;
-    let order = cloud.order() as usize;
+    let order = probes.order() as usize;
     let sh_of = |i: usize| ShRgb::from_coeffs(cloud.probe_sh(i).to_vec()).expect("order²");
-    let mut ws = WalkState::new();
     println!(
         "mean truth luminance {mean:.4}; leak floor 0.01·mean = {:.4}",
         0.01 * mean
@@ -84,10 +101,12 @@ fn main() -> Result<(), Box<dyn Error>> {
             continue;
         }
         let at = baker.capture(p.position, 9_000_000 + i as u64, &s)?;
-        let (idx, w) = cloud.weights_at(p.position, &mut ws);
+        let q = probes.query(&mut state, p.position)?;
+        let w = &q.weights[..4];
         // The same cell's barycentric (or outer-cell) weights before visibility.
-        let (_, bary) = cloud.mesh().weights_at(p.position, &mut ws);
-        let verts: Vec<usize> = idx.iter().map(|&k| k as usize).collect();
+        let b = barycentric.query(&mut state, p.position)?;
+        let bary = &b.weights[..4];
+        let verts: Vec<usize> = q.probes[..4].iter().map(|&k| k as usize).collect();
         let vpos: Vec<Vec3> = verts.iter().map(|&k| file.positions[k]).collect();
         let caps = baker.capture_many(&vpos, 9_100_000 + 4 * i, &s, &|_, _| {})?;
         let mut d = ShRgb::zeros(order);
@@ -143,12 +162,8 @@ fn main() -> Result<(), Box<dyn Error>> {
                 continue;
             }
             let q = vpos[k];
-            let dir = q - p.position;
-            let len = dir.length();
-            let blocked = baker
-                .tracer()
-                .closest_hit(&Ray::new(p.position, dir / len), len)
-                .is_some();
+            let len = (q - p.position).length();
+            let blocked = !segment_clear(baker.tracer(), p.position, q);
             let vis = cloud
                 .visibility_maps()
                 .map_or(1.0, |m| m.visibility(verts[k], q, p.position));

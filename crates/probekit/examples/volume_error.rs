@@ -3,9 +3,38 @@
 //! the analytic sphere-light SH at the point), against the `.probes` bytes.
 //! `cargo run --release -p probekit --example volume_error [-- --plot FILE.png]`
 //! (with `--plot`, also a line chart of error against bytes).
+//!
+//! Each volume is baked as `probekit volume builtin:lights-demo` bakes it
+//! ([`probekit::pipeline::bake_volume_from`] with a recipe: closed-form
+//! gradients, samples below validity 0.5 dilated; the file records its
+//! recipe) and queried through [`probekit_runtime::Probes`].
 
 use glam::Vec3;
-use probekit::volume::*;
+use probekit::pipeline::bake_volume_from;
+use probekit::recipe::{BakeRecord, GradientModeName, Recipe, VolumeLayout};
+use probekit::volume::{Interp, LightsDemo, VolumeSource};
+use probekit_runtime::{LoadOptions, ObjectState, ProbeFile, Probes};
+
+/// The source's name, as `probekit volume` records it.
+const LIGHTS_DEMO: &str = "builtin:lights-demo";
+
+/// The volume `layout` over the demo's box with closed-form gradients,
+/// baked by the pipeline.
+fn bake(demo: &LightsDemo, layout: VolumeLayout) -> ProbeFile {
+    let (min, max) = LightsDemo::demo_box();
+    let mut recipe = Recipe {
+        bake_box: Some([min.to_array(), max.to_array()]),
+        ..Recipe::default()
+    };
+    recipe.capture.order = demo.order;
+    recipe.volume.layout = layout;
+    recipe.volume.gradients.mode = GradientModeName::Analytic;
+    recipe.validate().expect("a valid recipe");
+    let record = BakeRecord::without_scene(LIGHTS_DEMO, recipe.clone());
+    bake_volume_from(demo, &recipe.recorded_box(), &recipe, 0.5, record)
+        .expect("bake")
+        .0
+}
 
 fn main() {
     let demo = LightsDemo::demo(3);
@@ -46,36 +75,31 @@ fn main() {
         .iter()
         .map(|e| e.length_squared() as f64)
         .sum::<f64>();
-    let common = |g| CommonSettings {
-        min,
-        max,
-        gradients: g,
-        validity_threshold: 0.5,
-    };
     let mut rows = Vec::new();
     for r in [5u32, 9, 13, 17] {
-        let (f, _) = build_uniform(&demo, &common(GradientMode::Analytic), [r; 3]).unwrap();
-        rows.push((format!("uniform {r}³"), f));
+        let layout = VolumeLayout::Uniform {
+            cell: None,
+            resolution: Some([r; 3]),
+        };
+        rows.push((format!("uniform {r}³"), bake(&demo, layout)));
     }
     for (a, b, tol) in [(1u32, 4u32, 0.25f32), (2, 5, 0.25), (2, 5, 0.1)] {
-        let st = AdaptiveSettings {
-            common: common(GradientMode::Analytic),
+        let layout = VolumeLayout::Octree {
             min_depth: a,
             max_depth: b,
-            geometry: true,
-            depth_factor: Some(1.0),
-            gradient_threshold: None,
-            prediction_tolerance: Some(tol),
-            prune_tolerance: Some(tol * 0.4),
+            roots: None,
+            tolerance: tol,
+            prune: tol * 0.4,
             relative_floor: 0.0,
+            geometry: true,
             geometry_depth: u32::MAX,
-            emitter_depth: 0,
+            emitter_depth: Some(0),
             noise_k: 0.0,
             balance: false,
-            roots: None,
+            depth_factor: 1.0,
+            gradient_threshold: None,
         };
-        let (f, _) = build_adaptive(&demo, &st).unwrap();
-        rows.push((format!("adaptive {a}..{b} tol {tol}"), f));
+        rows.push((format!("adaptive {a}..{b} tol {tol}"), bake(&demo, layout)));
     }
     println!("| volume | samples | bytes (no gradients) | bytes (with gradients) | trilinear | Taylor | tricubic |");
     println!("|---|---|---|---|---|---|---|");
@@ -89,19 +113,23 @@ fn main() {
     .map(|s| (s.to_string(), Vec::new()))
     .collect();
     for (name, f) in rows {
-        let v = Volume::from_file(&f).unwrap();
         let with: u64 = f.bytes_by_section().unwrap().values().sum();
         let mut nog = f.clone();
         nog.gradients = None;
         let without: u64 = nog.bytes_by_section().unwrap().values().sum();
         let mut errs = Vec::new();
         for interp in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic] {
+            let mut options = LoadOptions::default();
+            options.interpolation = interp;
+            let v = Probes::from_file(&f, options).unwrap();
+            let mut state = ObjectState::new();
             let num: f64 = pts
                 .iter()
                 .zip(&normals)
                 .zip(&reference)
                 .map(|((p, n), e)| {
-                    (v.irradiance(*p, *n, interp).unwrap() - *e).length_squared() as f64
+                    let got = Vec3::from(v.irradiance(&mut state, *p, *n).unwrap());
+                    (got - *e).length_squared() as f64
                 })
                 .sum();
             errs.push((num / denom).sqrt());
