@@ -176,16 +176,23 @@ fn generated_files_are_up_to_date() {
 }
 
 #[test]
-fn docs_example_validates() {
+fn docs_examples_validate() {
     let docs = include_str!("../../../docs/shaders.md");
-    let start = docs
-        .find("```wgsl\n")
-        .expect("docs/shaders.md has a ```wgsl example")
-        + 8;
-    let len = docs[start..].find("```").expect("unterminated example");
-    let example = &docs[start..start + len];
-    let source = format!("{PROBEKIT_WGSL}\n{PROBEKIT_BUFFERS_WGSL}\n{example}");
-    let (module, _) =
-        validate_wgsl("docs/shaders.md example", &source).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(module.entry_points.len(), 1);
+    let mut rest = docs;
+    let mut examples = 0;
+    while let Some(start) = rest.find("```wgsl\n") {
+        let body = &rest[start + 8..];
+        let len = body.find("```").expect("unterminated example");
+        let example = &body[..len];
+        let source = format!("{}\n{example}", library_wgsl());
+        let (module, _) =
+            validate_wgsl("docs/shaders.md example", &source).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(module.entry_points.len(), 1, "{example}");
+        examples += 1;
+        rest = &body[len + 3..];
+    }
+    assert!(
+        examples >= 2,
+        "docs/shaders.md has a volume and a rig example"
+    );
 }
