@@ -1,6 +1,6 @@
 // probekit_check.wgsl — the reference compute kernel: calls every function
-// of probekit.wgsl, probekit_buffers.wgsl, probekit_cloud.wgsl and
-// probekit_bricks.wgsl once per test case. The tests of
+// of probekit.wgsl, probekit_buffers.wgsl, probekit_cloud.wgsl,
+// probekit_bricks.wgsl and probekit_rig.wgsl once per test case. The tests of
 // crates/probekit-shaders run it on wgpu and compare with the Rust functions;
 // the generator compiles it so that naga's HLSL/GLSL/MSL back ends emit the
 // whole library (they only write what an entry point can reach).
@@ -38,6 +38,13 @@
 // Mode 3 (PK_CHECK_BRICKS), from pk_bricks: [0..27) pk_bricks_sh_l2,
 //   [27..30) pk_bricks_irradiance, [30..33) pk_bricks_irradiance_zh3,
 //   [33..36) the atlas coordinate of pk_bricks_lookup.
+// Mode 4 (PK_CHECK_RIG), from pk_rig and pk_sphere_table, also reads [6]
+//   the rig's first word in pk_rig: [0..3) pk_rig_irradiance,
+//   [3..6) pk_rig_model_irradiance, [6..33) pk_rig_sh.
+// Mode 5 (PK_CHECK_LIGHT) also reads [6] the first word of a light record
+//   in pk_rig and [7], [8] a (cos θ, sin α) pair: [0..3)
+//   pk_light_irradiance of the record, [3] pk_sphere_table_lookup of the
+//   pair.
 
 const PK_CHECK_IN: u32 = 68u;
 const PK_CHECK_OUT: u32 = 168u;
@@ -45,6 +52,8 @@ const PK_CHECK_LIBRARY: u32 = 0u;
 const PK_CHECK_CLOUD: u32 = 1u;
 const PK_CHECK_VOLUME: u32 = 2u;
 const PK_CHECK_BRICKS: u32 = 3u;
+const PK_CHECK_RIG: u32 = 4u;
+const PK_CHECK_LIGHT: u32 = 5u;
 
 struct PkCheckParams {
     grid: PkVolumeGrid,
@@ -124,6 +133,23 @@ fn check_bricks(a: u32, o: u32) {
     check_put(o + 33u, pk_bricks_lookup(p).coord);
 }
 
+fn check_rig(a: u32, o: u32) {
+    let p = check_in_vec3(a);
+    let n = check_in_vec3(a + 3u);
+    let rig = u32(check_in[a + 6u]);
+    check_put(o, pk_rig_irradiance(rig, p, n));
+    check_put(o + 3u, pk_rig_model_irradiance(rig, p, n));
+    check_put_l2(o + 6u, pk_rig_sh(rig, p));
+}
+
+fn check_light(a: u32, o: u32) {
+    let p = check_in_vec3(a);
+    let n = check_in_vec3(a + 3u);
+    let light = pk_rig_light_at(u32(check_in[a + 6u]));
+    check_put(o, pk_light_irradiance(light, p, n));
+    check_out[o + 3u] = pk_sphere_table_lookup(check_in[a + 7u], check_in[a + 8u]);
+}
+
 /// Mode 0 for case `i`.
 fn check_library(i: u32) {
     let a = i * PK_CHECK_IN;
@@ -186,6 +212,10 @@ fn pk_check(@builtin(global_invocation_id) gid: vec3<u32>) {
         check_volume(a, o);
     } else if check_params.mode == PK_CHECK_BRICKS {
         check_bricks(a, o);
+    } else if check_params.mode == PK_CHECK_RIG {
+        check_rig(a, o);
+    } else if check_params.mode == PK_CHECK_LIGHT {
+        check_light(a, o);
     } else {
         check_library(i);
     }
@@ -218,5 +248,17 @@ fn pk_check_volume(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn pk_check_bricks(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x < check_params.count {
         check_bricks(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
+    }
+}
+
+/// Modes 4 and 5 (rigs and lights), by check_params.mode.
+@compute @workgroup_size(64)
+fn pk_check_rig(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x < check_params.count {
+        if check_params.mode == PK_CHECK_LIGHT {
+            check_light(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
+        } else {
+            check_rig(gid.x * PK_CHECK_IN, gid.x * PK_CHECK_OUT);
+        }
     }
 }

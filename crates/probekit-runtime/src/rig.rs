@@ -240,6 +240,18 @@ impl RigState {
         self.params_count
     }
 
+    /// The rig's model: which functions of the position weight the
+    /// parameters ([`rig_weights`]).
+    pub fn model(&self) -> RigModel {
+        self.model
+    }
+
+    /// The box the model is normalised to, `(min, max)`: the mesh's
+    /// bounding box in its own coordinates (m), as the file records it.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        (self.bbox_min, self.bbox_max)
+    }
+
     /// The current parameters: `parameter_count() × order²` radiance SH,
     /// parameter-major.
     pub fn parameters(&self) -> &[Vec3] {

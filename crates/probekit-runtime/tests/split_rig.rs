@@ -285,3 +285,58 @@ fn a_given_bounding_sphere_decides_the_zones() {
         );
     }
 }
+
+/// What the accessors hand out (for packing the rig for a shader) is what
+/// `irradiance` evaluates: the rig alone plus each near light, in the
+/// object's frame, times its share, through the shared sphere table; the
+/// shares lie in (0, 1]; a light wholly in the rig is left out; the state's
+/// model and box are the file's.
+#[test]
+fn near_lights_and_table_rebuild_the_irradiance() {
+    let lights = [
+        Light::Sphere {
+            position: Vec3::new(1.6, 0.3, 0.2),
+            radius: 0.1,
+            intensity: Vec3::new(3.0, 2.0, 1.0),
+        },
+        Light::Disk {
+            position: Vec3::new(0.0, 0.0, -2.0),
+            direction: Vec3::Z,
+            radius: 0.5,
+            intensity: Vec3::splat(2.0),
+        },
+        Light::Point {
+            position: Vec3::new(40.0, 5.0, 0.0),
+            intensity: Vec3::splat(50.0),
+        },
+        Light::Directional {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            irradiance: Vec3::ONE,
+        },
+    ];
+    let mut s = split();
+    assert!(s.near_lights().is_empty());
+    assert_eq!(s.sphere_table().size(), 128);
+    assert_eq!(s.sphere_table().values().len(), 128 * 128);
+    let r = rig();
+    assert_eq!(s.state().model(), r.model);
+    assert_eq!(s.state().bounds(), (r.bbox_min, r.bbox_max));
+    let m = Affine3A::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::X);
+    s.update(m, &lights, 2.0, 1.0).unwrap();
+    let near = s.near_lights();
+    assert!(!near.is_empty() && near.len() < lights.len(), "{near:?}");
+    assert!(near.iter().all(|(_, share)| *share > 0.0 && *share <= 1.0));
+    // The first light, in the object's frame.
+    let first = m.inverse().transform_point3(Vec3::new(1.6, 0.3, 0.2));
+    assert!(near[0].0.position().unwrap().distance(first) < 1e-5);
+    let mut rng = Rng(41);
+    for _ in 0..50 {
+        let p = rng.vec3() * 0.9;
+        let n = rng.vec3().normalize_or(Vec3::Y);
+        let mut want = s.state().irradiance(p, n);
+        for (l, share) in near {
+            want += l.irradiance(p, n, Some(s.sphere_table())) * *share;
+        }
+        assert_eq!(s.irradiance(p, n), want);
+    }
+}

@@ -3,11 +3,12 @@
 
 use probekit_shaders::layout::{
     BRICKS_HEADER, CLOUD_FLAG_CELLS, CLOUD_FLAG_PROBE_WEIGHTS, CLOUD_FLAG_VISIBILITY, CLOUD_HEADER,
-    CLOUD_HEADER_WORDS, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
+    CLOUD_HEADER_WORDS, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS, RIG_CODES,
+    RIG_HEADER, RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
 };
 use probekit_shaders::{
     full_wgsl, generate, library_wgsl, validate_wgsl, PROBEKIT_BRICKS_WGSL, PROBEKIT_BUFFERS_WGSL,
-    PROBEKIT_CLOUD_WGSL, PROBEKIT_WGSL, REGENERATE_COMMAND,
+    PROBEKIT_CLOUD_WGSL, PROBEKIT_RIG_WGSL, PROBEKIT_WGSL, REGENERATE_COMMAND,
 };
 use std::path::PathBuf;
 
@@ -56,6 +57,12 @@ fn wgsl_validates_with_naga() {
         "pk_bricks_sh_l2",
         "pk_bricks_irradiance",
         "pk_bricks_irradiance_zh3",
+        "pk_sphere_table_lookup",
+        "pk_light_irradiance",
+        "pk_rig_weights",
+        "pk_rig_sh",
+        "pk_rig_model_irradiance",
+        "pk_rig_irradiance",
     ] {
         assert!(
             library
@@ -66,9 +73,12 @@ fn wgsl_validates_with_naga() {
         );
     }
     assert!(library.entry_points.is_empty());
+    // The rig file needs only the pure library.
+    let lib_rig = format!("{PROBEKIT_WGSL}\n{PROBEKIT_RIG_WGSL}");
+    validate_wgsl("probekit_rig.wgsl", &lib_rig).unwrap_or_else(|e| panic!("{e}"));
     let (full, _) =
         validate_wgsl("probekit_check.wgsl", &full_wgsl()).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(full.entry_points.len(), 5);
+    assert_eq!(full.entry_points.len(), 6);
 }
 
 /// The `u32` value of `const NAME: u32 = Vu;` in `source`.
@@ -111,6 +121,18 @@ fn layout_constants_agree_with_the_wgsl() {
     ] {
         assert_eq!(wgsl_const(PROBEKIT_CLOUD_WGSL, name), value, "{name}");
     }
+    for (name, word) in RIG_HEADER {
+        assert_eq!(wgsl_const(PROBEKIT_RIG_WGSL, name), word as u32, "{name}");
+    }
+    // The last header entry is a vec3 (the box's max corner).
+    assert!(RIG_HEADER.iter().all(|&(_, w)| w + 3 <= RIG_HEADER_WORDS));
+    for (name, value) in RIG_CODES {
+        assert_eq!(wgsl_const(PROBEKIT_RIG_WGSL, name), value, "{name}");
+    }
+    assert_eq!(
+        wgsl_const(PROBEKIT_RIG_WGSL, "PK_RIG_LIGHT_WORDS"),
+        RIG_LIGHT_WORDS as u32
+    );
 }
 
 #[test]
@@ -128,6 +150,9 @@ fn generated_files_are_up_to_date() {
             "pk_cloud_weights",
             "pk_cloud_locate",
             "pk_bricks_sh_l2",
+            "pk_rig_irradiance",
+            "pk_light_irradiance",
+            "pk_sphere_table_lookup",
         ] {
             assert!(f.contents.contains(name), "{} lacks {name}", f.name);
         }
@@ -151,16 +176,23 @@ fn generated_files_are_up_to_date() {
 }
 
 #[test]
-fn docs_example_validates() {
+fn docs_examples_validate() {
     let docs = include_str!("../../../docs/shaders.md");
-    let start = docs
-        .find("```wgsl\n")
-        .expect("docs/shaders.md has a ```wgsl example")
-        + 8;
-    let len = docs[start..].find("```").expect("unterminated example");
-    let example = &docs[start..start + len];
-    let source = format!("{PROBEKIT_WGSL}\n{PROBEKIT_BUFFERS_WGSL}\n{example}");
-    let (module, _) =
-        validate_wgsl("docs/shaders.md example", &source).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(module.entry_points.len(), 1);
+    let mut rest = docs;
+    let mut examples = 0;
+    while let Some(start) = rest.find("```wgsl\n") {
+        let body = &rest[start + 8..];
+        let len = body.find("```").expect("unterminated example");
+        let example = &body[..len];
+        let source = format!("{}\n{example}", library_wgsl());
+        let (module, _) =
+            validate_wgsl("docs/shaders.md example", &source).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(module.entry_points.len(), 1, "{example}");
+        examples += 1;
+        rest = &body[len + 3..];
+    }
+    assert!(
+        examples >= 2,
+        "docs/shaders.md has a volume and a rig example"
+    );
 }

@@ -2,8 +2,8 @@
 //! needed): every section of the cloud buffer holds the runtime's data at
 //! the offsets its header gives, the hull-face rows reproduce the
 //! projection onto a face's plane (checked against a plane computed
-//! independently), the volume and brick buffers hold their inputs where
-//! `docs/shaders.md` says, and bad input is a typed error.
+//! independently), the volume, brick and rig buffers hold their inputs
+//! where `docs/shaders.md` says, and bad input is a typed error.
 
 // Index loops over coefficients read like the layout tables.
 #![allow(clippy::needless_range_loop)]
@@ -13,14 +13,19 @@ use probekit_runtime::cloud::directional::{directions, DirectionTable};
 use probekit_runtime::cloud::{
     face_neighbors, lattice_tets, CellPlanes, CellVisibility, TetMesh, VisibilityMaps,
 };
-use probekit_runtime::format::{Coefficients, Gradients, ProbeFileKind, VolumeGrid};
+use probekit_runtime::format::{
+    AxisModel, Coefficients, Gradients, ProbeFileKind, Rig, RigModel, Transition, VolumeGrid,
+};
+use probekit_runtime::rig::{Light, SphereTable, SplitRig};
 use probekit_runtime::sh::basis::eval_l2;
 use probekit_runtime::sh::LUMINANCE;
 use probekit_runtime::{ProbeCloud, ProbeFile};
 use probekit_shaders::layout::{
-    pack_bricks, pack_cloud, pack_volume_grid, BrickAtlas, BrickEncoding, LayoutError,
-    CLOUD_HEADER, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
+    pack_bricks, pack_cloud, pack_sphere_table, pack_split_rig, pack_volume_grid, BrickAtlas,
+    BrickEncoding, LayoutError, CLOUD_HEADER, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE,
+    CLOUD_TET_WORDS, RIG_HEADER, RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
 };
+use std::sync::Arc;
 
 /// xorshift32 in [0, 1).
 struct Rng(u32);
@@ -409,4 +414,190 @@ fn bricks_layout_and_errors() {
         encoding: BrickEncoding::Quantized,
         ..atlas
     }));
+}
+
+/// Header word `name` of `RIG_HEADER`.
+fn rh(name: &str) -> usize {
+    RIG_HEADER.iter().find(|e| e.0 == name).unwrap().1
+}
+
+/// A mixed tensor rig (`[Lattice(3), Gradient, Constant]`, 6 parameters)
+/// over a box, with an arbitrary fitting matrix and a falling transition
+/// table, so that an update keeps near lights and refits the parameters.
+fn test_rig(order: u32) -> Rig {
+    let samples: Vec<Vec3> = (0..7)
+        .map(|i| {
+            Vec3::new(
+                i as f32 * 0.3 - 1.0,
+                (i % 3) as f32 * 0.4,
+                0.1 * i as f32 - 0.3,
+            )
+        })
+        .collect();
+    Rig {
+        name: "layout".into(),
+        model: RigModel::Tensor([
+            AxisModel::Lattice(3),
+            AxisModel::Gradient,
+            AxisModel::Constant,
+        ]),
+        order,
+        bbox_min: Vec3::new(-1.0, 0.0, -0.5),
+        bbox_max: Vec3::new(1.0, 0.8, 0.5),
+        bounding_radius: 1.3,
+        fitting: (0..6 * samples.len())
+            .map(|i| ((i * 37 % 11) as f32 - 5.0) / 7.0)
+            .collect(),
+        samples,
+        transitions: (0..10)
+            .map(|i| {
+                let x = 1.1 * 1.5f32.powi(i);
+                Transition {
+                    distance: x,
+                    error: 200.0 / (x * x),
+                }
+            })
+            .collect(),
+    }
+}
+
+#[test]
+fn split_rig_layout_and_errors() {
+    let table = Arc::new(SphereTable::new(16));
+    let mut rig = SplitRig::new(&test_rig(3), table.clone()).unwrap();
+    let lights = [
+        Light::Sphere {
+            position: Vec3::new(1.5, 0.4, 0.3),
+            radius: 0.1,
+            intensity: Vec3::new(3.0, 2.0, 1.0),
+        },
+        Light::Point {
+            position: Vec3::new(-9.0, 1.0, 0.5),
+            intensity: Vec3::splat(4.0),
+        },
+        Light::Spot {
+            position: Vec3::new(0.2, 2.0, 0.0),
+            direction: -Vec3::Y,
+            inner_deg: 20.0,
+            outer_deg: 35.0,
+            intensity: Vec3::splat(6.0),
+        },
+        Light::Disk {
+            position: Vec3::new(0.0, 0.0, -1.8),
+            direction: Vec3::Z,
+            radius: 0.5,
+            intensity: Vec3::splat(2.0),
+        },
+        Light::Directional {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            irradiance: Vec3::ONE,
+        },
+    ];
+    let m = glam::Affine3A::from_rotation_translation(
+        glam::Quat::from_rotation_y(0.4),
+        Vec3::new(0.3, 0.0, -0.2),
+    );
+    rig.update(m, &lights, 1.0, 0.5).unwrap();
+    let near = rig.near_lights();
+    assert!(near.len() >= 2 && near.len() < lights.len(), "{near:?}");
+    let w = pack_split_rig(&rig).unwrap();
+    assert_eq!(w[rh("PK_RIG_H_MODEL")], 2, "tensor");
+    let (axes, counts) = (rh("PK_RIG_H_AXIS_X"), rh("PK_RIG_H_COUNT_X"));
+    assert_eq!(
+        &w[axes..axes + 3],
+        &[2, 1, 0],
+        "lattice, gradient, constant"
+    );
+    assert_eq!(&w[counts..counts + 3], &[3, 2, 1]);
+    assert_eq!(w[rh("PK_RIG_H_COEFFS")], 9);
+    assert_eq!(w[rh("PK_RIG_H_PARAMS")], 6);
+    assert_eq!(w[rh("PK_RIG_H_LIGHTS")] as usize, near.len());
+    let (lo, hi) = rig.state().bounds();
+    assert_eq!(v3(&w, rh("PK_RIG_H_BOX_MIN")), lo);
+    assert_eq!(v3(&w, rh("PK_RIG_H_BOX_MAX")), hi);
+    assert_eq!(&w[18..RIG_HEADER_WORDS], &[0, 0]);
+    let params = w[rh("PK_RIG_H_PARAMETERS")] as usize;
+    assert_eq!(params, RIG_HEADER_WORDS);
+    let state_params = rig.state().parameters();
+    assert_eq!(state_params.len(), 6 * 9);
+    assert!(state_params.iter().any(|c| *c != Vec3::ZERO));
+    for (i, c) in state_params.iter().enumerate() {
+        assert_eq!(v3(&w, params + 3 * i), *c, "parameter coefficient {i}");
+    }
+    let records = w[rh("PK_RIG_H_LIGHT_RECORDS")] as usize;
+    assert_eq!(records, params + 3 * state_params.len());
+    assert_eq!(w.len(), records + RIG_LIGHT_WORDS * near.len());
+    for (k, (light, share)) in near.iter().enumerate() {
+        let r = &w[records + RIG_LIGHT_WORDS * k..][..RIG_LIGHT_WORDS];
+        assert_eq!(f(r, 13), *share);
+        assert_eq!(&r[14..], &[0, 0]);
+        match *light {
+            Light::Sphere {
+                position,
+                radius,
+                intensity,
+            } => {
+                assert_eq!(r[0], 0);
+                assert_eq!((v3(r, 1), f(r, 7), v3(r, 8)), (position, radius, intensity));
+            }
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                assert_eq!(r[0], 1);
+                assert_eq!((v3(r, 1), v3(r, 8)), (position, intensity));
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                ..
+            } => {
+                assert_eq!(r[0], 2);
+                assert_eq!(
+                    (v3(r, 1), v3(r, 4), v3(r, 8)),
+                    (position, direction, intensity)
+                );
+                // The attenuation from the packed scale and offset is the
+                // runtime's, at the axis, the cone's edges and outside.
+                for deg in [0.0f32, 20.0, 27.5, 35.0, 50.0] {
+                    let c = deg.to_radians().cos();
+                    let t = (c * f(r, 11) + f(r, 12)).clamp(0.0, 1.0);
+                    let want = probekit_runtime::sh::lights::spot_attenuation(
+                        c,
+                        20f32.to_radians(),
+                        35f32.to_radians(),
+                    );
+                    assert_eq!(t * t, want, "{deg}°");
+                }
+            }
+            Light::Disk {
+                position,
+                direction,
+                radius,
+                intensity,
+            } => {
+                assert_eq!(r[0], 3);
+                assert_eq!(
+                    (v3(r, 1), v3(r, 4), f(r, 7), v3(r, 8)),
+                    (position, direction, radius, intensity)
+                );
+            }
+            Light::Directional { .. } => panic!("a directional light is never near"),
+        }
+    }
+    // The table: its side, then its entries.
+    let t = pack_sphere_table(&table);
+    assert_eq!(t[0], 16);
+    assert_eq!(t.len(), 1 + 16 * 16);
+    assert!(t[1..]
+        .iter()
+        .zip(table.values())
+        .all(|(a, b)| f32::from_bits(*a) == *b));
+    // An order-4 rig keeps a band-4 term the shader does not evaluate.
+    let r4 = SplitRig::new(&test_rig(4), table).unwrap();
+    assert!(matches!(
+        pack_split_rig(&r4),
+        Err(LayoutError::RigOrder { order: 4 })
+    ));
 }

@@ -336,6 +336,18 @@ impl SphereTable {
         Self { size, data }
     }
 
+    /// Entries per side (rows and columns).
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
+    /// The `size²` entries, row after row (row `j`, column `i` at
+    /// `j·size + i`; [`SphereTable::new`]): the unit-radiance irradiance
+    /// (no unit: a form factor times π, at most π).
+    pub fn values(&self) -> &[f32] {
+        &self.data
+    }
+
     /// Unit-radiance irradiance at `(cos θ, sin α)`, bilinear (arguments
     /// clamped to the table's range; NaN reads as the range's start).
     pub fn lookup(&self, cos_theta: f32, sin_alpha: f32) -> f32 {

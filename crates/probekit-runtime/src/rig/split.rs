@@ -166,6 +166,23 @@ impl SplitRig {
         &self.state
     }
 
+    /// This frame's per-vertex lights, in the order they were given to
+    /// [`SplitRig::update`]: each light taken into the object's frame
+    /// (positions and directions in object coordinates, m) with its
+    /// per-vertex share `1 − w` in `(0, 1]` ([`rig_weight`]); lights wholly
+    /// in the rig are left out. Empty before the first update.
+    /// [`SplitRig::irradiance`] is the rig plus `Σ share ·`
+    /// [`Light::irradiance`] of these, looked up in
+    /// [`SplitRig::sphere_table`].
+    pub fn near_lights(&self) -> &[(Light, f32)] {
+        &self.near
+    }
+
+    /// The table sphere and disk lights are looked up in per vertex.
+    pub fn sphere_table(&self) -> &SphereTable {
+        &self.table
+    }
+
     /// Per-frame update for the object placed by the rigid transform
     /// `world_from_object` among `lights` (world coordinates): each light
     /// is taken into the object's frame, its transition distance found

@@ -11,12 +11,17 @@
 //!   `pk_sh_coeffs` and `pk_sh_gradients` of `shaders/probekit_buffers.wgsl`.
 //! * [`pack_bricks`]: the textures of a brick-atlas export into the one
 //!   `u32` buffer `pk_bricks` of `shaders/probekit_bricks.wgsl`.
+//! * [`pack_split_rig`]: a runtime [`SplitRig`](probekit_runtime::rig::SplitRig)
+//!   after its per-frame update — model, box, current parameters, near
+//!   lights with their shares — into `pk_rig` of `shaders/probekit_rig.wgsl`;
+//!   [`pack_sphere_table`]: the sphere-light table into `pk_sphere_table`.
 //!
 //! Buffers are little-endian `u32` words (`f32` values as their bits);
 //! [`words_to_bytes`] gives the bytes to upload.
 
 mod bricks;
 mod cloud;
+mod rig;
 mod volume;
 
 pub use bricks::{pack_bricks, BrickAtlas, BrickEncoding, BRICKS_HEADER, BRICKS_HEADER_WORDS};
@@ -24,6 +29,10 @@ pub use cloud::{
     cell_code, pack_cloud, pack_cloud_file, PackedCloud, CLOUD_FLAG_CELLS,
     CLOUD_FLAG_PROBE_WEIGHTS, CLOUD_FLAG_VISIBILITY, CLOUD_HEADER, CLOUD_HEADER_WORDS, CLOUD_HULL,
     CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
+};
+pub use rig::{
+    pack_rig_light, pack_sphere_table, pack_split_rig, RIG_CODES, RIG_HEADER, RIG_HEADER_WORDS,
+    RIG_LIGHT_WORDS, RIG_MAX_ORDER,
 };
 pub use volume::{pack_volume_grid, PackedVolumeGrid, VOLUME_GRADIENT_FLOATS, VOLUME_PROBE_FLOATS};
 
@@ -66,6 +75,13 @@ pub enum LayoutError {
     /// A brick atlas whose sizes do not agree.
     #[error("brick atlas: {0}")]
     Bricks(String),
+    /// A rig of more SH bands than the shader evaluates
+    /// ([`RIG_MAX_ORDER`]).
+    #[error("rig of SH order {order}; the shaders evaluate at most order 3 (L2)")]
+    RigOrder {
+        /// The rig's order (bands).
+        order: usize,
+    },
 }
 
 /// The little-endian bytes of `words` (what to upload as a storage buffer).

@@ -59,6 +59,8 @@ pub const MODE_LIBRARY: u32 = 0;
 pub const MODE_CLOUD: u32 = 1;
 pub const MODE_VOLUME: u32 = 2;
 pub const MODE_BRICKS: u32 = 3;
+pub const MODE_RIG: u32 = 4;
+pub const MODE_LIGHT: u32 = 5;
 
 /// The buffers `pk_check` reads; empty ones are bound as 16 zero bytes.
 pub struct Buffers {
@@ -72,6 +74,10 @@ pub struct Buffers {
     pub cloud: Vec<u32>,
     /// `pk_bricks`.
     pub bricks: Vec<u32>,
+    /// `pk_rig`.
+    pub rig: Vec<u32>,
+    /// `pk_sphere_table`.
+    pub sphere_table: Vec<u32>,
     /// The `PkVolumeGrid` of the parameters (48 bytes).
     pub grid: [u8; 48],
     /// Codec offsets of mode 0 (l1, zh3, l2, cube).
@@ -86,6 +92,8 @@ impl Default for Buffers {
             gradients: Vec::new(),
             cloud: Vec::new(),
             bricks: Vec::new(),
+            rig: Vec::new(),
+            sphere_table: Vec::new(),
             grid: [0; 48],
             offsets: [0; 4],
         }
@@ -126,7 +134,7 @@ impl Gpu {
             count: None,
         };
         let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let mut entries: Vec<_> = [0, 1, 2, 3, 4, 8]
+        let mut entries: Vec<_> = [0, 1, 2, 3, 4, 5, 6, 8]
             .into_iter()
             .map(|b| entry_of(b, read))
             .collect();
@@ -183,6 +191,8 @@ impl Gpu {
             (2, storage("pk_sh_gradients", &f2b(&b.gradients))),
             (3, storage("pk_cloud", &u2b(&b.cloud))),
             (4, storage("pk_bricks", &u2b(&b.bricks))),
+            (5, storage("pk_rig", &u2b(&b.rig))),
+            (6, storage("pk_sphere_table", &u2b(&b.sphere_table))),
             (8, storage("check_in", &f2b(input))),
         ];
         let out_size = (cases.max(1) * CHECK_OUT_FLOATS * 4) as u64;
