@@ -54,6 +54,24 @@ compile_error!("probekit-runtime needs the `std` feature or, without std, the `l
 
 pub use probekit_sh as sh;
 
+/// Methods that change a loaded cloud's blend or data (its setters), which
+/// the crate itself and the baker call and an engine does not: `pub` with
+/// the `write` feature, crate-private without it. An engine chooses a
+/// blend once, at load ([`LoadOptions::blend`]), and relights through
+/// [`Probes::relight`], so a shared handle never changes under a query.
+macro_rules! baker_only {
+    ($($(#[$attr:meta])* fn $name:ident $args:tt $(-> $ret:ty)? $body:block)*) => {$(
+        $(#[$attr])*
+        #[cfg(feature = "write")]
+        pub fn $name $args $(-> $ret)? $body
+
+        $(#[$attr])*
+        #[cfg(not(feature = "write"))]
+        #[allow(dead_code)]
+        pub(crate) fn $name $args $(-> $ret)? $body
+    )*};
+}
+
 pub mod cloud;
 pub mod format;
 pub mod rig;
