@@ -132,14 +132,16 @@ struct DirectionalData {
     reciprocal_luminance: Vec<[Vec4; 3]>,
 }
 
-/// The range a fitted probe weight ([`ProbeCloud::set_probe_weights`], the
+/// The range a fitted probe weight ([`ProbeCloud::probe_weights`], the
 /// file's `PWGT` section) must lie in: positive, finite, and far enough from
 /// 0 and infinity that four of them times the other factors neither
 /// underflow nor overflow an `f32` sum.
 pub const PROBE_WEIGHT_RANGE: core::ops::RangeInclusive<f32> = 1e-6..=1e6;
 
-/// Largest brightness exponent [`ProbeCloud::set_brightness_weighting`]
-/// accepts.
+/// Largest brightness exponent a cloud blends with
+/// ([`ProbeCloud::brightness_weighting`] and
+/// [`ProbeCloud::directional_brightness`]; a file or a load override
+/// beyond it is refused).
 pub const MAX_BRIGHTNESS_EXPONENT: f32 = 4.0;
 
 /// The share of a point's barycentric weight that cell visibility must
@@ -406,7 +408,7 @@ impl ProbeCloud {
     /// `min(out.len(), order²)` coefficients; the rest is zeroed): the blend
     /// of [`ProbeCloud::weights_at`] (visibility-weighted when on), done per
     /// direction for bands ≤ 2 when directional brightness is on
-    /// ([`ProbeCloud::set_directional_brightness`]). No allocation.
+    /// ([`ProbeCloud::directional_brightness`]). No allocation.
     pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
         let (_, probes, weights) = self.blend_at(p, state);
         self.blend_sh(&probes, &weights, out);
