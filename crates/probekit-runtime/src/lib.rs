@@ -27,7 +27,8 @@
 //! ```
 //!
 //! Batches ([`Probes::irradiance_many`], [`Probes::sh_at_many`]) share one
-//! state, so an object's vertices walk little. Rigs: [`Probes::rig`],
+//! state, so an object's vertices walk little. A file baked with light
+//! groups is relit in place with [`Probes::relight`]. Rigs: [`Probes::rig`],
 //! [`Probes::update_rig`], [`Probes::rig_irradiance`]. The modules below
 //! ([`cloud`], [`volume`], [`format`](mod@format), [`rig`]) are the parts `Probes` is
 //! built from, for tools and diagnostics.
