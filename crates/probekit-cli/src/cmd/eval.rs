@@ -91,7 +91,8 @@ const DEFAULT_BUDGETS: [usize; 4] = [50, 100, 200, 400];
 
 /// Refuses flags that would be ignored: the sweep's `--budgets` and
 /// `--methods` without `--plot`, `--samples` with neither `--compare` nor
-/// `--plot` (it sets their bakes' samples), and no evaluation points.
+/// `--plot` (it sets their bakes' samples), no evaluation points, and a
+/// `--compare` other than `grid` (before the ground truth is traced).
 fn check_flags(a: &EvalArgs) -> Result<()> {
     if a.plot.is_none() {
         if a.budgets.is_some() {
@@ -106,6 +107,9 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
     }
     if a.points == 0 {
         bail!("--points 0: expected at least one evaluation point");
+    }
+    if let Some(o) = a.compare.as_deref().filter(|&o| o != "grid") {
+        bail!("--compare {o}: expected grid");
     }
     Ok(())
 }
@@ -175,27 +179,24 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     if let Some(n) = a.samples {
         recipe.capture.samples = n;
     }
-    match a.compare.as_deref() {
-        None => {}
-        Some("grid") => {
-            // The same recipe, placed on a grid of the file's probe count:
-            // the grid gets the blend data the evaluated file has.
-            recipe.placement = Placement::Grid {
-                budget: Some(file.positions.len().max(8)),
-                cell: None,
-            };
-            let ctx = || format!("{scene_name}: --compare grid");
-            let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
-            let g = Bake::new(&scene, &scene_name, &recipe)
-                .and_then(|b| b.run(&step))
-                .with_context(ctx)?
-                .file;
-            let grid = Probes::from_file(&g, cloud_options).with_context(ctx)?;
-            let gp = predict(&grid, &pts).with_context(ctx)?;
-            let gf = evaluate(&scene, &pts, &gp, &truth, baker.tracer(), a.worst, &grid);
-            out["compare"] = serde_json::json!({ "grid": gf });
-        }
-        Some(o) => bail!("--compare {o}: expected grid"),
+    // `--compare grid` (the only comparison; checked by `check_flags`).
+    if a.compare.is_some() {
+        // The same recipe, placed on a grid of the file's probe count:
+        // the grid gets the blend data the evaluated file has.
+        recipe.placement = Placement::Grid {
+            budget: Some(file.positions.len().max(8)),
+            cell: None,
+        };
+        let ctx = || format!("{scene_name}: --compare grid");
+        let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
+        let g = Bake::new(&scene, &scene_name, &recipe)
+            .and_then(|b| b.run(&step))
+            .with_context(ctx)?
+            .file;
+        let grid = Probes::from_file(&g, cloud_options).with_context(ctx)?;
+        let gp = predict(&grid, &pts).with_context(ctx)?;
+        let gf = evaluate(&scene, &pts, &gp, &truth, baker.tracer(), a.worst, &grid);
+        out["compare"] = serde_json::json!({ "grid": gf });
     }
     if let Some(plot) = &a.plot {
         let budgets = a.budgets.clone().unwrap_or(DEFAULT_BUDGETS.to_vec());

@@ -67,9 +67,8 @@ pub struct RenderArgs {
 
 /// Parses `--camera`.
 fn parse_camera(s: &str) -> Result<Camera> {
-    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
-    let v = match v {
-        Ok(v) if (v.len() == 6 || v.len() == 7) && v.iter().all(|x| x.is_finite()) => v,
+    let v = match super::util::finite_list(s) {
+        Some(v) if v.len() == 6 || v.len() == 7 => v,
         _ => bail!("--camera {s}: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z[,FOV_DEG]"),
     };
     let fov = v

@@ -43,11 +43,16 @@ pub fn read_csv(path: &Path, cols: usize) -> Result<Vec<Vec<f32>>> {
     Ok(rows)
 }
 
+/// Comma-separated finite numbers; `None` if one is not.
+pub fn finite_list(s: &str) -> Option<Vec<f32>> {
+    let v: Vec<f32> = (s.split(',').map(|f| f.trim().parse().ok())).collect::<Option<_>>()?;
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
 /// Parses `x,y,z` (finite).
 pub fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
-    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
-    match v {
-        Ok(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => Ok(Vec3::new(v[0], v[1], v[2])),
+    match finite_list(s) {
+        Some(v) if v.len() == 3 => Ok(Vec3::new(v[0], v[1], v[2])),
         _ => bail!("{what} {s}: expected three finite numbers x,y,z"),
     }
 }
