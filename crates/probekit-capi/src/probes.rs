@@ -104,7 +104,9 @@ impl From<LoadError> for Error {
         let status = match &e {
             LoadError::Format(FormatError::Io { .. }) => PkStatus::Io,
             LoadError::Volume(VolumeError::NoGradients(_)) => PkStatus::NoGradients,
-            LoadError::VisibilityBias(_) => PkStatus::InvalidArgument,
+            LoadError::VisibilityBias(_) | LoadError::VisibilitySharpness(_) => {
+                PkStatus::InvalidArgument
+            }
             _ => PkStatus::Format,
         };
         Error(status, e.to_string())

@@ -27,7 +27,8 @@
 //! ```
 //!
 //! Batches ([`Probes::irradiance_many`], [`Probes::sh_at_many`]) share one
-//! state, so an object's vertices walk little. Rigs: [`Probes::rig`],
+//! state, so an object's vertices walk little. A file baked with light
+//! groups is relit in place with [`Probes::relight`]. Rigs: [`Probes::rig`],
 //! [`Probes::update_rig`], [`Probes::rig_irradiance`]. The modules below
 //! ([`cloud`], [`volume`], [`format`](mod@format), [`rig`]) are the parts `Probes` is
 //! built from, for tools and diagnostics.
@@ -53,6 +54,24 @@ extern crate alloc;
 compile_error!("probekit-runtime needs the `std` feature or, without std, the `libm` feature");
 
 pub use probekit_sh as sh;
+
+/// Methods that change a loaded cloud's blend or data (its setters), which
+/// the crate itself and the baker call and an engine does not: `pub` with
+/// the `write` feature, crate-private without it. An engine chooses a
+/// blend once, at load ([`LoadOptions::blend`]), and relights through
+/// [`Probes::relight`], so a shared handle never changes under a query.
+macro_rules! baker_only {
+    ($($(#[$attr:meta])* fn $name:ident $args:tt $(-> $ret:ty)? $body:block)*) => {$(
+        $(#[$attr])*
+        #[cfg(feature = "write")]
+        pub fn $name $args $(-> $ret)? $body
+
+        $(#[$attr])*
+        #[cfg(not(feature = "write"))]
+        #[allow(dead_code)]
+        pub(crate) fn $name $args $(-> $ret)? $body
+    )*};
+}
 
 pub mod cloud;
 pub mod format;

@@ -230,6 +230,12 @@ impl Volume {
         })
     }
 
+    /// Every sample's radiance SH (`order²` per sample, sample after
+    /// sample), writable for relighting in place (`Probes::relight`).
+    pub(crate) fn coefficients_mut(&mut self) -> &mut [Vec3] {
+        &mut self.coeffs
+    }
+
     /// SH order (bands) of the stored radiance.
     pub fn order(&self) -> usize {
         self.order

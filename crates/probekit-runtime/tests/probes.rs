@@ -595,3 +595,142 @@ fn query_weights_reproduce_the_point() {
         }
     }
 }
+
+/// `cloud_file(3)` with every probe's distance moments saying a surface
+/// 0.6 m away in every direction (one texel per probe, variance 0).
+fn walled_cloud_file() -> ProbeFile {
+    use probekit_runtime::format::DistanceMoments;
+    let mut f = cloud_file(3);
+    let (max, mu) = (4.0f32, 0.6f32);
+    let h = |x: f32| half::f16::from_f32(x).to_bits();
+    let data = (0..f.positions.len())
+        .flat_map(|_| [h(mu / max), h(mu * mu / (max * max))])
+        .collect();
+    f.visibility = Some(DistanceMoments {
+        resolution: 1,
+        max_distance: max,
+        data,
+    });
+    f.validate().unwrap();
+    f
+}
+
+/// The Chebyshev sharpness override: 0 switches the test off (the blend
+/// is that of a load without distance moments), the default keeps it (a
+/// point far from every probe's surfaces blends otherwise), and more than
+/// 16 is refused.
+#[test]
+fn visibility_sharpness_override_takes_effect_at_load() {
+    let f = walled_cloud_file();
+    let with = |edit: &dyn Fn(&mut LoadOptions)| {
+        let mut o = LoadOptions::default();
+        edit(&mut o);
+        load(&f, o)
+    };
+    let plain = with(&|o| o.blend.distance_moments = Some(false));
+    let off = with(&|o| o.blend.visibility_sharpness = Some(0));
+    let tested = with(&|_| {});
+    let mut differs = 0;
+    let mut rng = Rng(23);
+    for (p, _) in points(&mut rng, 50) {
+        let q = |probes: &Probes| probes.query(&mut ObjectState::new(), p).unwrap();
+        assert_eq!(q(&off).weights, q(&plain).weights, "{p}");
+        differs += usize::from(q(&tested).weights != q(&plain).weights);
+    }
+    assert!(differs > 10, "{differs}");
+    let mut o = LoadOptions::default();
+    o.blend.visibility_sharpness = Some(17);
+    assert!(matches!(
+        Probes::from_bytes(&f.to_bytes().unwrap(), o),
+        Err(LoadError::VisibilitySharpness(17))
+    ));
+}
+
+/// Relighting in place: the relit SH is the original blend's weights (the
+/// baked light's, brightness weighting on) applied to `T + Σ (s_g − 1)·G_g`,
+/// written out here; bad scales or a relighter of another file change
+/// nothing.
+#[test]
+fn relight_keeps_the_blend_of_the_baked_light() {
+    use probekit_runtime::format::{LightGroup, Relighter};
+    let mut f = cloud_file(3);
+    let total = coeffs(&f.positions, 3);
+    let a: Vec<Vec3> = (total.iter().enumerate())
+        .map(|(i, c)| *c * (0.2 + 0.6 * ((i / 9) % 3) as f32 / 2.0))
+        .collect();
+    let b: Vec<Vec3> = total.iter().zip(&a).map(|(t, x)| *t - *x).collect();
+    let total: Vec<Vec3> = a.iter().zip(&b).map(|(x, y)| *x + *y).collect();
+    f.coefficients = Coefficients::from_f32(3, &total).unwrap();
+    f.groups = [("a", &a), ("b", &b)]
+        .map(|(name, c)| LightGroup {
+            name: name.into(),
+            coefficients: Coefficients::from_f32(3, c).unwrap(),
+        })
+        .to_vec();
+    let mut options = LoadOptions::default();
+    options.blend.brightness_exponent = Some(1.0);
+    let baked = load(&f, options);
+    let mut relit = baked.clone();
+    let relighter = Relighter::new(&f).unwrap();
+    let scales = [Vec3::new(3.0, 2.0, 0.5), Vec3::ONE];
+    relit.relight(&relighter, &scales).unwrap();
+    let mut rng = Rng(29);
+    for (p, _) in points(&mut rng, 40) {
+        let q = baked.query(&mut ObjectState::new(), p).unwrap();
+        let mut want = [Vec3::ZERO; 9];
+        for (&i, &w) in q.probes.iter().zip(&q.weights) {
+            for k in 0..9 {
+                let i = i as usize * 9 + k;
+                want[k] += w * (total[i] + (scales[0] - Vec3::ONE) * a[i]);
+            }
+        }
+        let got = relit.sh_at(&mut ObjectState::new(), p).unwrap();
+        for k in 0..9 {
+            assert!(close(Vec3::from_array(got[k]), want[k], 1e-5), "{p} {k}");
+        }
+    }
+    // A cloud loaded from the relit coefficients blends by the relit
+    // light instead: not the same (the check above can fail).
+    let mut rebuilt = f.clone();
+    rebuilt.coefficients = f.relit(&[("a", scales[0])]).unwrap();
+    let rebuilt = load(&rebuilt, options);
+    let sh = |probes: &Probes, p| probes.sh_at(&mut ObjectState::new(), p).unwrap();
+    let moved = (points(&mut rng, 40).iter())
+        .filter(|(p, _)| (sh(&rebuilt, *p)[0][0] - sh(&relit, *p)[0][0]).abs() > 1e-3)
+        .count();
+    assert!(moved > 5, "{moved}");
+    // Nothing changes on an error.
+    let before = relit.sh_at(&mut ObjectState::new(), Vec3::ONE).unwrap();
+    assert!(relit.relight(&relighter, &scales[..1]).is_err());
+    let other = Relighter::new(&common::groups_file()).unwrap();
+    assert!(relit.relight(&other, &[Vec3::ONE; 2]).is_err());
+    assert_eq!(
+        relit.sh_at(&mut ObjectState::new(), Vec3::ONE).unwrap(),
+        before
+    );
+}
+
+/// Every stored band of an order-4 file is the field (interpolation of an
+/// affine field is exact); the first nine are `sh_at`'s.
+#[test]
+fn all_bands_are_the_stored_order() {
+    for f in [cloud_file(4), volume_file(4)] {
+        let probes = load(&f, LoadOptions::default());
+        let mut rng = Rng(31);
+        for (p, _) in points(&mut rng, 20) {
+            let p = p.clamp(Vec3::ZERO, Vec3::splat(2.0));
+            let mut all = [Vec3::splat(9.0); 20];
+            probes
+                .sh_all_bands_at(&mut ObjectState::new(), p, &mut all)
+                .unwrap();
+            for k in 0..16 {
+                assert!(close(all[k], field(p, k, 4), 1e-4), "{p} {k}");
+            }
+            assert_eq!(&all[16..], &[Vec3::ZERO; 4]);
+            let l2 = probes.sh_at(&mut ObjectState::new(), p).unwrap();
+            for k in 0..9 {
+                assert_eq!(l2[k], all[k].to_array());
+            }
+        }
+    }
+}

@@ -443,7 +443,7 @@ fn query(d: &ViewData, p: Vec3, n: Option<Vec3>) -> Result<Reply, String> {
             serde_json::json!({"kind": "tetrahedron", "index": i})
         }
         crate::query::Cell::HullFace(i) => serde_json::json!({"kind": "hull_face", "index": i}),
-        crate::query::Cell::Volume => serde_json::json!({"kind": "volume"}),
+        crate::query::Cell::Volume(i) => serde_json::json!({"kind": "volume", "index": i}),
     };
     let sh: Vec<[f32; 3]> = a.sh.iter().map(|c| c.to_array()).collect();
     let mut v = serde_json::json!({

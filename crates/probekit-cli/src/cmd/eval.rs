@@ -1,7 +1,7 @@
 //! `probekit eval PROBES --scene SCENE [--points N] [--seed S] [--json]`:
 //! error of a probe cloud against path-traced ground truth at random
 //! free-space points of the bake box (`probekit::eval`).
-//! Works on clouds and volumes alike (`Predictor`).
+//! Works on clouds and volumes alike (the runtime's `Probes`).
 //!
 //! `--compare grid` also bakes (in-process, with the capture settings the
 //! file's metadata records) a uniform grid with the file's probe count over
@@ -16,18 +16,18 @@
 //! most squared error, worst first, with their shares of it (under
 //! `"worst"`, for the grid too).
 
-use super::util::{load_probes, parse_interp, scene_for_file};
+use super::util::{load_probes, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::capture::{Baker, ReferenceSettings};
-use probekit::eval::{evaluate, reference_with_progress};
-use probekit::pipeline::sweep::{plot_sweep, sweep, SWEEP_METHODS};
+use probekit::eval::{evaluate, predict, reference_with_progress};
+use probekit::pipeline::sweep::{plot_sweep, sweep, without_overridden_blend_data, SWEEP_METHODS};
 use probekit::pipeline::Bake;
-use probekit::query::Predictor;
-use probekit::recipe::{BakeRecord, CellVisibility, Placement};
+use probekit::recipe::{BakeRecord, Placement};
 use probekit::scene::Aabb;
 use probekit::trace::free_space::sample_points;
+use probekit_runtime::{LoadOptions, Probes};
 use std::path::PathBuf;
 
 /// Arguments of `probekit eval`.
@@ -54,16 +54,12 @@ pub struct EvalArgs {
     /// default the scene's `[bake] box`.
     #[arg(long = "box", value_delimiter = ',', allow_hyphen_values = true)]
     pub bbox: Option<Vec<f32>>,
-    /// Volumes: trilinear (default), taylor or tricubic (an error with a
-    /// probe cloud, which interpolates by its tetrahedra).
-    #[arg(long)]
-    pub interp: Option<String>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
-    /// Clouds: blend overrides for diagnosis.
+    /// Volumes: interpolation; clouds: blend overrides for diagnosis.
     #[command(flatten)]
-    pub blend: super::blend_args::BlendArgs,
+    pub load: super::load_args::LoadArgs,
     /// Also evaluate a uniform `grid` with the same probe count.
     #[arg(long)]
     pub compare: Option<String>,
@@ -95,7 +91,8 @@ const DEFAULT_BUDGETS: [usize; 4] = [50, 100, 200, 400];
 
 /// Refuses flags that would be ignored: the sweep's `--budgets` and
 /// `--methods` without `--plot`, `--samples` with neither `--compare` nor
-/// `--plot` (it sets their bakes' samples), and no evaluation points.
+/// `--plot` (it sets their bakes' samples), no evaluation points, and a
+/// `--compare` other than `grid` (before the ground truth is traced).
 fn check_flags(a: &EvalArgs) -> Result<()> {
     if a.plot.is_none() {
         if a.budgets.is_some() {
@@ -111,6 +108,9 @@ fn check_flags(a: &EvalArgs) -> Result<()> {
     if a.points == 0 {
         bail!("--points 0: expected at least one evaluation point");
     }
+    if let Some(o) = a.compare.as_deref().filter(|&o| o != "grid") {
+        bail!("--compare {o}: expected grid");
+    }
     Ok(())
 }
 
@@ -120,12 +120,12 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let file = load_probes(&a.probes)?;
     check_flags(a)?;
     super::util::check_outputs(&[a.plot.as_deref()])?;
-    let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
-    let mut predictor = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
-    let overrides = a
-        .blend
-        .apply(&mut predictor)
-        .with_context(|| name.clone())?;
+    let options = a.load.options(&[])?;
+    let probes = options.load(&file).with_context(|| name.clone())?;
+    // The clouds `--compare` and `--plot` bake, loaded with the evaluated
+    // file's blend overrides (a volume has none).
+    let mut cloud_options = LoadOptions::default();
+    cloud_options.blend = options.blend;
     let (scene, scene_name) =
         scene_for_file(&file, &a.probes, a.scene.as_deref(), a.allow_other_scene)?;
     let baker = Baker::new(&scene).with_context(|| scene_name.clone())?;
@@ -160,17 +160,17 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let progress = bar.callback();
     let truth = reference_with_progress(&baker, &pts, &rs, &|d, t| progress("ground truth", d, t))
         .with_context(|| scene_name.clone())?;
-    let pred = predictor.predict(&pts).with_context(|| name.clone())?;
-    let mut out = serde_json::to_value(evaluate(
+    let pred = predict(&probes, &pts).with_context(|| name.clone())?;
+    let report = evaluate(
         &scene,
         &pts,
         &pred,
         &truth,
         baker.tracer(),
-        file.positions.len(),
         a.worst,
-        &predictor,
-    ))?;
+        &probes,
+    );
+    let mut out = serde_json::to_value(report)?;
     // The recipe the file was baked with (the defaults for a file that
     // records none), with `--samples` for the bakes below.
     let mut recipe = BakeRecord::from_json(&file.metadata)
@@ -179,37 +179,24 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     if let Some(n) = a.samples {
         recipe.capture.samples = n;
     }
-    match a.compare.as_deref() {
-        None => {}
-        Some("grid") => {
-            // The same recipe, placed on a grid of the file's probe count:
-            // the grid gets the blend data the evaluated file has.
-            recipe.placement = Placement::Grid {
-                budget: Some(file.positions.len().max(8)),
-                cell: None,
-            };
-            let ctx = || format!("{scene_name}: --compare grid");
-            let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
-            let g = Bake::new(&scene, &scene_name, &recipe)
-                .and_then(|b| b.run(&step))
-                .with_context(ctx)?
-                .file;
-            let mut gpred = Predictor::from_file(&g, interp).with_context(ctx)?;
-            overrides.set(&mut gpred);
-            let gp = gpred.predict(&pts).with_context(ctx)?;
-            let gf = evaluate(
-                &scene,
-                &pts,
-                &gp,
-                &truth,
-                baker.tracer(),
-                g.positions.len(),
-                a.worst,
-                &gpred,
-            );
-            out["compare"] = serde_json::json!({ "grid": gf });
-        }
-        Some(o) => bail!("--compare {o}: expected grid"),
+    // `--compare grid` (the only comparison; checked by `check_flags`).
+    if a.compare.is_some() {
+        // The same recipe, placed on a grid of the file's probe count:
+        // the grid gets the blend data the evaluated file has.
+        recipe.placement = Placement::Grid {
+            budget: Some(file.positions.len().max(8)),
+            cell: None,
+        };
+        let ctx = || format!("{scene_name}: --compare grid");
+        let step = |phase: &str, d, t| progress(&format!("grid: {phase}"), d, t);
+        let g = Bake::new(&scene, &scene_name, &recipe)
+            .and_then(|b| b.run(&step))
+            .with_context(ctx)?
+            .file;
+        let grid = Probes::from_file(&g, cloud_options).with_context(ctx)?;
+        let gp = predict(&grid, &pts).with_context(ctx)?;
+        let gf = evaluate(&scene, &pts, &gp, &truth, baker.tracer(), a.worst, &grid);
+        out["compare"] = serde_json::json!({ "grid": gf });
     }
     if let Some(plot) = &a.plot {
         let budgets = a.budgets.clone().unwrap_or(DEFAULT_BUDGETS.to_vec());
@@ -221,25 +208,16 @@ pub fn run(a: &EvalArgs) -> Result<()> {
             None => SWEEP_METHODS.to_vec(),
         };
         // The swept clouds get the evaluated file's visibility data (less
-        // what the flags turn off) and its query flags, so the curves blend
-        // as the file does (the flags were checked by `apply` above).
-        let blend = &mut recipe.blend;
-        if overrides.no_visibility {
-            blend.distance_moments = 0;
-            blend.cell_visibility = CellVisibility::Subdivision(0);
-        } else if overrides.no_cell_visibility {
-            blend.cell_visibility = CellVisibility::Subdivision(0);
-        }
-        if overrides.no_probe_weights {
-            blend.probe_weights = false;
-        }
+        // what the overrides turn off) and its overrides, so the curves
+        // blend as the file does.
+        without_overridden_blend_data(&mut recipe, &options.blend);
         let rows = sweep(
             &scene,
             &scene_name,
             &recipe,
             &methods,
             &budgets,
-            &|p| overrides.set(p),
+            &cloud_options,
             &pts,
             &truth,
             &mut |m, b, e| eprintln!("{scene_name}: sweep: {m} at budget {b} failed, skipped: {e}"),

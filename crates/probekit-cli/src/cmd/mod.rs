@@ -1,10 +1,10 @@
 //! One module per subcommand; each exposes `Args` (clap derive) and `run`.
 
 pub mod bake;
-pub mod blend_args;
 pub mod convert;
 pub mod eval;
 pub mod export;
+pub mod load_args;
 pub mod probes;
 pub mod recipe_args;
 pub mod render;

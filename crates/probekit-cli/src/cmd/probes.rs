@@ -1,13 +1,12 @@
 //! `probekit capture`, `reference`, `query` and `inspect`: one probe, ground
 //! truth, and questions to a baked file.
 
-use super::util::{load_probes, load_scene, parse_interp, parse_vec3, read_csv, rgb};
+use super::util::{load_probes, load_scene, parse_vec3, read_csv, rgb};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings, ReferenceSettings};
-use probekit::query::Predictor;
-use probekit_runtime::cloud::WalkState;
+use probekit::query::QueryReport;
 use std::path::PathBuf;
 
 /// Arguments of `probekit capture`.
@@ -128,114 +127,55 @@ pub struct QueryArgs {
     /// CSV rows `x,y,z,nx,ny,nz` instead of `--at`.
     #[arg(long)]
     pub points: Option<PathBuf>,
-    /// Volumes: trilinear (default), taylor or tricubic (an error with a
-    /// probe cloud, which interpolates by its tetrahedra).
-    #[arg(long)]
-    pub interp: Option<String>,
     /// Relight before querying: `NAME=s[,NAME=s...]` scales light group
     /// NAME (stored by `bake --groups`) by `s`, or by RGB `r:g:b`.
     #[arg(long)]
     pub group_scale: Vec<String>,
-    /// Clouds: blend overrides for diagnosis.
+    /// Volumes: interpolation; clouds: blend overrides for diagnosis.
     #[command(flatten)]
-    pub blend: super::blend_args::BlendArgs,
+    pub load: super::load_args::LoadArgs,
     /// Print JSON (the only output form).
     #[arg(long)]
     pub json: bool,
 }
 
-/// Parses `--group-scale` values: `NAME=s` or `NAME=r:g:b`, comma-separated.
-fn parse_group_scales(args: &[String]) -> Result<Vec<(String, Vec3)>> {
-    let mut out = Vec::new();
-    for item in args.iter().flat_map(|a| a.split(',')) {
-        let bad = || anyhow!("--group-scale {item}: expected NAME=s or NAME=r:g:b");
-        let (name, value) = item.split_once('=').ok_or_else(bad)?;
-        let parts: Vec<f32> = value
-            .split(':')
-            .map(|v| v.trim().parse::<f32>().map_err(|_| bad()))
-            .collect::<Result<_>>()?;
-        let rgb = match parts[..] {
-            [s] => Vec3::splat(s),
-            [r, g, b] => Vec3::new(r, g, b),
-            _ => return Err(bad()),
-        };
-        if name.trim().is_empty() || !rgb.is_finite() {
-            return Err(bad());
-        }
-        out.push((name.trim().to_string(), rgb));
-    }
-    Ok(out)
-}
-
-/// Runs `probekit query`: `{"irradiance":[r,g,b]}` for `--at`, or
-/// `{"irradiance":[[r,g,b],...]}` for `--points`. With `--group-scale` the
-/// file's coefficients are relit (`ProbeFile::relit`): a cloud in place, as
-/// an engine does, so it keeps the blend of its baked light.
+/// Runs `probekit query`: [`QueryReport`] as JSON, `{"irradiance":[r,g,b]}`
+/// for `--at`, `{"irradiance":[[r,g,b],...]}` for `--points`. With
+/// `--group-scale` the loaded probes are relit in place, as an engine
+/// relights them (`Probes::relight`: a cloud keeps the blend of its baked
+/// light).
 pub fn query(a: &QueryArgs) -> Result<()> {
     let name = a.probes.display().to_string();
-    let mut file = load_probes(&a.probes)?;
-    let scales = parse_group_scales(&a.group_scale)?;
-    let interp = parse_interp(&file, a.interp.as_deref()).with_context(|| name.clone())?;
-    let mut relit = None;
-    if !scales.is_empty() {
-        if file.groups.is_empty() {
-            bail!(
-                "{name}: --group-scale needs a file baked with --groups (it has no light groups)"
-            );
+    let file = load_probes(&a.probes)?;
+    let options = a.load.options(&a.group_scale)?;
+    let probes = options.load(&file).with_context(|| name.clone())?;
+    // A normal of zero length is refused with `zero`'s message.
+    let unit = |n: Vec3, zero: &dyn Fn() -> String| {
+        if n.length_squared() < 1e-12 {
+            bail!("{}", zero());
         }
-        let named: Vec<(&str, Vec3)> = scales.iter().map(|(n, s)| (n.as_str(), *s)).collect();
-        relit = Some(file.relit(&named).with_context(|| {
-            let names: Vec<&str> = file.group_names().collect();
-            format!("{name}: --group-scale (groups: {})", names.join(", "))
-        })?);
-    }
-    // A volume loads the relit coefficients; a cloud (what `Predictor`
-    // builds from a file with tetrahedra) is relit in place after loading.
-    if file.tetrahedra.is_none() {
-        if let Some(r) = relit.take() {
-            file.coefficients = r;
-        }
-    }
-    let mut probes = Predictor::from_file(&file, interp).with_context(|| name.clone())?;
-    if let (Some(r), Predictor::Cloud(c)) = (relit, &mut probes) {
-        let coeffs = r.to_f32().with_context(|| name.clone())?;
-        let dst = c.coefficients_mut();
-        if dst.len() != coeffs.len() {
-            bail!("{name}: relit coefficients do not match the cloud's");
-        }
-        dst.copy_from_slice(&coeffs);
-    }
-    a.blend.apply(&mut probes).with_context(|| name.clone())?;
-    let mut st = WalkState::new();
-    match (&a.at, &a.points) {
+        Ok(n.normalize())
+    };
+    let report = match (&a.at, &a.points) {
         (Some(at), None) => {
             let p = parse_vec3(at, "--at")?;
             let n = parse_vec3(a.normal.as_deref().unwrap_or("0,1,0"), "--normal")?;
-            if n.length_squared() < 1e-12 {
-                bail!("--normal: zero vector");
-            }
-            let e = probes
-                .irradiance(p, n.normalize(), &mut st)
-                .with_context(|| name.clone())?;
-            println!("{}", serde_json::json!({ "irradiance": rgb(e) }));
+            QueryReport::one(&probes, p, unit(n, &|| "--normal: zero vector".into())?)
         }
         (None, Some(csv)) => {
             let rows = read_csv(csv, 6)?;
-            let mut out = Vec::with_capacity(rows.len());
+            let mut points = Vec::with_capacity(rows.len());
             for (i, r) in rows.iter().enumerate() {
-                let n = Vec3::new(r[3], r[4], r[5]);
-                if n.length_squared() < 1e-12 {
-                    bail!("{}: row {}: zero normal", csv.display(), i + 1);
-                }
-                let e = probes
-                    .irradiance(Vec3::new(r[0], r[1], r[2]), n.normalize(), &mut st)
-                    .with_context(|| name.clone())?;
-                out.push(rgb(e));
+                let row = || format!("{}: row {}: zero normal", csv.display(), i + 1);
+                let n = unit(Vec3::new(r[3], r[4], r[5]), &row)?;
+                points.push((Vec3::new(r[0], r[1], r[2]), n));
             }
-            println!("{}", serde_json::json!({ "irradiance": out }));
+            QueryReport::batch(&probes, &points)
         }
         _ => return Err(anyhow!("query needs exactly one of --at or --points")),
-    }
+    };
+    let report = report.with_context(|| name.clone())?;
+    println!("{}", serde_json::to_value(&report)?);
     Ok(())
 }
 

@@ -3,17 +3,16 @@
 //! [--samples N] [--json]`: the scene lit by the probes beside the same
 //! path-traced, and the error (library: [`probekit::render`]).
 
-use super::util::{
-    check_brightness_weight, check_directional_brightness, cloud_flag_on_volume, first_given,
-    load_probes, scene_for_file,
-};
+use super::util::{load_probes, scene_for_file};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use probekit::capture::CaptureSettings;
 use probekit::format::ProbeFile;
+use probekit::query::{check_exponent, QueryOptionError};
 use probekit::render::{render, Camera, ObjectKind, RenderSettings, Rendered};
 use probekit::scene::Scene;
+use probekit_runtime::{BlendOverrides, ProbeFileKind};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `probekit render`.
@@ -48,12 +47,12 @@ pub struct RenderArgs {
     pub samples: u32,
     /// Clouds: brightness exponent of the test object's blend, 0 to 4
     /// (default: the one stored with the file's probe weights, 0 without;
-    /// as `query --brightness-weight`).
+    /// as `query --blend brightness=A`).
     #[arg(long)]
     pub brightness_weight: Option<f32>,
     /// Clouds: directional brightness exponent of the test object's blend,
     /// 0 to 4 (default: the one stored with the file's probe weights, 0
-    /// without; as `query --directional-brightness`).
+    /// without; as `query --blend directional=G`).
     #[arg(long)]
     pub directional_brightness: Option<f32>,
     /// Use a scene whose lighting differs from the scene the probes were
@@ -68,9 +67,8 @@ pub struct RenderArgs {
 
 /// Parses `--camera`.
 fn parse_camera(s: &str) -> Result<Camera> {
-    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
-    let v = match v {
-        Ok(v) if (v.len() == 6 || v.len() == 7) && v.iter().all(|x| x.is_finite()) => v,
+    let v = match super::util::finite_list(s) {
+        Some(v) if v.len() == 6 || v.len() == 7 => v,
         _ => bail!("--camera {s}: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z[,FOV_DEG]"),
     };
     let fov = v
@@ -126,23 +124,17 @@ pub fn bake_settings(file: &ProbeFile, scene: &Scene) -> RenderSettings {
 /// Runs `probekit render`.
 pub fn run(a: &RenderArgs) -> Result<()> {
     super::util::check_outputs(&[Some(&a.output)])?;
-    if let Some(w) = a.brightness_weight {
-        check_brightness_weight(w)?;
-    }
-    if let Some(g) = a.directional_brightness {
-        check_directional_brightness(g)?;
-    }
+    let mut blend = BlendOverrides::default();
+    let exponent = |flag, x: Option<f32>| x.map(|x| check_exponent(flag, x)).transpose();
+    blend.brightness_exponent = exponent("--brightness-weight", a.brightness_weight)?;
+    blend.directional_exponent = exponent("--directional-brightness", a.directional_brightness)?;
     let file = load_probes(&a.probes)?;
-    if file.tetrahedra.is_none() {
-        let flag = first_given([
-            (a.brightness_weight.is_some(), "--brightness-weight"),
-            (
-                a.directional_brightness.is_some(),
-                "--directional-brightness",
-            ),
-        ]);
+    if file.kind == ProbeFileKind::Volume {
+        let flag = (a.brightness_weight.map(|_| "--brightness-weight"))
+            .or(a.directional_brightness.map(|_| "--directional-brightness"));
         if let Some(flag) = flag {
-            return Err(cloud_flag_on_volume(flag)).with_context(|| a.probes.display().to_string());
+            return Err(QueryOptionError::CloudOnly(flag.into()))
+                .with_context(|| a.probes.display().to_string());
         }
     }
     let (scene, scene_name) =
@@ -159,8 +151,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         show_probes: a.show_probes,
         samples: a.samples,
         bounces: bake_bounces(&file, &scene),
-        brightness_weight: a.brightness_weight,
-        directional_brightness: a.directional_brightness,
+        blend,
         ..RenderSettings::default()
     };
     let what = format!("{scene_name} with {}", a.probes.display());

@@ -6,14 +6,12 @@
 
 use anyhow::{anyhow, Context};
 use clap::{Args, ValueEnum};
-use glam::Vec3;
-use probekit::query::Predictor;
-use probekit::rig::render::{comparison_figure, zones_figure, Column};
-use probekit::rig::run::{load_lights, load_mesh, run as run_rig, RunConfig, RunReport};
+use probekit::query::QueryOptions;
+use probekit::rig::report::RigReport;
+use probekit::rig::run::{comparison_pictures, load_lights, load_mesh, run as run_rig, RunConfig};
 use probekit::rig::source::ProbeSource;
 use probekit::rig::{RigSetupError, RigSpec};
-use probekit_runtime::Interp;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// On or off.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -85,29 +83,6 @@ pub struct RigArgs {
     pub out: Option<PathBuf>,
 }
 
-/// The `--json` line: the rig, its error, its light zones and its cost per
-/// frame (whether a baked file was used is the caller's to know).
-fn json(spec: &RigSpec, r: &RunReport) -> String {
-    let (a, t, g) = r.zone_counts();
-    serde_json::json!({
-        "rig": spec.to_string(),
-        "parameters": spec.parameter_count(),
-        "samples": r.fitted.rig.samples.len(),
-        "rel_rmse": r.stats.rel_rmse,
-        "max_error_grey_levels": r.stats.max_grey,
-        "lights": {"analytic": a, "transition": t, "rig": g},
-        "ns_per_frame": r.ns_per_frame.round() as u64,
-    })
-    .to_string()
-}
-
-fn kind_name(p: &ProbeSource) -> &'static str {
-    match p.predictor() {
-        Predictor::Cloud(_) => "cloud",
-        Predictor::Volume(..) => "volume",
-    }
-}
-
 /// Runs `probekit rig`.
 pub fn run(a: RigArgs) -> anyhow::Result<()> {
     super::util::check_outputs(&[a.out.as_deref(), a.render.as_deref()])?;
@@ -118,11 +93,15 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         RigSetupError::Scene(_) | RigSetupError::UnknownBuiltin(_) => anyhow!("{e}"),
         e => anyhow!("{}: {e}", a.mesh),
     })?;
+    let file = a
+        .probes
+        .as_deref()
+        .map(super::util::load_probes)
+        .transpose()?;
     let lights = match &a.scene {
         Some(s) => {
             let l = load_lights(s)?;
-            if let (Some(p), Some(hash)) = (&a.probes, &l.lighting_hash) {
-                let file = super::util::load_probes(p)?;
+            if let (Some(p), Some(file), Some(hash)) = (&a.probes, &file, &l.lighting_hash) {
                 let name = p.display().to_string();
                 if let Err(e) = probekit::format::check_scene_hash(&file.metadata, &name, hash, s) {
                     if !a.allow_other_scene {
@@ -139,24 +118,16 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         None if a.probes.is_some() => Vec::new(),
         None => return Err(anyhow!("rig needs --scene, --probes or both")),
     };
-    let name = a.interp.as_deref().unwrap_or("trilinear");
-    let interp = Interp::from_name(name).ok_or_else(|| {
-        anyhow!("--interp {name}: expected trilinear, taylor, tricubic, idw or leaf-trilinear")
-    })?;
-    let probes = match &a.probes {
-        Some(p) => {
-            let source = ProbeSource::load(p)?;
-            if let (Some(i), true) = (&a.interp, source.is_cloud()) {
-                return Err(super::util::interp_on_cloud(i))
-                    .with_context(|| p.display().to_string());
-            }
-            Some(
-                source
-                    .with_interp(interp)
-                    .map_err(|e| anyhow!("{}: {e}", p.display()))?,
-            )
+    let probes = match (&a.probes, &file) {
+        (Some(p), Some(file)) => {
+            let options = QueryOptions::parse(a.interp.as_deref(), &[], &[])?;
+            let options = options
+                .load_options(file.kind)
+                .with_context(|| p.display().to_string())?;
+            let source = ProbeSource::from_file(file, options);
+            Some(source.map_err(|e| anyhow!("{}: {e}", p.display()))?)
         }
-        None => None,
+        _ => None,
     };
     if let Some(w) = a.white {
         if !(w > 0.0 && w.is_finite()) {
@@ -175,65 +146,13 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
     };
     let report = run_rig(&mesh, &a.mesh, &lights, probes.as_ref(), &cfg, true)
         .with_context(|| a.mesh.clone())?;
+    let path = a.probes.as_ref().map(|p| p.display().to_string());
+    let baked = path.as_deref().zip(probes.as_ref());
+    let printed = RigReport::new(&spec, &a.mesh, &mesh, at, &lights, baked, &report);
     if a.json {
-        println!("{}", json(&spec, &report));
+        println!("{}", serde_json::to_value(&printed)?);
     } else {
-        let (an, tr, rg) = report.zone_counts();
-        println!(
-            "rig {spec} on {} at {at}: {} SH vectors, {} samples",
-            a.mesh,
-            spec.parameter_count(),
-            report.fitted.rig.samples.len()
-        );
-        println!(
-            "  lights: {an} analytic, {tr} transition, {rg} rig (of {})",
-            lights.len()
-        );
-        if let (Some(p), Some(src)) = (&a.probes, &probes) {
-            println!(
-                "  baked {} {} (order {}) through the rig",
-                kind_name(src),
-                p.display(),
-                src.order()
-            );
-        }
-        println!(
-            "  per-vertex error vs exact: rel RMSE {:.4}, max {:.2} grey levels (white {:.4})",
-            report.stats.rel_rmse, report.stats.max_grey, report.stats.l_white
-        );
-        println!(
-            "  spatial error vs per-vertex SH of the same lights: rel RMSE {:.4}, max {:.2} grey levels",
-            report.stats_vs_sh.rel_rmse, report.stats_vs_sh.max_grey
-        );
-        if !report.thresholds.is_empty() {
-            let t: Vec<String> = report
-                .fitted
-                .rig
-                .transitions
-                .iter()
-                .map(|t| format!("{:.2}:{:.3}", t.distance, t.error))
-                .collect();
-            println!(
-                "  error table (distance/R : grey levels, unitized light): {}",
-                t.join(" ")
-            );
-            let (c, r) = mesh.bounding_sphere();
-            for (i, (l, th)) in lights.iter().zip(&report.thresholds).enumerate() {
-                let x = l
-                    .position()
-                    .map_or(f32::INFINITY, |p| p.distance(c + at) / r);
-                println!(
-                    "  light {i}: at {x:.2} R, transition at {th:.2} R, {:?}",
-                    report.zones[i]
-                );
-            }
-        }
-        println!(
-            "  frame: {:.0} ns (rig update + per-vertex), brute-force analytic {:.0} ns, ratio {:.2}",
-            report.ns_per_frame,
-            report.ns_brute_force,
-            report.ns_brute_force / report.ns_per_frame.max(1.0)
-        );
+        print!("{printed}");
     }
     if let Some(out) = &a.out {
         let bytes = probekit::rig::fit::rig_file(std::slice::from_ref(&report.fitted))
@@ -242,74 +161,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         std::fs::write(out, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", out.display()))?;
     }
     if let Some(out) = &a.render {
-        render(out, &mesh, &lights, probes.as_ref(), &cfg, &report)?;
+        comparison_pictures(out, &mesh, &lights, probes.as_ref(), &cfg, &report)?;
     }
-    Ok(())
-}
-
-fn render(
-    out: &Path,
-    mesh: &probekit::rig::mesh::Mesh,
-    lights: &[probekit::lights::Light],
-    probes: Option<&ProbeSource>,
-    cfg: &RunConfig,
-    report: &RunReport,
-) -> anyhow::Result<()> {
-    let mut specs: Vec<RigSpec> = [
-        "constant",
-        "gradient",
-        "lattice:2x2x3",
-        "lattice:3x2x2",
-        "mixed:l3,g,c",
-        "lattice:8x4x2",
-    ]
-    .iter()
-    .map(|s| s.parse().expect("built-in spec"))
-    .collect();
-    if !specs.contains(&cfg.spec) {
-        specs.push(cfg.spec);
-    }
-    let l_white = report.stats.l_white;
-    let mut runs = Vec::new();
-    for s in &specs {
-        // Rigs are compared with each other with every light in the rig.
-        let c = RunConfig {
-            spec: *s,
-            split: false,
-            ..cfg.clone()
-        };
-        runs.push((s, run_rig(mesh, "mesh", lights, probes, &c, false)?));
-    }
-    let grey = |r: &RunReport| -> Vec<f32> {
-        r.approx
-            .iter()
-            .zip(&r.exact)
-            .map(|(x, e)| 255.0 * (*x - *e).abs().max_element() / std::f32::consts::PI / l_white)
-            .collect()
-    };
-    let mut cols: Vec<Column> = runs
-        .iter()
-        .map(|(s, r)| Column {
-            name: s.to_string(),
-            irradiance: &r.approx,
-            error_grey: Some(grey(r)),
-        })
-        .collect();
-    cols.push(Column {
-        name: "exact".into(),
-        irradiance: &report.exact,
-        error_grey: None,
-    });
-    comparison_figure(out, mesh, &cols, l_white, 64.0)?;
-    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("rig");
-    let zones_path = out.with_file_name(format!("{stem}_zones.png"));
-    let world = mesh.translated(cfg.at);
-    // Directional lights have no position to draw.
-    let lw: Vec<(Vec3, f32)> = lights
-        .iter()
-        .zip(&report.zones)
-        .filter_map(|(l, z)| Some((l.position()?, z.rig_weight())))
-        .collect();
-    zones_figure(&zones_path, &world, &report.approx, l_white, &lw)?;
     Ok(())
 }

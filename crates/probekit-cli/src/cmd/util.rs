@@ -43,11 +43,16 @@ pub fn read_csv(path: &Path, cols: usize) -> Result<Vec<Vec<f32>>> {
     Ok(rows)
 }
 
+/// Comma-separated finite numbers; `None` if one is not.
+pub fn finite_list(s: &str) -> Option<Vec<f32>> {
+    let v: Vec<f32> = (s.split(',').map(|f| f.trim().parse().ok())).collect::<Option<_>>()?;
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
 /// Parses `x,y,z` (finite).
 pub fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
-    let v: Result<Vec<f32>, _> = s.split(',').map(|f| f.trim().parse::<f32>()).collect();
-    match v {
-        Ok(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => Ok(Vec3::new(v[0], v[1], v[2])),
+    match finite_list(s) {
+        Some(v) if v.len() == 3 => Ok(Vec3::new(v[0], v[1], v[2])),
         _ => bail!("{what} {s}: expected three finite numbers x,y,z"),
     }
 }
@@ -118,28 +123,6 @@ pub fn check_outputs(paths: &[Option<&Path>]) -> Result<()> {
     Ok(())
 }
 
-/// The first flag of `flags` (`(given, flag)`, in order) that was given on
-/// the command line, if any: the one to name when a set of flags does not
-/// apply.
-pub fn first_given<'a>(flags: impl IntoIterator<Item = (bool, &'a str)>) -> Option<&'a str> {
-    flags
-        .into_iter()
-        .find_map(|(given, flag)| given.then_some(flag))
-}
-
-/// The error for a flag of the cloud's blend given with a volume file.
-pub fn cloud_flag_on_volume(flag: &str) -> anyhow::Error {
-    anyhow!("{flag} applies to probe clouds; this file is an irradiance volume")
-}
-
-/// The error for a volume's `--interp` given with a probe cloud.
-pub fn interp_on_cloud(interp: &str) -> anyhow::Error {
-    anyhow!(
-        "--interp {interp} applies to irradiance volumes; this file is a probe cloud (it \
-         interpolates by its tetrahedra)"
-    )
-}
-
 /// Loads a `.probes` file.
 pub fn load_probes(path: &Path) -> Result<ProbeFile> {
     ProbeFile::load(path).with_context(|| path.display().to_string())
@@ -148,45 +131,6 @@ pub fn load_probes(path: &Path) -> Result<ProbeFile> {
 /// `[r, g, b]` for JSON.
 pub fn rgb(v: Vec3) -> [f32; 3] {
     v.to_array()
-}
-
-/// `--interp` of volume files: `trilinear` (the default, `None`), `taylor`
-/// or `tricubic`. A probe cloud (a file with tetrahedra) interpolates by its
-/// tetrahedra, so `--interp` given with one is an error rather than ignored.
-pub fn parse_interp(file: &ProbeFile, s: Option<&str>) -> Result<probekit_runtime::Interp> {
-    use probekit_runtime::Interp;
-    if let (Some(s), Some(_)) = (s, &file.tetrahedra) {
-        return Err(interp_on_cloud(s));
-    }
-    Ok(match s.unwrap_or("trilinear") {
-        "trilinear" => Interp::Trilinear,
-        "taylor" => Interp::Taylor,
-        "tricubic" => Interp::Tricubic,
-        o => bail!("--interp {o}: expected trilinear, taylor or tricubic"),
-    })
-}
-
-/// Checks a `--brightness-weight` value: the range
-/// `ProbeCloud::set_brightness_weighting` accepts (NaN refused), so a bad
-/// value fails before any work, for volumes too.
-pub fn check_brightness_weight(a: f32) -> Result<()> {
-    check_exponent("--brightness-weight", a)
-}
-
-/// Checks a `--directional-brightness` value, as
-/// [`check_brightness_weight`].
-pub fn check_directional_brightness(g: f32) -> Result<()> {
-    check_exponent("--directional-brightness", g)
-}
-
-/// Checks that `flag`'s value `x` lies in
-/// `0..=`[`probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT`].
-pub fn check_exponent(flag: &str, x: f32) -> Result<()> {
-    let max = probekit_runtime::cloud::MAX_BRIGHTNESS_EXPONENT;
-    if !(0.0..=max).contains(&x) {
-        bail!("{flag} {x}: expected 0 to {max}");
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -132,14 +132,16 @@ struct DirectionalData {
     reciprocal_luminance: Vec<[Vec4; 3]>,
 }
 
-/// The range a fitted probe weight ([`ProbeCloud::set_probe_weights`], the
+/// The range a fitted probe weight ([`ProbeCloud::probe_weights`], the
 /// file's `PWGT` section) must lie in: positive, finite, and far enough from
 /// 0 and infinity that four of them times the other factors neither
 /// underflow nor overflow an `f32` sum.
 pub const PROBE_WEIGHT_RANGE: core::ops::RangeInclusive<f32> = 1e-6..=1e6;
 
-/// Largest brightness exponent [`ProbeCloud::set_brightness_weighting`]
-/// accepts.
+/// Largest brightness exponent a cloud blends with
+/// ([`ProbeCloud::brightness_weighting`] and
+/// [`ProbeCloud::directional_brightness`]; a file or a load override
+/// beyond it is refused).
 pub const MAX_BRIGHTNESS_EXPONENT: f32 = 4.0;
 
 /// The share of a point's barycentric weight that cell visibility must
@@ -239,22 +241,24 @@ impl ProbeCloud {
         })
     }
 
-    /// Attaches (or with `None` removes) per-probe visibility maps; they
-    /// must cover exactly the cloud's probes.
-    pub fn set_visibility_maps(
-        &mut self,
-        maps: Option<VisibilityMaps>,
-    ) -> Result<(), ProbeCloudError> {
-        if let Some(m) = &maps {
-            if m.probe_count() != self.probe_count() {
-                return Err(ProbeCloudError::VisibilityMismatch {
-                    maps: m.probe_count(),
-                    probes: self.probe_count(),
-                });
+    baker_only! {
+        /// Attaches (or with `None` removes) per-probe visibility maps; they
+        /// must cover exactly the cloud's probes.
+        fn set_visibility_maps(
+            &mut self,
+            maps: Option<VisibilityMaps>,
+        ) -> Result<(), ProbeCloudError> {
+            if let Some(m) = &maps {
+                if m.probe_count() != self.probe_count() {
+                    return Err(ProbeCloudError::VisibilityMismatch {
+                        maps: m.probe_count(),
+                        probes: self.probe_count(),
+                    });
+                }
             }
+            self.visibility = maps;
+            Ok(())
         }
-        self.visibility = maps;
-        Ok(())
     }
 
     /// The visibility maps, if the cloud has them (whether or not weighting
@@ -263,15 +267,19 @@ impl ProbeCloud {
         self.visibility.as_ref()
     }
 
-    /// The visibility maps, writable (to tune bias, sharpness, variance).
-    pub fn visibility_maps_mut(&mut self) -> Option<&mut VisibilityMaps> {
-        self.visibility.as_mut()
+    baker_only! {
+        /// The visibility maps, writable (to tune bias, sharpness, variance).
+        fn visibility_maps_mut(&mut self) -> Option<&mut VisibilityMaps> {
+            self.visibility.as_mut()
+        }
     }
 
-    /// Switches visibility weighting on (the default) or off for every
-    /// query; without maps it has no effect.
-    pub fn set_visibility(&mut self, on: bool) {
-        self.visibility_on = on;
+    baker_only! {
+        /// Switches visibility weighting on (the default) or off for every
+        /// query; without maps it has no effect.
+        fn set_visibility(&mut self, on: bool) {
+            self.visibility_on = on;
+        }
     }
 
     /// True when queries apply visibility weighting (maps present and on).
@@ -279,27 +287,29 @@ impl ProbeCloud {
         self.visibility_on && self.visibility.is_some()
     }
 
-    /// Attaches (or with `None` removes) per-cell visibility bits
-    /// ([`super::cell_visibility`]); they must cover exactly the mesh's
-    /// tetrahedra and hull faces, in its order.
-    pub fn set_cell_visibility_bits(
-        &mut self,
-        cells: Option<CellVisibility>,
-    ) -> Result<(), ProbeCloudError> {
-        if let Some(c) = &cells {
-            if c.tet_count() != self.mesh.tets().len()
-                || c.hull_face_count() != self.mesh.hull_face_count()
-            {
-                return Err(ProbeCloudError::CellVisibilityMismatch {
-                    tets: c.tet_count(),
-                    hull_faces: c.hull_face_count(),
-                    mesh_tets: self.mesh.tets().len(),
-                    mesh_hull_faces: self.mesh.hull_face_count(),
-                });
+    baker_only! {
+        /// Attaches (or with `None` removes) per-cell visibility bits
+        /// ([`super::cell_visibility`]); they must cover exactly the mesh's
+        /// tetrahedra and hull faces, in its order.
+        fn set_cell_visibility_bits(
+            &mut self,
+            cells: Option<CellVisibility>,
+        ) -> Result<(), ProbeCloudError> {
+            if let Some(c) = &cells {
+                if c.tet_count() != self.mesh.tets().len()
+                    || c.hull_face_count() != self.mesh.hull_face_count()
+                {
+                    return Err(ProbeCloudError::CellVisibilityMismatch {
+                        tets: c.tet_count(),
+                        hull_faces: c.hull_face_count(),
+                        mesh_tets: self.mesh.tets().len(),
+                        mesh_hull_faces: self.mesh.hull_face_count(),
+                    });
+                }
             }
+            self.cells = cells;
+            Ok(())
         }
-        self.cells = cells;
-        Ok(())
     }
 
     /// The cell visibility bits, if the cloud has them (whether or not
@@ -308,22 +318,24 @@ impl ProbeCloud {
         self.cells.as_ref()
     }
 
-    /// Attaches (or with `None` removes) occluder planes
-    /// ([`super::cell_visibility::CellPlanes`]): in a tetrahedron with a
-    /// plane, cell visibility is the plane's side test in place of the
-    /// interpolated bits. They must be for exactly the mesh's tetrahedra.
-    /// Like the bits, they apply while cell-visibility weighting is on.
-    pub fn set_cell_planes(&mut self, planes: Option<CellPlanes>) -> Result<(), ProbeCloudError> {
-        if let Some(p) = &planes {
-            if p.tet_count() != self.mesh.tets().len() {
-                return Err(ProbeCloudError::CellPlanesMismatch {
-                    tets: p.tet_count(),
-                    mesh_tets: self.mesh.tets().len(),
-                });
+    baker_only! {
+        /// Attaches (or with `None` removes) occluder planes
+        /// ([`super::cell_visibility::CellPlanes`]): in a tetrahedron with a
+        /// plane, cell visibility is the plane's side test in place of the
+        /// interpolated bits. They must be for exactly the mesh's tetrahedra.
+        /// Like the bits, they apply while cell-visibility weighting is on.
+        fn set_cell_planes(&mut self, planes: Option<CellPlanes>) -> Result<(), ProbeCloudError> {
+            if let Some(p) = &planes {
+                if p.tet_count() != self.mesh.tets().len() {
+                    return Err(ProbeCloudError::CellPlanesMismatch {
+                        tets: p.tet_count(),
+                        mesh_tets: self.mesh.tets().len(),
+                    });
+                }
             }
+            self.planes = planes.map(Box::new);
+            Ok(())
         }
-        self.planes = planes.map(Box::new);
-        Ok(())
     }
 
     /// The occluder planes, if the cloud has them.
@@ -331,10 +343,12 @@ impl ProbeCloud {
         self.planes.as_deref()
     }
 
-    /// Switches cell-visibility weighting on (the default) or off; without
-    /// bits or planes it has no effect. Independent of [`ProbeCloud::set_visibility`].
-    pub fn set_cell_visibility(&mut self, on: bool) {
-        self.cells_on = on;
+    baker_only! {
+        /// Switches cell-visibility weighting on (the default) or off; without
+        /// bits or planes it has no effect. Independent of [`ProbeCloud::set_visibility`].
+        fn set_cell_visibility(&mut self, on: bool) {
+            self.cells_on = on;
+        }
     }
 
     /// True when queries apply cell-visibility weighting (bits or planes
@@ -343,11 +357,13 @@ impl ProbeCloud {
         self.cells_on && (self.cells.is_some() || self.planes.is_some())
     }
 
-    /// Sets the distance bias of the visibility test in metres (default
-    /// [`super::visibility::DEFAULT_VISIBILITY_BIAS`]); no effect without maps.
-    pub fn set_visibility_bias(&mut self, bias: f32) {
-        if let Some(m) = &mut self.visibility {
-            m.set_bias(bias);
+    baker_only! {
+        /// Sets the distance bias of the visibility test in metres (default
+        /// [`super::visibility::DEFAULT_VISIBILITY_BIAS`]); no effect without maps.
+        fn set_visibility_bias(&mut self, bias: f32) {
+            if let Some(m) = &mut self.visibility {
+                m.set_bias(bias);
+            }
         }
     }
 
@@ -371,13 +387,15 @@ impl ProbeCloud {
         self.mesh.positions().len()
     }
 
-    /// Every probe's radiance SH (`order²` per probe, probe after probe),
-    /// writable: an engine relights a loaded cloud in place with
-    /// [`crate::format::Relighter::relight_into`], no allocation. The blend
-    /// weights do not change (the brightness weighting keeps the baked
-    /// light's `Ē_i`), so the relit irradiance is linear in the group scales.
-    pub fn coefficients_mut(&mut self) -> &mut [Vec3] {
-        &mut self.coeffs
+    baker_only! {
+        /// Every probe's radiance SH (`order²` per probe, probe after probe),
+        /// writable: an engine relights a loaded cloud in place with
+        /// [`crate::format::Relighter::relight_into`], no allocation. The blend
+        /// weights do not change (the brightness weighting keeps the baked
+        /// light's `Ē_i`), so the relit irradiance is linear in the group scales.
+        fn coefficients_mut(&mut self) -> &mut [Vec3] {
+            &mut self.coeffs
+        }
     }
 
     /// The radiance SH of probe `i` (`order²` coefficients).
@@ -390,7 +408,7 @@ impl ProbeCloud {
     /// `min(out.len(), order²)` coefficients; the rest is zeroed): the blend
     /// of [`ProbeCloud::weights_at`] (visibility-weighted when on), done per
     /// direction for bands ≤ 2 when directional brightness is on
-    /// ([`ProbeCloud::set_directional_brightness`]). No allocation.
+    /// ([`ProbeCloud::directional_brightness`]). No allocation.
     pub fn sh_at(&self, p: Vec3, state: &mut WalkState, out: &mut [Vec3]) {
         let (_, probes, weights) = self.blend_at(p, state);
         self.blend_sh(&probes, &weights, out);

@@ -55,6 +55,10 @@ pub const DEFAULT_VISIBILITY_BIAS: f32 = 0.05;
 /// Default sharpening exponent `k` of the Chebyshev bound (DDGI cubes it).
 pub const DEFAULT_VISIBILITY_SHARPNESS: u32 = 3;
 
+/// Largest sharpening exponent ([`VisibilityMaps::set_sharpness`] clamps
+/// to it; a load refuses a larger `BlendOverrides::visibility_sharpness`).
+pub(crate) const MAX_SHARPNESS: u32 = 16;
+
 /// Smallest variance `σ²_min` used by the Chebyshev test, in m² (1 cm
 /// standard deviation): a texel seeing one flat wall head-on has `μ2 = μ²`
 /// up to rounding, and a zero variance would make the test a hard step.
@@ -148,10 +152,12 @@ impl VisibilityMaps {
         self.bias
     }
 
-    /// Sets the distance bias (metres; non-finite values are ignored).
-    pub fn set_bias(&mut self, bias: f32) {
-        if bias.is_finite() {
-            self.bias = bias;
+    baker_only! {
+        /// Sets the distance bias (metres; non-finite values are ignored).
+        fn set_bias(&mut self, bias: f32) {
+            if bias.is_finite() {
+                self.bias = bias;
+            }
         }
     }
 
@@ -160,9 +166,11 @@ impl VisibilityMaps {
         self.sharpness
     }
 
-    /// Sets the sharpening exponent (clamped to `0..=16`; 0 disables the test).
-    pub fn set_sharpness(&mut self, k: u32) {
-        self.sharpness = k.min(16);
+    baker_only! {
+        /// Sets the sharpening exponent (clamped to `0..=16`; 0 disables the test).
+        fn set_sharpness(&mut self, k: u32) {
+            self.sharpness = k.min(MAX_SHARPNESS);
+        }
     }
 
     /// Minimum variance `σ²_min` of the test, m² ([`MIN_VISIBILITY_VARIANCE`]).
@@ -170,11 +178,13 @@ impl VisibilityMaps {
         self.min_variance
     }
 
-    /// Sets the minimum variance `σ²_min` (m²; non-finite or negative values
-    /// are ignored).
-    pub fn set_min_variance(&mut self, v: f32) {
-        if v.is_finite() && v >= 0.0 {
-            self.min_variance = v;
+    baker_only! {
+        /// Sets the minimum variance `σ²_min` (m²; non-finite or negative values
+        /// are ignored).
+        fn set_min_variance(&mut self, v: f32) {
+            if v.is_finite() && v >= 0.0 {
+                self.min_variance = v;
+            }
         }
     }
 

@@ -172,7 +172,7 @@ impl SectionId {
     /// writes this form; a file holds at most one of `CVIS` and `CVSP`.
     pub const CELL_VISIBILITY_SPARSE: Self = Self::from_fourcc(*b"CVSP");
     /// Fitted per-probe blend weights of a cloud, one `f32` per probe
-    /// (format 1.6; [`crate::cloud::ProbeCloud::set_probe_weights`]).
+    /// (format 1.6; [`crate::cloud::ProbeCloud::probe_weights`]).
     pub const PROBE_WEIGHTS: Self = Self::from_fourcc(*b"PWGT");
     /// Occluder planes of some tetrahedra of a cloud, refining its cell
     /// visibility where one flat wall cuts the cell: the mesh's tetrahedron

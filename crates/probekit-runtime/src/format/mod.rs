@@ -398,10 +398,10 @@ pub struct ProbeFile {
     /// Fitted per-probe blend weights of a cloud (`PWGT`, format 1.6; one
     /// per probe, each in [`crate::cloud::PROBE_WEIGHT_RANGE`]; `None`: no
     /// section, every probe weighs 1). See
-    /// [`crate::cloud::ProbeCloud::set_probe_weights`].
+    /// [`crate::cloud::ProbeCloud::probe_weights`].
     pub probe_weights: Option<Vec<f32>>,
     /// Brightness exponent `α` the probe weights were fitted with and the
-    /// cloud blends with ([`crate::cloud::ProbeCloud::set_brightness_weighting`]),
+    /// cloud blends with ([`crate::cloud::ProbeCloud::brightness_weighting`]),
     /// stored in `PWGT`'s header word `w1` as `f32` bits (format 1.8; a
     /// 1.6/1.7 file's zero reads as 0, the plain blend). In
     /// `0..=`[`crate::cloud::MAX_BRIGHTNESS_EXPONENT`]; non-zero only with
@@ -409,7 +409,7 @@ pub struct ProbeFile {
     pub brightness_exponent: f32,
     /// Directional brightness exponent `γ` the cloud blends with on top of
     /// the probe weights
-    /// ([`crate::cloud::ProbeCloud::set_directional_brightness`]), stored in
+    /// ([`crate::cloud::ProbeCloud::directional_brightness`]), stored in
     /// `PWGT`'s header word `w2` as `f32` bits (format 1.9,
     /// [`layout::MINOR_DIRECTIONAL`]; older files read 0, no directional
     /// blend). Same range and rule as `brightness_exponent`.

@@ -36,6 +36,9 @@ pub enum LoadError {
     /// [`crate::BlendOverrides::visibility_bias`] is not finite.
     #[error("visibility bias {0}: expected a finite distance in metres")]
     VisibilityBias(f32),
+    /// [`crate::BlendOverrides::visibility_sharpness`] is above 16.
+    #[error("visibility sharpness {0}: expected 0 to 16")]
+    VisibilitySharpness(u32),
 }
 
 /// Why a query was refused. Queries never panic; every bad input is one of

@@ -9,9 +9,9 @@ pub use error::{LoadError, QueryError};
 pub use options::{BlendOverrides, LoadOptions};
 pub use query::{Cell, Query};
 
+use crate::cloud::visibility::MAX_SHARPNESS;
 use crate::cloud::{ProbeCloud, WalkState};
-use crate::format::Rig;
-use crate::format::{L1Mode, ProbeFile, ProbeFileKind};
+use crate::format::{FormatError, L1Mode, ProbeFile, ProbeFileKind, Relighter, Rig};
 use crate::prelude::*;
 use crate::rig::{RigState, SphereTable, SplitRig};
 use crate::volume::{Interp, Volume, VolumeError};
@@ -264,6 +264,28 @@ impl Probes {
         Ok(())
     }
 
+    /// Radiance SH at `position` with every stored band, for the baker and
+    /// tools (feature `write`): the first `min(out.len(), order²)`
+    /// coefficients of the file's order, the rest of `out` zeroed; no L1
+    /// hallucination ([`Probes::sh_at`] gives an engine bands 0–2).
+    #[cfg(feature = "write")]
+    pub fn sh_all_bands_at(
+        &self,
+        state: &mut ObjectState,
+        position: Vec3,
+        out: &mut [Vec3],
+    ) -> Result<(), QueryError> {
+        self.has_probes()?;
+        query::check_position(position, 0)?;
+        let k = (self.order * self.order) as usize;
+        let mut buf = [Vec3::ZERO; MAX_COEFFS];
+        self.sample(state, position, &mut buf[..k])?;
+        let m = out.len().min(k);
+        out[..m].copy_from_slice(&buf[..m]);
+        out[m..].fill(Vec3::ZERO);
+        Ok(())
+    }
+
     /// [`Probes::sh_at`] with what produced it: the cell the point was
     /// found in and the probes and weights of the blend (see [`Query`]).
     pub fn query(&self, state: &mut ObjectState, position: Vec3) -> Result<Query, QueryError> {
@@ -298,6 +320,31 @@ impl Probes {
             probes,
             weights,
         })
+    }
+
+    /// Relights the probes in place for new light-group scales (one RGB
+    /// scale per group of `relighter`, in its order: [`Relighter::scales_for`]
+    /// turns names into them), as [`Relighter::relight_into`] computes them.
+    /// `relighter` is built once from the same file ([`Relighter::new`]).
+    /// A cloud keeps the blend of its baked light (its brightness
+    /// weightings read the probes' brightness as loaded), so the relit
+    /// irradiance is linear in the scales; a volume's gradients stay the
+    /// baked ones. Errors (nothing changed): a relighter of another order
+    /// or probe count, a scale count that is not the group count, a scale
+    /// that is not finite. No allocation; a rigs-only file has nothing to
+    /// relight.
+    pub fn relight(&mut self, relighter: &Relighter, scales: &[Vec3]) -> Result<(), FormatError> {
+        if relighter.order() != self.order {
+            return Err(FormatError::Unrepresentable(
+                "the relighter's SH order differs from the file's",
+            ));
+        }
+        let coeffs: &mut [Vec3] = match &mut self.source {
+            Source::Cloud(c) => c.coefficients_mut(),
+            Source::Volume(v, _) => v.coefficients_mut(),
+            Source::None => &mut [],
+        };
+        relighter.relight_into(scales, coeffs)
     }
 
     /// Number of rigs in the file.
@@ -455,6 +502,14 @@ fn cloud_with(file: &ProbeFile, options: &LoadOptions) -> Result<ProbeCloud, Loa
             return Err(LoadError::VisibilityBias(bias));
         }
         cloud.set_visibility_bias(bias);
+    }
+    if let Some(k) = b.visibility_sharpness {
+        if k > MAX_SHARPNESS {
+            return Err(LoadError::VisibilitySharpness(k));
+        }
+        if let Some(maps) = cloud.visibility_maps_mut() {
+            maps.set_sharpness(k);
+        }
     }
     Ok(cloud)
 }

@@ -65,4 +65,8 @@ pub struct BlendOverrides {
     /// Distance bias of the Chebyshev test in metres (finite): default
     /// [`crate::cloud::visibility::DEFAULT_VISIBILITY_BIAS`].
     pub visibility_bias: Option<f32>,
+    /// Sharpening exponent of the Chebyshev test, 0 to 16 (0: the test
+    /// passes every probe): default
+    /// [`crate::cloud::visibility::DEFAULT_VISIBILITY_SHARPNESS`].
+    pub visibility_sharpness: Option<u32>,
 }

@@ -4,7 +4,8 @@
 //! 1 cm of a surface) with random unit normals
 //! ([`sample_points`](crate::trace::free_space::sample_points)), compute
 //! reference irradiance with [`Baker::reference_irradiance`], and compare an
-//! interpolation (a baked file through [`crate::query::Predictor`]).
+//! interpolation (a baked file loaded as the runtime's
+//! [`Probes`], queried by [`predict`]).
 //! Placement comparisons and budget sweeps are [`crate::pipeline::sweep`].
 //!
 //! Metrics (RGB irradiance `E`, not divided by π):
@@ -34,8 +35,18 @@ use crate::scene::Region;
 use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
 use probekit_runtime::cloud::{TetMesh, WalkState};
+use probekit_runtime::{Probes, QueryError};
 use probekit_sh::ShRgb;
 pub use report::{evaluate, BlendProbe, EvalReport, RegionReport, WorstReport};
+
+/// The irradiance of `probes` at every point for its normal, in order,
+/// through the runtime's batched query (one `ObjectState` for the batch):
+/// what an engine shows there.
+pub fn predict(probes: &Probes, points: &[EvalPoint]) -> Result<Vec<Vec3>, QueryError> {
+    let pairs: Vec<(Vec3, Vec3)> = points.iter().map(|p| (p.position, p.normal)).collect();
+    let e = crate::query::irradiance_at(probes, &pairs)?;
+    Ok(e.into_iter().map(Vec3::from_array).collect())
+}
 
 /// Reference irradiance at each point (index = row number).
 pub fn reference(

@@ -4,12 +4,13 @@ use super::{
     leaks_at, mean_luminance, metrics, region_leaks_at, region_metrics, unlit_points, worst_points,
     Metrics,
 };
-use crate::query::Predictor;
+use crate::query::{blends_hidden_probes, outside_hull};
 use crate::scene::Scene;
 use crate::trace::free_space::EvalPoint;
 use crate::trace::Tracer;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
+use probekit_runtime::Probes;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -27,10 +28,10 @@ pub struct EvalReport {
     /// Leaks among them.
     pub leaks_unlit: usize,
     /// Clouds: leaks whose blend reaches a probe that geometry hides from
-    /// the point ([`Predictor::blends_hidden_probes`]).
+    /// the point ([`blends_hidden_probes`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub leaks_through_geometry: Option<usize>,
-    /// Clouds: points beyond the probes' hull ([`Predictor::outside_hull`]).
+    /// Clouds: points beyond the probes' hull ([`outside_hull`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub points_outside_hull: Option<usize>,
     /// Clouds: leaks among them.
@@ -92,25 +93,24 @@ pub struct BlendProbe {
     pub irradiance: [f32; 3],
 }
 
-/// The report of `pred`, `predictor`'s irradiance at `pts`, against `truth`
-/// over `scene`'s regions, with segment tests by `tracer` for the leaks
-/// through geometry, and the `worst` worst points (0: none). `probes` is
-/// the evaluated file's probe count.
-#[allow(clippy::too_many_arguments)]
+/// The report of `pred`, the irradiance of `probes` at `pts`
+/// ([`predict`](super::predict)), against `truth` over `scene`'s regions,
+/// with segment tests by `tracer` for the leaks through geometry (clouds),
+/// and the `worst` worst points (0: none).
 pub fn evaluate(
     scene: &Scene,
     pts: &[EvalPoint],
     pred: &[Vec3],
     truth: &[Vec3],
     tracer: &Tracer,
-    probes: usize,
     worst: usize,
-    predictor: &Predictor,
+    probes: &Probes,
 ) -> EvalReport {
     let mean = mean_luminance(truth);
     let (unlit, leaks_unlit) = unlit_points(pred, truth, mean);
-    let hidden = predictor.blends_hidden_probes(tracer, pts);
-    let outside = predictor.outside_hull(pts);
+    let cloud = probes.cloud();
+    let hidden = cloud.map(|c| blends_hidden_probes(c, tracer, pts));
+    let outside = cloud.map(|c| outside_hull(c, pts));
     let per_region =
         |flags: &[bool]| region_leaks_at(&scene.regions, pts, pred, truth, mean, flags);
     let through = hidden.as_deref().map(per_region);
@@ -131,8 +131,8 @@ pub fn evaluate(
         .into_iter()
         .map(|w| {
             let p = &pts[w.index];
-            let blend = match predictor {
-                Predictor::Cloud(c) => {
+            let blend = match cloud {
+                Some(c) => {
                     let (idx, wt) = c.weights_at(p.position, &mut WalkState::new());
                     Some(
                         (0..4)
@@ -150,7 +150,7 @@ pub fn evaluate(
                             .collect(),
                     )
                 }
-                _ => None,
+                None => None,
             };
             WorstReport {
                 position: p.position.to_array(),
@@ -167,7 +167,7 @@ pub fn evaluate(
         .collect();
     EvalReport {
         metrics: metrics(pred, truth, mean),
-        probes,
+        probes: probes.probe_count(),
         unlit_points: unlit,
         leaks_unlit,
         leaks_through_geometry: hidden.as_deref().map(|h| leaks_at(pred, truth, mean, h)),

@@ -2,7 +2,7 @@ use super::*;
 use crate::capture::{Baker, CaptureSettings, ReferenceSettings};
 use crate::delaunay::tetrahedralize;
 use crate::placement::{grid_points, place, LightShells, PlacementMethod};
-use crate::query::Predictor;
+use crate::query::{blends_hidden_probes, outside_hull};
 use crate::scene::{Aabb, Scene};
 use crate::trace::free_space::*;
 use crate::trace::Tracer;
@@ -307,9 +307,7 @@ fn leaks_through_geometry_are_the_leaks_whose_blend_reaches_behind_a_wall() {
             normal: Vec3::Y,
         })
         .collect();
-    let flags = Predictor::Cloud(cloud)
-        .blends_hidden_probes(&tracer, &pts)
-        .unwrap();
+    let flags = blends_hidden_probes(&cloud, &tracer, &pts);
     let mut ws = probekit_runtime::cloud::WalkState::new();
     let mut across = 0;
     for (p, &f) in pts.iter().zip(&flags) {
@@ -361,7 +359,7 @@ fn outside_hull_flags_the_points_beyond_a_lattice_of_probes() {
             d > 1e-4
         })
         .collect();
-    let flags = Predictor::Cloud(cloud).outside_hull(&pts).unwrap();
+    let flags = outside_hull(&cloud, &pts);
     let mut outside = 0;
     for (p, &f) in pts.iter().zip(&flags) {
         assert_eq!(f, !hull.contains(p.position), "{:?}", p.position);

@@ -2,9 +2,9 @@
 //!
 //! Each measured configuration goes the way a user's file goes: the
 //! evaluated file's recipe with another placement, baked by [`Bake::run`]
-//! (placement, capture, assembly and blend data), evaluated through the
-//! same [`Predictor`] as `probekit eval` on the same points and ground
-//! truth ([`metrics`]).
+//! (placement, capture, assembly and blend data), evaluated as `probekit
+//! eval` evaluates a file (the runtime's [`Probes`], [`predict`]) on the
+//! same points and ground truth ([`metrics`]).
 //!
 //! A sweep maps a probe budget `B` to each method's own knob
 //! ([`placement_for_budget`]) and reports the probe count each actually
@@ -14,14 +14,13 @@
 //! clustering and leak prevention change the count).
 
 use super::{Bake, PipelineError, Progress};
-use crate::eval::{mean_luminance, metrics, Metrics};
+use crate::eval::{mean_luminance, metrics, predict, Metrics};
 use crate::plot::{line_chart_log, PlotError};
-use crate::query::{PredictError, Predictor};
-use crate::recipe::{Placement, Recipe};
+use crate::recipe::{CellVisibility, Placement, Recipe};
 use crate::scene::Scene;
 use crate::trace::free_space::EvalPoint;
 use glam::Vec3;
-use probekit_runtime::Interp;
+use probekit_runtime::{BlendOverrides, LoadError, LoadOptions, Probes, QueryError};
 use std::path::Path;
 use thiserror::Error;
 
@@ -41,9 +40,12 @@ pub enum SweepError {
     /// The bake failed.
     #[error(transparent)]
     Bake(#[from] PipelineError),
-    /// The cloud could not be evaluated.
+    /// The cloud could not be loaded for queries.
     #[error(transparent)]
-    Predict(#[from] PredictError),
+    Load(#[from] LoadError),
+    /// The cloud could not be queried.
+    #[error(transparent)]
+    Query(#[from] QueryError),
 }
 
 /// The placement `name` configured for about `budget` probes (see the
@@ -104,8 +106,9 @@ impl SweepRow {
 
 /// Runs every method of `methods` at every budget of `budgets`: `recipe`
 /// with that placement, baked over `scene` (named `scene_name`) by the
-/// pipeline, its predictor given the caller's query settings
-/// (`configure`), evaluated on `points` against `truth`. A configuration
+/// pipeline, loaded with the caller's load options (`options`: the blend
+/// overrides of the evaluated file's queries), evaluated on `points`
+/// against `truth`. A configuration
 /// that fails is reported to `on_error(method, budget, error)` and left
 /// out; the rest go on. Rows are in method-then-budget order.
 #[allow(clippy::too_many_arguments)]
@@ -115,7 +118,7 @@ pub fn sweep(
     recipe: &Recipe,
     methods: &[&str],
     budgets: &[usize],
-    configure: &dyn Fn(&mut Predictor),
+    options: &LoadOptions,
     points: &[EvalPoint],
     truth: &[Vec3],
     on_error: &mut dyn FnMut(&str, usize, &SweepError),
@@ -133,9 +136,7 @@ pub fn sweep(
                     ..recipe.clone()
                 };
                 let file = Bake::new(scene, scene_name, &r)?.run(&step)?.file;
-                let mut p = Predictor::from_file(&file, Interp::Trilinear)?;
-                configure(&mut p);
-                let pred = p.predict(points)?;
+                let pred = predict(&Probes::from_file(&file, *options)?, points)?;
                 Ok((
                     r.placement.method(),
                     file.positions.len(),
@@ -154,6 +155,23 @@ pub fn sweep(
         }
     }
     rows
+}
+
+/// Leaves out of `recipe`'s blend data what `overrides` switch off (distance
+/// moments, cell visibility, probe weights), so that a sweep's clouds carry
+/// the blend data the evaluated file's queries use; the overrides
+/// themselves still apply at load ([`sweep`]'s `options`).
+pub fn without_overridden_blend_data(recipe: &mut Recipe, overrides: &BlendOverrides) {
+    let blend = &mut recipe.blend;
+    if overrides.distance_moments == Some(false) {
+        blend.distance_moments = 0;
+    }
+    if overrides.cell_visibility == Some(false) {
+        blend.cell_visibility = CellVisibility::Subdivision(0);
+    }
+    if overrides.probe_weights == Some(false) {
+        blend.probe_weights = false;
+    }
 }
 
 /// Draws `rel_rmse` against probe count, one line per method (in first-seen
@@ -183,7 +201,7 @@ mod tests {
     use crate::capture::{Baker, ReferenceSettings};
     use crate::eval::reference;
     use crate::placement::grid_points;
-    use crate::recipe::{Blend, CellVisibility, Fit};
+    use crate::recipe::{Blend, Fit};
     use crate::scene::demo::box_triangles;
     use crate::scene::{Aabb, Light, LightKind, Material};
     use crate::trace::free_space::{inside_geometry, sample_points};
@@ -250,7 +268,7 @@ mod tests {
             &recipe,
             &SWEEP_METHODS,
             &budgets,
-            &|_| {},
+            &LoadOptions::default(),
             &pts,
             &truth,
             &mut |m, b, e| failures.push(format!("{m} {b}: {e}")),
@@ -304,18 +322,15 @@ mod tests {
             },
             ..Blend::default()
         };
-        let configure = |p: &mut Predictor| {
-            if let Predictor::Cloud(c) = p {
-                c.set_visibility_bias(0.1);
-            }
-        };
+        let mut biased = LoadOptions::default();
+        biased.blend.visibility_bias = Some(0.1);
         let grid = sweep(
             &scene,
             "corner",
             &recipe,
             &["grid"],
             &[32],
-            &configure,
+            &biased,
             &pts,
             &truth,
             &mut |m, b, e| panic!("{m} {b}: {e}"),

@@ -57,9 +57,8 @@ use crate::scene::{Scene, SceneError};
 use glam::Vec3;
 use image::RgbImage;
 use panels::{compose, draw_edge, label_strip, GAP};
-use probekit_runtime::cloud::WalkState;
-use probekit_runtime::ProbeFile;
-use shade::{shade_pixel, Overlay, Px, Sky, Source};
+use probekit_runtime::{BlendOverrides, LoadOptions, ObjectState, ProbeFile, Probes};
+use shade::{shade_pixel, Overlay, Px, Sky};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -83,7 +82,8 @@ pub enum RenderError {
     /// The camera is unusable.
     #[error("camera: {0}")]
     BadCamera(String),
-    /// The probe file is neither a cloud with tetrahedra nor a volume.
+    /// The probe file cannot be loaded for queries: neither a cloud with
+    /// tetrahedra nor a volume, or a blend override out of range.
     #[error("probes: {0}")]
     Probes(String),
     /// Settings out of range.
@@ -160,16 +160,11 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Diffuse albedo of the test object.
     pub albedo: f32,
-    /// Clouds: brightness exponent of the test object's blend
-    /// ([`ProbeCloud::set_brightness_weighting`](probekit_runtime::ProbeCloud::set_brightness_weighting); `None`, the default: the
-    /// one the file stores with its probe weights, 0 without). Volumes
-    /// ignore it.
-    pub brightness_weight: Option<f32>,
-    /// Clouds: directional brightness exponent of the test object's blend
-    /// ([`ProbeCloud::set_directional_brightness`](probekit_runtime::ProbeCloud::set_directional_brightness); `None`, the default:
-    /// the one the file stores with its probe weights, 0 without). Volumes
-    /// ignore it.
-    pub directional_brightness: Option<f32>,
+    /// Clouds: overrides of the test object's blend (the default: the
+    /// blend the file stores, as an engine loads it; volumes ignore them).
+    /// The walls are shaded without visibility and brightness weighting
+    /// whatever these say (module docs).
+    pub blend: BlendOverrides,
 }
 
 impl Default for RenderSettings {
@@ -184,8 +179,7 @@ impl Default for RenderSettings {
             bounces: 3,
             seed: 1,
             albedo: 0.8,
-            brightness_weight: None,
-            directional_brightness: None,
+            blend: BlendOverrides::default(),
         }
     }
 }
@@ -253,38 +247,27 @@ pub fn render(
     if !(settings.albedo.is_finite() && settings.albedo >= 0.0) {
         return Err(RenderError::BadSettings("albedo must be ≥ 0".into()));
     }
-    let mut source = Source::from_file(file)?;
-    if let (Source::Cloud(c), Some(a)) = (&mut source, settings.brightness_weight) {
-        c.set_brightness_weighting(a)
-            .map_err(|e| RenderError::BadSettings(e.to_string()))?;
-    }
-    if let (Source::Cloud(c), Some(g)) = (&mut source, settings.directional_brightness) {
-        c.set_directional_brightness(g)
-            .map_err(|e| RenderError::BadSettings(e.to_string()))?;
-    }
+    let probes = load_probes(file, settings.blend)?;
     // Walls are shaded without visibility or brightness weighting of either
-    // kind (module
-    // docs): a second view of the cloud with them off, only when the first
-    // has one on.
-    let unweighted = match &source {
-        Source::Cloud(c)
+    // kind (module docs): a second load of the cloud with them off, only
+    // when the first has one on.
+    let unweighted = match probes.cloud() {
+        Some(c)
             if c.visibility_enabled()
                 || c.cell_visibility_enabled()
                 || c.brightness_weighting() > 0.0
                 || c.directional_brightness() > 0.0 =>
         {
-            let mut c = c.clone();
-            c.set_visibility(false);
-            c.set_cell_visibility(false);
-            c.set_brightness_weighting(0.0)
-                .map_err(|e| RenderError::BadSettings(e.to_string()))?;
-            c.set_directional_brightness(0.0)
-                .map_err(|e| RenderError::BadSettings(e.to_string()))?;
-            Some(Source::Cloud(c))
+            let mut blend = settings.blend;
+            blend.distance_moments = Some(false);
+            blend.cell_visibility = Some(false);
+            blend.brightness_exponent = Some(0.0);
+            blend.directional_exponent = Some(0.0);
+            Some(load_probes(file, blend)?)
         }
         _ => None,
     };
-    let wall_source = unweighted.as_ref().unwrap_or(&source);
+    let wall_probes = unweighted.as_ref().unwrap_or(&probes);
     let sky = Sky::new(scene)?;
     let baker = Baker::new(scene)?;
     let tracer = baker.tracer();
@@ -381,7 +364,7 @@ pub fn render(
     let total = truth_total + h as usize;
     let overlay = settings
         .show_probes
-        .then(|| Overlay::new(file, &source, &bake_box));
+        .then(|| Overlay::new(file, &probes, &bake_box));
     // Per-row candidate probe spheres (screen-space bounding boxes).
     let mut row_glyphs: Vec<Vec<u32>> = vec![Vec::new(); h as usize];
     if let Some(ov) = &overlay {
@@ -415,7 +398,7 @@ pub fn render(
         (0..h)
             .into_par_iter()
             .map(|y| {
-                let mut ws = WalkState::new();
+                let mut ws = ObjectState::new();
                 let row = (0..w)
                     .map(|x| {
                         let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5, w, h);
@@ -423,7 +406,7 @@ pub fn render(
                             &ray,
                             tracer,
                             scene,
-                            (&source, wall_source),
+                            (&probes, wall_probes),
                             &sky,
                             &object,
                             overlay.as_ref().map(|o| (o, &row_glyphs[y as usize][..])),
@@ -510,6 +493,21 @@ pub fn render(
         spheres,
         warnings,
     })
+}
+
+/// `file` loaded as an engine loads it, with `blend`'s overrides; a file
+/// without probes to query (a shard part, rigs only) is an error.
+fn load_probes(file: &ProbeFile, blend: BlendOverrides) -> Result<Probes, RenderError> {
+    let mut options = LoadOptions::default();
+    options.blend = blend;
+    let probes =
+        Probes::from_file(file, options).map_err(|e| RenderError::Probes(e.to_string()))?;
+    if probes.probe_count() == 0 {
+        return Err(RenderError::Probes(
+            "the file holds no probes to query (rigs only)".into(),
+        ));
+    }
+    Ok(probes)
 }
 
 /// Ground-truth points of a progress total that also counts `h` rows.

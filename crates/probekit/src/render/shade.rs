@@ -6,42 +6,15 @@ use crate::env::EnvMap;
 use crate::scene::Scene;
 use crate::trace::{Ray, Tracer};
 use glam::{Quat, Vec3};
-use probekit_runtime::cloud::WalkState;
-use probekit_runtime::{Interp, ProbeCloud, ProbeFile, ProbeFileKind, Volume};
+use probekit_runtime::{ObjectState, ProbeFile, Probes};
 
-/// The probes, ready to answer irradiance queries.
-// One per render, never in bulk.
-#[allow(clippy::large_enum_variant)]
-pub(super) enum Source {
-    Cloud(ProbeCloud),
-    Volume(Volume),
-}
-
-impl Source {
-    /// Cloud when the file has tetrahedra, volume when its kind says so
-    /// (the same dispatch as `probekit query`).
-    pub(super) fn from_file(file: &ProbeFile) -> Result<Self, RenderError> {
-        if file.tetrahedra.is_some() {
-            ProbeCloud::from_file(file)
-                .map(Source::Cloud)
-                .map_err(|e| RenderError::Probes(e.to_string()))
-        } else if file.kind == ProbeFileKind::Volume {
-            Volume::from_file(file)
-                .map(Source::Volume)
-                .map_err(|e| RenderError::Probes(e.to_string()))
-        } else {
-            Err(RenderError::Probes(
-                "the file has no tetrahedra and is not a volume (an unmerged shard part?)".into(),
-            ))
-        }
-    }
-
-    pub(super) fn irradiance(&self, p: Vec3, n: Vec3, ws: &mut WalkState) -> Vec3 {
-        match self {
-            Source::Cloud(c) => c.irradiance(p, n, ws),
-            Source::Volume(v) => v.irradiance(p, n, Interp::Trilinear).unwrap_or(Vec3::ZERO),
-        }
-    }
+/// The probes' irradiance `E(n)` at `p` for unit normal `n`, as an engine
+/// reads it from the loaded file (0 where the query is refused: a normal
+/// that is not finite, say).
+pub(super) fn probe_irradiance(probes: &Probes, p: Vec3, n: Vec3, state: &mut ObjectState) -> Vec3 {
+    probes
+        .irradiance(state, p, n)
+        .map_or(Vec3::ZERO, Vec3::from_array)
 }
 
 /// What a ray escaping the scene sees.
@@ -96,13 +69,13 @@ pub(super) struct Overlay {
 }
 
 impl Overlay {
-    pub(super) fn new(file: &ProbeFile, source: &Source, bake_box: &crate::scene::Aabb) -> Self {
+    pub(super) fn new(file: &ProbeFile, probes: &Probes, bake_box: &crate::scene::Aabb) -> Self {
         let n = file.positions.len().max(1);
         let vol = bake_box.size();
         let spacing = (vol.x.max(1e-3) * vol.y.max(1e-3) * vol.z.max(1e-3) / n as f32).cbrt();
         let radius = (0.12 * spacing).min(0.08);
-        let glyphs = match source {
-            Source::Cloud(c) => c
+        let glyphs = match probes.cloud() {
+            Some(c) => c
                 .mesh()
                 .positions()
                 .iter()
@@ -112,8 +85,8 @@ impl Overlay {
                     sh: c.probe_sh(i).to_vec(),
                 })
                 .collect(),
-            Source::Volume(v) => {
-                let k = v.coeffs_per_sample();
+            None => {
+                let k = file.coefficients.coeffs_per_probe();
                 let coeffs = file.coefficients.to_f32().unwrap_or_default();
                 file.positions
                     .iter()
@@ -128,7 +101,7 @@ impl Overlay {
             }
         };
         let mut edges = Vec::new();
-        if let Source::Cloud(c) = source {
+        if let Some(c) = probes.cloud() {
             let mut set = std::collections::BTreeSet::new();
             for t in c.mesh().tets() {
                 for a in 0..4 {
@@ -169,18 +142,18 @@ pub(super) fn shade_pixel(
     ray: &Ray,
     tracer: &Tracer,
     scene: &Scene,
-    (source, wall_source): (&Source, &Source),
+    (probes, wall_probes): (&Probes, &Probes),
     sky: &Sky,
     object: &TestObject,
     overlay: Option<(&Overlay, &[u32])>,
     albedo: f32,
-    ws: &mut WalkState,
+    ws: &mut ObjectState,
 ) -> Px {
     let inv_pi = std::f32::consts::FRAC_1_PI;
     // The nearest foreground thing: test object or a probe sphere.
     let obj = object.hit(ray, f32::INFINITY);
     let mut fg_t = obj.map_or(f32::INFINITY, |o| o.t);
-    let mut object = obj.map(|o| (source.irradiance(o.point, o.normal, ws), o.truth));
+    let mut object = obj.map(|o| (probe_irradiance(probes, o.point, o.normal, ws), o.truth));
     let mut fg: Option<(Vec3, Vec3)> =
         object.map(|(e, t)| (albedo * inv_pi * e, albedo * inv_pi * t));
     if let Some((ov, cands)) = overlay {
@@ -218,7 +191,7 @@ pub(super) fn shade_pixel(
         } else {
             hit.shading_normal
         };
-        let e = wall_source.irradiance(hit.point + 0.01 * nf, ns, ws);
+        let e = probe_irradiance(wall_probes, hit.point + 0.01 * nf, ns, ws);
         let c =
             scene.emission(hit.material, hit.uv) + scene.albedo(hit.material, hit.uv) * inv_pi * e;
         col += trans * hit.opacity * c;

@@ -22,11 +22,14 @@
 //! - [`split`]: the error tables, per-light transition distances, the
 //!   analytic/transition/rig evaluation and the error metrics.
 //! - [`render`]: the comparison and zone pictures.
+//! - [`run`]: one experiment end to end (what `probekit rig` runs), and
+//!   [`report`], what it prints of it.
 
 pub mod fit;
 pub mod lights;
 pub mod mesh;
 pub mod render;
+pub mod report;
 pub mod run;
 pub mod sample;
 pub mod source;

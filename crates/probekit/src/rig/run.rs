@@ -6,13 +6,15 @@
 use super::fit::FittedRig;
 use super::lights::{lights_from_scene, paper_cost_lights, rig_demo_lights, SceneLights};
 use super::mesh::{self, Mesh};
+use super::render::{comparison_figure, zones_figure, Column, RenderError};
 use super::source::ProbeSource;
 use super::split::{self, Frame, Zone};
 use super::{RigSetupError, RigSpec};
 use crate::lights::{Light, SphereTable};
 use crate::scene::Scene;
 use glam::Vec3;
-use probekit_runtime::cloud::WalkState;
+use probekit_runtime::ObjectState;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Seed of the sample distribution unless told otherwise.
@@ -155,7 +157,7 @@ pub fn run(
     time: bool,
 ) -> Result<RunReport, RigSetupError> {
     let mut fitted = FittedRig::fit(mesh, cfg.spec, cfg.order, cfg.samples, cfg.seed, name)?;
-    let mut walk = WalkState::new();
+    let mut walk = ObjectState::new();
     let mut exact = split::exact_irradiance(mesh, cfg.at, lights);
     if let Some(src) = probes {
         split::add_probe_irradiance(mesh, cfg.at, src, cfg.order, &mut walk, &mut exact);
@@ -245,6 +247,96 @@ pub fn run(
         ns_per_frame,
         ns_brute_force,
     })
+}
+
+/// Why the comparison pictures could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PictureError {
+    /// One of the compared rigs could not be fitted.
+    #[error(transparent)]
+    Rig(#[from] RigSetupError),
+    /// A picture could not be written.
+    #[error(transparent)]
+    Write(#[from] RenderError),
+}
+
+/// The rig types every comparison picture shows ([`comparison_pictures`]).
+pub const COMPARED_RIGS: [&str; 6] = [
+    "constant",
+    "gradient",
+    "lattice:2x2x3",
+    "lattice:3x2x2",
+    "mixed:l3,g,c",
+    "lattice:8x4x2",
+];
+
+/// `probekit rig --render OUT`: writes to `out` the comparison picture
+/// ([`comparison_figure`]) of the rigs of [`COMPARED_RIGS`] and `cfg`'s own
+/// (each fitted with every light through the rig, as `run` does with the
+/// split off) beside the exact lighting of `report` (the experiment of
+/// `cfg`), with their error heat maps, and beside it `STEM_zones.png`
+/// (STEM: `out`'s name without its extension), the mesh lit with the split
+/// and the lights' zones ([`zones_figure`]). Returns the zones picture's
+/// path.
+pub fn comparison_pictures(
+    out: &Path,
+    mesh: &Mesh,
+    lights: &[Light],
+    probes: Option<&ProbeSource>,
+    cfg: &RunConfig,
+    report: &RunReport,
+) -> Result<PathBuf, PictureError> {
+    let mut specs: Vec<RigSpec> = COMPARED_RIGS
+        .iter()
+        .map(|s| s.parse().expect("built-in spec"))
+        .collect();
+    if !specs.contains(&cfg.spec) {
+        specs.push(cfg.spec);
+    }
+    let l_white = report.stats.l_white;
+    let mut runs = Vec::new();
+    for s in &specs {
+        // Rigs are compared with each other with every light in the rig.
+        let c = RunConfig {
+            spec: *s,
+            split: false,
+            ..cfg.clone()
+        };
+        runs.push((s, run(mesh, "mesh", lights, probes, &c, false)?));
+    }
+    let grey = |r: &RunReport| -> Vec<f32> {
+        r.approx
+            .iter()
+            .zip(&r.exact)
+            .map(|(x, e)| 255.0 * (*x - *e).abs().max_element() / std::f32::consts::PI / l_white)
+            .collect()
+    };
+    let mut cols: Vec<Column> = runs
+        .iter()
+        .map(|(s, r)| Column {
+            name: s.to_string(),
+            irradiance: &r.approx,
+            error_grey: Some(grey(r)),
+        })
+        .collect();
+    cols.push(Column {
+        name: "exact".into(),
+        irradiance: &report.exact,
+        error_grey: None,
+    });
+    comparison_figure(out, mesh, &cols, l_white, 64.0)?;
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("rig");
+    let zones_path = out.with_file_name(format!("{stem}_zones.png"));
+    let world = mesh.translated(cfg.at);
+    // Directional lights have no position to draw.
+    let lw: Vec<(Vec3, f32)> = lights
+        .iter()
+        .zip(&report.zones)
+        .filter_map(|(l, z)| Some((l.position()?, z.rig_weight())))
+        .collect();
+    zones_figure(&zones_path, &world, &report.approx, l_white, &lw)?;
+    Ok(zones_path)
 }
 
 #[cfg(test)]

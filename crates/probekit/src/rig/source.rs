@@ -1,98 +1,77 @@
 //! A baked probe file as a rig's lighting source: a baked probe cloud or
 //! volume sampled at the rig's points.
 //!
-//! [`ProbeSource`] wraps the runtime's own queries, through [`Predictor`] — [`probekit_runtime::ProbeCloud::sh_at`]
-//! (barycentric blend in the enclosing tetrahedron) or [`probekit_runtime::Volume::sample_sh`]
-//! (trilinear by default; points outside the box clamp to it) — so the rig
-//! sees exactly what an engine would read from the file. The rig is fitted
-//! to the file's SH at its sample points ([`ProbeSource::add_sh`], the
-//! per-frame input of [`super::split::Frame::update_from`]); the exact
-//! reference at a vertex is the file's irradiance evaluated at the vertex
-//! itself ([`ProbeSource::irradiance`]), so a rig's error against it is
-//! how well the rig models the spatial variation of the baked lighting over
-//! the object. Baked lighting always goes through the rig (it is a smooth
+//! [`ProbeSource`] is the runtime's [`Probes`], the type an engine loads
+//! (a cloud's blend in the enclosing tetrahedron, or a volume's
+//! interpolation, trilinear by default, points outside the box clamped to
+//! it), so the rig sees exactly what an engine would read from the file.
+//! The rig is fitted to the file's SH at its sample points
+//! ([`ProbeSource::add_sh`], the per-frame input of
+//! [`super::split::Frame::update_from`]); the exact reference at a vertex
+//! is the file's irradiance evaluated at the vertex itself
+//! ([`ProbeSource::irradiance`]), so a rig's error against it is how well
+//! the rig models the spatial variation of the baked lighting over the
+//! object. Baked lighting always goes through the rig (it is a smooth
 //! field; there is no analytic path for it).
 //!
-//! Orders: the file's SH is truncated to the rig's order or padded with
-//! zeros (both exact, SH bands are orthogonal).
+//! Orders: the file's SH (every stored band,
+//! [`Probes::sh_all_bands_at`]) is truncated to the rig's order or padded
+//! with zeros (both exact, SH bands are orthogonal).
 
 use super::RigSetupError;
-use crate::query::Predictor;
 use glam::Vec3;
-use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::ProbeFile;
-use probekit_runtime::Interp;
+use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use probekit_sh::MAX_COEFFS;
 use std::path::Path;
 
 /// A loaded cloud or volume, ready to be sampled at world positions: the
-/// [`Predictor`] that `probekit query` and `probekit eval` use, with the
-/// rig's error type and its truncate-or-pad SH accumulation.
+/// runtime's [`Probes`], with the rig's error type and its
+/// truncate-or-pad SH accumulation.
 #[derive(Clone, Debug)]
-pub struct ProbeSource(Predictor);
+pub struct ProbeSource(Probes);
 
 impl ProbeSource {
-    /// Builds the source from a loaded file: a cloud when it has
-    /// tetrahedra, else a volume queried trilinearly (the dispatch of
-    /// `probekit query`).
-    pub fn from_file(file: &ProbeFile) -> Result<Self, RigSetupError> {
-        Predictor::from_file(file, Interp::Trilinear)
+    /// Builds the source from a loaded file with `options` (a volume's
+    /// interpolation; interpolations that need gradients are refused when
+    /// the volume has none).
+    pub fn from_file(file: &ProbeFile, options: LoadOptions) -> Result<Self, RigSetupError> {
+        Probes::from_file(file, options)
             .map(ProbeSource)
             .map_err(|e| RigSetupError::Probes(e.to_string()))
     }
 
-    /// The underlying cloud or volume.
-    pub fn predictor(&self) -> &Predictor {
-        &self.0
-    }
     /// Loads a `.probes` file (errors name the file).
-    pub fn load(path: &Path) -> Result<Self, RigSetupError> {
+    pub fn load(path: &Path, options: LoadOptions) -> Result<Self, RigSetupError> {
         let name = path.display();
         let file =
             ProbeFile::load(path).map_err(|e| RigSetupError::Probes(format!("{name}: {e}")))?;
-        Self::from_file(&file).map_err(|e| match e {
+        Self::from_file(&file, options).map_err(|e| match e {
             RigSetupError::Probes(m) => RigSetupError::Probes(format!("{name}: {m}")),
             other => other,
         })
     }
 
-    /// Uses `interp` for a volume (no effect on a cloud). Interpolations
-    /// that need gradients are refused when the file has none.
-    pub fn with_interp(self, interp: Interp) -> Result<Self, RigSetupError> {
-        match self.0 {
-            Predictor::Volume(v, _) => {
-                if interp.needs_gradients() && !v.has_gradients() {
-                    return Err(RigSetupError::Probes(format!(
-                        "interpolation {interp:?} needs gradients; the volume has none"
-                    )));
-                }
-                Ok(ProbeSource(Predictor::Volume(v, interp)))
-            }
-            c => Ok(ProbeSource(c)),
-        }
-    }
-
-    /// Whether the file is a probe cloud (tetrahedra), which
-    /// [`ProbeSource::with_interp`] leaves as it is, rather than a volume.
-    pub fn is_cloud(&self) -> bool {
-        matches!(self.0, Predictor::Cloud(_))
+    /// The loaded file.
+    pub fn probes(&self) -> &Probes {
+        &self.0
     }
 
     /// SH order (bands) stored in the file.
     pub fn order(&self) -> usize {
-        self.0.order()
+        self.0.order() as usize
     }
 
     /// Adds `weight ×` the file's radiance SH at world position `p` to
     /// `out` (its first `out.len()` coefficients; the file's SH is truncated
-    /// or zero-padded to that). `state` is the cloud's walk cache (unused by
-    /// a volume). No allocation.
-    pub fn add_sh(&self, p: Vec3, weight: f32, state: &mut WalkState, out: &mut [Vec3]) {
+    /// or zero-padded to that). `state` is the object's query state. No
+    /// allocation.
+    pub fn add_sh(&self, p: Vec3, weight: f32, state: &mut ObjectState, out: &mut [Vec3]) {
         let mut buf = [Vec3::ZERO; MAX_COEFFS];
-        // Cannot fail: the buffer holds MAX_COEFFS ≥ order², and
-        // `from_file`/`with_interp` refuse interpolations the file cannot
-        // serve; stay silent-zero rather than panic.
-        if self.0.sh_at(p, state, &mut buf).is_err() {
+        // Fails only for a position that is not finite, or a rigs-only
+        // file (which `from_file` leaves without probes): stay silent-zero
+        // rather than panic.
+        if self.0.sh_all_bands_at(state, p, &mut buf).is_err() {
             buf.fill(Vec3::ZERO);
         }
         let n = out.len().min(self.order() * self.order());
@@ -104,7 +83,7 @@ impl ProbeSource {
     /// The file's irradiance `E(n)` (not divided by π) at world position
     /// `p` for unit normal `n`, truncated to `order` bands: the clamped-cosine
     /// convolution ([`probekit_sh::irradiance`]) of [`Self::add_sh`] at `p`.
-    pub fn irradiance(&self, p: Vec3, n: Vec3, order: usize, state: &mut WalkState) -> Vec3 {
+    pub fn irradiance(&self, p: Vec3, n: Vec3, order: usize, state: &mut ObjectState) -> Vec3 {
         let k = (order * order).min(MAX_COEFFS);
         let mut buf = [Vec3::ZERO; MAX_COEFFS];
         self.add_sh(p, 1.0, state, &mut buf[..k]);
@@ -121,6 +100,7 @@ mod tests {
     use crate::rig::split::{update_from_sources, Frame};
     use crate::rig::RigSpec;
     use probekit_runtime::format::{ProbeFileKind, VolumeGrid};
+    use probekit_runtime::Interp;
 
     const ORDER: usize = 3;
     const N2: usize = ORDER * ORDER;
@@ -226,9 +206,9 @@ mod tests {
         let f = Affine::new();
         let car = mesh::car();
         for file in [volume(&f), cloud(&f)] {
-            let src = ProbeSource::from_file(&file).unwrap();
+            let src = ProbeSource::from_file(&file, LoadOptions::default()).unwrap();
             assert_eq!(src.order(), ORDER);
-            let mut walk = WalkState::new();
+            let mut walk = ObjectState::new();
             // The source itself returns the field (interpolation of an
             // affine field is exact).
             let p = AT + Vec3::new(0.3, 0.7, -0.2);
@@ -280,16 +260,18 @@ mod tests {
 
     #[test]
     fn bad_probe_files_are_typed_errors() {
-        let e = ProbeSource::load(Path::new("/nonexistent/x.probes")).unwrap_err();
+        let e = ProbeSource::load(Path::new("/nonexistent/x.probes"), LoadOptions::default())
+            .unwrap_err();
         assert!(matches!(e, RigSetupError::Probes(_)));
         assert!(e.to_string().contains("/nonexistent/x.probes"));
         // A file that is neither a cloud nor a volume.
         let plain = ProbeFile::cloud(vec![Vec3::ZERO], 1, &[Vec3::ONE]).unwrap();
         assert!(matches!(
-            ProbeSource::from_file(&plain),
+            ProbeSource::from_file(&plain, LoadOptions::default()),
             Err(RigSetupError::Probes(_))
         ));
-        let v = ProbeSource::from_file(&volume(&Affine::new())).unwrap();
-        assert!(v.with_interp(Interp::Taylor).is_err());
+        let mut taylor = LoadOptions::default();
+        taylor.interpolation = Interp::Taylor;
+        assert!(ProbeSource::from_file(&volume(&Affine::new()), taylor).is_err());
     }
 }

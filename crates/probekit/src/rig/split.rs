@@ -31,9 +31,9 @@ use super::mesh::Mesh;
 use super::source::ProbeSource;
 use crate::lights::{Light, SphereTable};
 use glam::Vec3;
-use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::Transition;
 use probekit_runtime::rig::RigState;
+use probekit_runtime::ObjectState;
 
 /// Radius of the table's reference sphere light, in bounding radii.
 pub const REF_LIGHT_RADIUS: f32 = 0.05;
@@ -149,7 +149,7 @@ pub fn update_from_lights(
 
 /// Updates `frame` from `lights` (weighted as in [`update_from_lights`])
 /// plus, when given, the baked file `probes` sampled at each sample point
-/// (always fully in the rig). `walk` is the cloud's walk cache, kept
+/// (always fully in the rig). `walk` is the object's query state, kept
 /// between frames.
 #[allow(clippy::too_many_arguments)]
 pub fn update_from_sources(
@@ -159,7 +159,7 @@ pub fn update_from_sources(
     lights: &[Light],
     weights: &[f32],
     probes: Option<&ProbeSource>,
-    walk: &mut WalkState,
+    walk: &mut ObjectState,
 ) {
     let order = frame.state.order();
     frame.update_from(fitted, at, |p, out| {
@@ -182,7 +182,7 @@ pub fn add_probe_irradiance(
     at: Vec3,
     probes: &ProbeSource,
     order: usize,
-    walk: &mut WalkState,
+    walk: &mut ObjectState,
     out: &mut [Vec3],
 ) {
     for ((o, p), n) in out.iter_mut().zip(&mesh.positions).zip(&mesh.normals) {

@@ -14,8 +14,8 @@ impl ProbeCloud {
     /// tetrahedron's occluder plane where it has one, else its bits) and
     /// Chebyshev visibility `v_i(p)` ([`visibility`]) where present
     /// and on, and the factor `f_i = s_i·Ē_i^−α`: the fitted probe weight
-    /// `s_i` ([`ProbeCloud::set_probe_weights`]) when present and on, and the
-    /// brightness factor when [`ProbeCloud::set_brightness_weighting`] is
+    /// `s_i` ([`ProbeCloud::probe_weights`]) when present and on, and the
+    /// brightness factor when [`ProbeCloud::brightness_weighting`] is
     /// on; renormalized:
     /// `b_i·c_i·v_i·f_i / Σ_j b_j·c_j·v_j·f_j`. Where cell visibility hides
     /// every probe of positive barycentric weight from `p` (a pocket behind
