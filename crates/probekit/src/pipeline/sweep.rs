@@ -8,10 +8,11 @@
 //!
 //! A sweep maps a probe budget `B` to each method's own knob
 //! ([`placement_for_budget`]) and reports the probe count each actually
-//! produced: `grid` ≈ `B` cells (minus those inside geometry), `adaptive`
-//! budget `B`, `spawn-and-merge` an initial grid of `B/2` growing to at
-//! most `B`, `gradient-ascent` an initial grid of `B` (merging, dark
-//! clustering and leak prevention change the count).
+//! produced: `grid` ≈ `B` cells (those inside geometry moved out by the
+//! virtual offset, as `probekit bake` does), `adaptive` budget `B`,
+//! `spawn-and-merge` an initial grid of `B/2` growing to at most `B`,
+//! `gradient-ascent` an initial grid of `B` (merging, dark clustering and
+//! leak prevention change the count).
 
 use super::{Bake, PipelineError, Progress};
 use crate::eval::{mean_luminance, metrics, predict, Metrics};
