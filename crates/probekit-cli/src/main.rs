@@ -89,6 +89,15 @@ fn parse() -> Result<Cli, ExitCode> {
 }
 
 fn main() -> ExitCode {
+    // Output piped into a reader that stops early (`probekit inspect F |
+    // head`) ends the process quietly, as it does for other Unix tools,
+    // instead of panicking on the failed write.
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of a signal at start-up, before
+    // any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = match parse() {
         Ok(cli) => cli,
         Err(code) => return code,

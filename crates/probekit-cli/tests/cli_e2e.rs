@@ -563,3 +563,21 @@ fn l1_files_record_how_an_engine_evaluates_them() {
     );
     assert!(!d.join("bad.probes").exists());
 }
+
+/// A reader that stops early (`probekit … | head`) ends the output quietly:
+/// no panic message about the failed write.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_probekit"))
+        .arg("markdown-help")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+}
