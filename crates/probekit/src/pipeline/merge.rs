@@ -1,11 +1,12 @@
 //! Joining shard parts into the file a single machine writes.
 
-use super::{PipelineError, Progress};
+use super::PipelineError;
 use crate::blend::cell_planes::bake_file_cell_planes;
 use crate::blend::cell_visibility::bake_file_cell_visibility;
 use crate::format::check_scene_hash;
 use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
 use crate::format::ProbeFile;
+use crate::progress::Progress;
 use crate::recipe::BakeRecord;
 use crate::scene::Scene;
 use probekit_sh::ShRgb;
@@ -193,7 +194,7 @@ pub fn merge(
             }
         }
         kinds.fit_weights_into(&baker, &recipe.capture_settings(), &mut file, &|d, t| {
-            progress("probe weights", d, t)
+            progress("weight fit", d, t)
         })?;
     }
     file.validate()?;

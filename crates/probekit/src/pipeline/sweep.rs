@@ -13,9 +13,10 @@
 //! most `B`, `gradient-ascent` an initial grid of `B` (merging, dark
 //! clustering and leak prevention change the count).
 
-use super::{Bake, PipelineError, Progress};
+use super::{Bake, PipelineError};
 use crate::eval::{mean_luminance, metrics, Metrics};
 use crate::plot::{line_chart_log, PlotError};
+use crate::progress::Progress;
 use crate::query::{PredictError, Predictor};
 use crate::recipe::{Placement, Recipe};
 use crate::scene::Scene;

@@ -524,6 +524,7 @@ mod tests {
             next_index: 0,
             stats: PlacementStats::default(),
             layer: None,
+            clock: crate::progress::Clock::new(0),
         };
         let p = GradientAscentParams {
             initial: 64,

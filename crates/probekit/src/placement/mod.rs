@@ -40,7 +40,7 @@ pub use orphans::{orphan_points, ORPHAN_COVER_RADIUS, ORPHAN_SPACING};
 
 use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::delaunay::DelaunayError;
-use crate::progress::Progress;
+use crate::progress::{Clock, PhaseTime, Progress};
 use crate::scene::{Aabb, BakeBoxError};
 use crate::trace::free_space::inside_geometry;
 use glam::Vec3;
@@ -265,6 +265,8 @@ struct State<'a, 'b> {
     /// The layer box of [`snap_to_layer`], when the method keeps its probes
     /// on layers along the bake box's faces (`adaptive`).
     layer: Option<Aabb>,
+    /// Times the sub-phases (adaptive: pool, scoring, candidates, leaks, …).
+    clock: Clock,
 }
 
 /// Points within this distance (metres) of a face of the layer box, or beyond
@@ -298,6 +300,12 @@ pub fn snap_to_layer(p: Vec3, layer: &Aabb) -> Vec3 {
 }
 
 impl State<'_, '_> {
+    /// Ends the sub-phase `phase` (see [`Clock::lap`]).
+    fn lap(&mut self, phase: &str) {
+        let rays = self.baker.tracer().rays();
+        self.clock.lap(phase, rays);
+    }
+
     /// `pts` moved onto the layer box's faces ([`snap_to_layer`]) when the
     /// method has one; unchanged otherwise.
     fn snap(&self, mut pts: Vec<Vec3>) -> Vec<Vec3> {
@@ -394,6 +402,20 @@ pub fn place(
     settings: &CaptureSettings,
     progress: Progress<'_>,
 ) -> Result<Placement, PlacementError> {
+    place_timed(baker, bake_box, method, settings, progress).map(|p| p.0)
+}
+
+/// [`place`], and the time of its sub-phases (wall and CPU seconds, rays;
+/// adaptive placement's `pool`, `seed set`, `scoring`, `candidates`,
+/// `leaks`, `decimation`, `orphans` and, for [`LightShells::Auto`],
+/// `held-out`, each summed over both placements).
+pub fn place_timed(
+    baker: &Baker,
+    bake_box: Aabb,
+    method: &PlacementMethod,
+    settings: &CaptureSettings,
+    progress: Progress<'_>,
+) -> Result<(Placement, Vec<PhaseTime>), PlacementError> {
     settings.validate()?;
     // Before any work: a box that can hold probes, and a request that
     // bounds the memory it takes.
@@ -413,6 +435,7 @@ pub fn place(
             ..Default::default()
         },
         layer: None,
+        clock: Clock::new(baker.tracer().rays()),
     };
     let ls = LeakSettings::default();
     match method {
@@ -426,11 +449,14 @@ pub fn place(
             let pts = grid_points(&bake_box, *cell, *budget)?;
             let pts = st.filter_free(pts);
             progress("grid", pts.len(), pts.len());
-            return Ok(Placement {
-                positions: pts,
-                captured: None,
-                stats: st.stats,
-            });
+            return Ok((
+                Placement {
+                    positions: pts,
+                    captured: None,
+                    stats: st.stats,
+                },
+                Vec::new(),
+            ));
         }
         PlacementMethod::Manual(p) => {
             if let Some(i) = p.iter().position(|q| !q.is_finite()) {
@@ -440,11 +466,14 @@ pub fn place(
             }
             let pts = st.filter_free(p.clone());
             progress("manual", pts.len(), pts.len());
-            return Ok(Placement {
-                positions: pts,
-                captured: None,
-                stats: st.stats,
-            });
+            return Ok((
+                Placement {
+                    positions: pts,
+                    captured: None,
+                    stats: st.stats,
+                },
+                Vec::new(),
+            ));
         }
         PlacementMethod::Adaptive {
             budget,
@@ -473,6 +502,8 @@ pub fn place(
                 let shelled_progress =
                     |phase: &str, done, total| progress(&format!("{phase}+shells"), done, total);
                 let mut shelled = st.clone();
+                // Its clock goes on from the first run's.
+                shelled.clock = plain.clock.clone();
                 adaptive::adaptive(
                     &mut shelled,
                     &bake_box,
@@ -483,10 +514,14 @@ pub fn place(
                     &shelled_progress,
                 )?;
                 progress("held-out", 0, 1);
+                st.clock = shelled.clock.clone();
                 let e = adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                st.lap("held-out");
                 progress("held-out", 1, 1);
                 let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures;
+                let clock = st.clock.clone();
                 st = if e[1] < e[0] { shelled } else { plain };
+                st.clock = clock;
                 st.stats.captures = captures;
                 st.stats.held_out_error = Some(e);
             } else {
@@ -498,11 +533,15 @@ pub fn place(
         }
     }
     let captured = reusable.then(|| st.sh.clone());
-    Ok(Placement {
-        positions: st.positions,
-        captured,
-        stats: st.stats,
-    })
+    let phases = st.clock.take_phases();
+    Ok((
+        Placement {
+            positions: st.positions,
+            captured,
+            stats: st.stats,
+        },
+        phases,
+    ))
 }
 
 #[cfg(test)]

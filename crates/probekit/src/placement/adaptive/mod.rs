@@ -226,6 +226,7 @@ pub(super) fn adaptive(
     st.stats.rejected_inside += nraw - raw.len();
     progress("pool", 0, raw.len());
     let captured = st.capture(&raw)?;
+    st.lap("pool");
     progress("pool", raw.len(), raw.len());
     let order = captured.first().map_or(1, |c| c.1.order());
     let w = band_weights(order);
@@ -261,6 +262,7 @@ pub(super) fn adaptive(
     for i in seeds {
         a.push_pool(i);
     }
+    a.st.lap("seed set");
     progress("adaptive", a.st.positions.len(), budget);
     // The budget is a hard cap: the last leak pass and the orphan pass get
     // allowances of their own, kept out of the error-driven placement.
@@ -272,6 +274,7 @@ pub(super) fn adaptive(
     a.st.stats.crossing_before = before;
     let room = core.saturating_sub(a.st.positions.len());
     a.st.fix_leaks_within(ls, room, Some(bbox))?;
+    a.st.lap("leaks");
     a.origin.resize(a.st.positions.len(), None);
     if !done {
         done = a.refine_to(core, tolerance, progress, budget)?;
@@ -292,6 +295,7 @@ pub(super) fn adaptive(
     // still fail the leak test, within the same allowance.
     let before = a.st.positions.len();
     a.st.fix_leaks_within(ls, extra, Some(bbox))?;
+    a.st.lap("leaks");
     let mut left = extra.saturating_sub(a.st.positions.len() - before);
     // Pockets behind a wall's end or corner that see none of their
     // tetrahedron's probes get one, within an allowance of their own: from
@@ -303,6 +307,7 @@ pub(super) fn adaptive(
         orphans,
         bbox,
     )?;
+    a.st.lap("orphans");
     left += orphans - used;
     a.origin.resize(a.st.positions.len(), None);
     while let Some(s) = a.score()? {
@@ -317,8 +322,10 @@ pub(super) fn adaptive(
         }
         left -= k;
     }
+    a.st.lap("scoring");
     let (_, after) = super::crossing_extent(a.st.baker.tracer(), &a.st.positions)?;
     a.st.stats.crossing_after = after;
+    a.st.lap("leaks");
     progress("leaks", a.st.positions.len(), budget);
     Ok(())
 }

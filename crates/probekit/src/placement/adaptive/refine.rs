@@ -80,6 +80,7 @@ impl Adaptive<'_, '_, '_> {
             [-1.0, 1.0, -1.0],
             [-1.0, -1.0, 1.0],
         ];
+        self.st.lap("scoring");
         let tracer = self.st.baker.tracer();
         let mut cands = Vec::with_capacity(SPAWN * inserted.len());
         for &i in inserted {
@@ -127,12 +128,26 @@ impl Adaptive<'_, '_, '_> {
             self.pool.sh.push(sh);
             self.pool.probe.push(None);
         }
+        self.st.lap("candidates");
         Ok(())
     }
 
     /// Greedy insertion until `target` probes or the tolerance is met;
     /// returns `true` when the tolerance was met.
     pub(super) fn refine_to(
+        &mut self,
+        target: usize,
+        tolerance: f32,
+        progress: Progress<'_>,
+        budget: usize,
+    ) -> Result<bool, PlacementError> {
+        let r = self.refine_rounds(target, tolerance, progress, budget);
+        self.st.lap("scoring");
+        r
+    }
+
+    /// The rounds of [`Self::refine_to`].
+    fn refine_rounds(
         &mut self,
         target: usize,
         tolerance: f32,
@@ -250,6 +265,7 @@ impl Adaptive<'_, '_, '_> {
         st.positions.truncate(keep);
         st.sh.truncate(keep);
         self.origin.truncate(keep);
+        st.lap("decimation");
         Ok(removed)
     }
 }
