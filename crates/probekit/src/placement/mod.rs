@@ -269,6 +269,10 @@ struct State<'a, 'b> {
     clock: Clock,
 }
 
+/// Fewest candidates [`State::admit`] captures in one batch: enough for
+/// every thread of a small machine to have work.
+const ADMIT_BATCH_MIN: usize = 16;
+
 /// Points within this distance (metres) of a face of the layer box, or beyond
 /// it, are moved onto it ([`snap_to_layer`]).
 pub const LAYER_SNAP: f32 = 0.001;
@@ -371,9 +375,13 @@ impl State<'_, '_> {
         }
     }
 
-    /// Snaps `new` onto the box layers, keeps those in free space, captures
-    /// them and adds up to `room` of the valid captures for which `inside`
-    /// holds as probes; returns how many.
+    /// Snaps `new` onto the box layers, keeps those in free space, and
+    /// adds as probes the first `room` of them (in order) whose capture is
+    /// valid and for which `inside` holds; returns how many. Captures in
+    /// batches of about what is still wanted, so the candidates beyond the
+    /// last one admitted are never captured: each point keeps the capture
+    /// index it has in `new`, so the probes are those of capturing them
+    /// all and keeping the first `room`.
     fn admit(
         &mut self,
         new: Vec<Vec3>,
@@ -382,9 +390,23 @@ impl State<'_, '_> {
     ) -> Result<usize, PlacementError> {
         let new = self.snap(new);
         let new = self.filter_free(new);
-        let mut got = self.capture(&new)?;
-        got.retain(|(p, _)| inside(p));
-        got.truncate(room);
+        let first = self.next_index;
+        self.next_index += new.len();
+        let mut got = Vec::new();
+        let mut at = 0;
+        while got.len() < room && at < new.len() {
+            // What is still wanted, a quarter more for captures that come
+            // back invalid, and enough to keep the threads busy.
+            let want = room - got.len();
+            let end = (at + want + want / 4 + ADMIT_BATCH_MIN).min(new.len());
+            for c in self.capture_numbered(&new[at..end], first + at)? {
+                match c {
+                    Some(c) if got.len() < room && inside(&c.0) => got.push(c),
+                    _ => {}
+                }
+            }
+            at = end;
+        }
         let n = got.len();
         self.add(got);
         Ok(n)
