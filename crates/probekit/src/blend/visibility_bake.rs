@@ -10,7 +10,9 @@
 //! exactly as a baked one; [`VisibilityBake::fit_weights_into`] then fits the
 //! probe weights.
 
-use super::blend_fit::{capture_training_set, fit_blend, BlendFitError, BlendFitSettings};
+use super::blend_fit::{
+    capture_training_set, fit_blend, BlendFitError, BlendFitSettings, TrainingSet,
+};
 use super::cell_planes::bake_file_cell_planes;
 use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
@@ -166,6 +168,10 @@ impl VisibilityBake {
     /// `file` now has (as [`super::blend_fit::fit_file_probe_weights`]), training points captured
     /// with `capture` (indirect light only when `capture.split_direct`, as
     /// the bake stores), when selected; removes them otherwise.
+    /// `captured`: training points already captured (a bake's placement
+    /// captured them in free space; radiance SH as `file` stores it): they
+    /// count towards the `points_per_probe ×` probes the fit wants, and
+    /// only the rest are captured here ([`capture_training_set`]).
     /// `progress(done, total)` counts training points. Deterministic (any
     /// thread count). Returns the time of its steps (`training points`:
     /// their capture; `fit`), empty when there are no weights to fit.
@@ -174,6 +180,7 @@ impl VisibilityBake {
         baker: &Baker,
         capture: &CaptureSettings,
         file: &mut ProbeFile,
+        captured: &TrainingSet,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Vec<PhaseTime>, VisibilityBakeError> {
         file.probe_weights = None;
@@ -186,15 +193,21 @@ impl VisibilityBake {
         let mut clock = Clock::new(rays());
         let cloud = ProbeCloud::from_file(file).map_err(BlendFitError::from)?;
         let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
-        let training = capture_training_set(
-            baker,
-            &baker.scene().bake_box(),
-            cloud.mesh(),
-            count,
-            capture,
-            fit,
-            progress,
-        )?;
+        let mut training = captured.clone();
+        let more = count.saturating_sub(captured.positions.len());
+        if more > 0 {
+            let new = capture_training_set(
+                baker,
+                &baker.scene().bake_box(),
+                cloud.mesh(),
+                more,
+                capture,
+                fit,
+                progress,
+            )?;
+            training.positions.extend(new.positions);
+            training.sh.extend(new.sh);
+        }
         clock.lap("training points", rays());
         let f = fit_blend(&cloud, &training, fit, &fit.exponents())?;
         clock.lap("fit", rays());

@@ -193,9 +193,23 @@ pub fn merge(
                 .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
             }
         }
-        kinds.fit_weights_into(&baker, &recipe.capture_settings(), &mut file, &|d, t| {
-            progress("weight fit", d, t)
-        })?;
+        // The fit trains on what placement captured, where it did: place
+        // again (placement is deterministic) for the same points.
+        let training = match (&kinds.probe_weights, &recipe.placement) {
+            (Some(_), crate::recipe::Placement::Adaptive { .. }) => {
+                let bake = super::Bake::new(scene, scene_name, recipe)?;
+                let placed = bake.place(progress)?;
+                bake.captured_training(&placed)
+            }
+            _ => crate::blend::blend_fit::TrainingSet::default(),
+        };
+        kinds.fit_weights_into(
+            &baker,
+            &recipe.capture_settings(),
+            &mut file,
+            &training,
+            &|d, t| progress("weight fit", d, t),
+        )?;
     }
     file.validate()?;
     Ok(file)

@@ -35,6 +35,7 @@ pub use merge::merge;
 pub use positions::read_positions;
 pub use volume::{bake_volume, bake_volume_from, VolumeReport};
 
+use crate::blend::blend_fit::TrainingSet;
 use crate::blend::visibility_bake::VisibilityBakeError;
 use crate::capture::{BakeError, BakeOutput, Baker, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity, light_groups, CloudFileError};
@@ -102,6 +103,9 @@ pub struct Placed {
     /// The sub-phases of placement (adaptive: pool, scoring, candidates,
     /// leaks, …), for the [`BakeReport`].
     pub phases: Vec<PhaseTime>,
+    /// Points of free space placement captured that are not probes
+    /// ([`crate::placement::Placement::free_points`]).
+    pub free_points: Vec<(Vec3, ShRgb)>,
 }
 
 /// What a bake produced, in numbers (serialised by `probekit bake --json`).
@@ -219,6 +223,7 @@ impl<'s> Bake<'s> {
             light_shells: None,
         };
         let mut phases = Vec::new();
+        let mut free_points = Vec::new();
         let positions = match &self.recipe.placement {
             Placement::Grid { budget, cell } => {
                 let n = budget.or(cell.is_none().then_some(Placement::DEFAULT_BUDGET));
@@ -252,6 +257,7 @@ impl<'s> Bake<'s> {
                     &|phase, d, t| progress(&format!("placement: {phase}"), d, t),
                 )?;
                 phases = sub;
+                free_points = placed.free_points;
                 if let Placement::Adaptive { .. } = self.recipe.placement {
                     report.held_out_error = placed.stats.held_out_error;
                     report.light_shells = Some(placed.stats.light_shells);
@@ -264,6 +270,7 @@ impl<'s> Bake<'s> {
             positions,
             report,
             phases,
+            free_points,
         })
     }
 
@@ -338,15 +345,33 @@ impl<'s> Bake<'s> {
         Ok(f)
     }
 
+    /// The training points of the probe-weight fit that `placed` already
+    /// captured: its free-space points, when they hold what the file stores
+    /// (all light; not with `capture.indirect_only`, since placement
+    /// captures all light). Empty otherwise, and for placements that
+    /// capture none (grid, manual).
+    pub fn captured_training(&self, placed: &Placed) -> TrainingSet {
+        let settings = self.recipe.capture_settings();
+        let (positions, sh) = if settings.split_direct || !settings.exclude_direct.is_empty() {
+            (Vec::new(), Vec::new())
+        } else {
+            placed.free_points.iter().cloned().unzip()
+        };
+        TrainingSet { positions, sh }
+    }
+
     /// Stage 4: the blend data the recipe asks for, baked into `file`.
     /// `whole`: false for a part, which gets only its probes' distance
-    /// moments (the rest depends on every probe; `merge` bakes it). Laps
-    /// `clock` after each kind: `distance moments`, `cell visibility`
-    /// (occluder planes included), `weight fit` (with its sub-phases).
+    /// moments (the rest depends on every probe; `merge` bakes it).
+    /// `captured`: training points of the weight fit already captured
+    /// ([`Bake::captured_training`]). Laps `clock` after each kind:
+    /// `distance moments`, `cell visibility` (occluder planes included),
+    /// `weight fit` (with its sub-phases).
     pub fn blend_data(
         &self,
         file: &mut ProbeFile,
         whole: bool,
+        captured: &TrainingSet,
         progress: Progress<'_>,
         clock: &mut Clock,
     ) -> Result<(), PipelineError> {
@@ -360,6 +385,7 @@ impl<'s> Bake<'s> {
             &self.baker,
             &self.recipe.capture_settings(),
             file,
+            captured,
             &|d, t| progress("weight fit", d, t),
         )?;
         clock.lap_with("weight fit", self.rays(), sub);
@@ -388,7 +414,8 @@ impl<'s> Bake<'s> {
         record.placed = Some(placed.report.clone());
         let mut file = self.assemble(&out, &record)?;
         clock.lap("assembly", self.rays());
-        self.blend_data(&mut file, true, progress, &mut clock)?;
+        let training = self.captured_training(placed);
+        self.blend_data(&mut file, true, &training, progress, &mut clock)?;
         file.validate()?;
         let phases = self.phases(clock);
         let report = report(&file, &out, None, placed.report.clone(), phases)?;
@@ -413,7 +440,8 @@ impl<'s> Bake<'s> {
         record.placed = Some(placed.report.clone());
         let mut file = self.assemble_part(&out, &record, shard, shards, placed.positions.len())?;
         clock.lap("assembly", self.rays());
-        self.blend_data(&mut file, false, progress, &mut clock)?;
+        let none = TrainingSet::default();
+        self.blend_data(&mut file, false, &none, progress, &mut clock)?;
         file.validate()?;
         let phases = self.phases(clock);
         let report = report(

@@ -525,6 +525,7 @@ mod tests {
             stats: PlacementStats::default(),
             layer: None,
             clock: crate::progress::Clock::new(0),
+            free_points: Vec::new(),
         };
         let p = GradientAscentParams {
             initial: 64,

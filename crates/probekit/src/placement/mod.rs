@@ -251,6 +251,14 @@ pub struct Placement {
     pub captured: Option<Vec<ShRgb>>,
     /// What happened.
     pub stats: PlacementStats,
+    /// Points in free space of the bake box that placement captured (with
+    /// the settings' light transport at its sample count) and that are
+    /// not probes: adaptive placement's candidate pool and, for
+    /// [`LightShells::Auto`], its held-out points; empty for the other
+    /// methods. Each is (position, radiance SH, all light), what a
+    /// training point of the probe-weight fit is
+    /// (`blend::blend_fit::capture_training_set`).
+    pub free_points: Vec<(Vec3, ShRgb)>,
 }
 
 /// Probes so far: positions, captured SH, and the next capture index.
@@ -267,6 +275,8 @@ struct State<'a, 'b> {
     layer: Option<Aabb>,
     /// Times the sub-phases (adaptive: pool, scoring, candidates, leaks, …).
     clock: Clock,
+    /// See [`Placement::free_points`].
+    free_points: Vec<(Vec3, ShRgb)>,
 }
 
 /// Fewest candidates [`State::admit`] captures in one batch: enough for
@@ -355,6 +365,23 @@ impl State<'_, '_> {
             }
         }
         Ok(out)
+    }
+
+    /// [`Self::capture_numbered`] of points already known to keep a
+    /// clearance from every surface (`adaptive`'s `has_clearance`): without
+    /// the virtual offset, whose pre-pass would trace its rays only to
+    /// leave them where they are; one that sees mostly back faces all the
+    /// same comes back invalid and is dropped, not moved.
+    fn capture_free(
+        &mut self,
+        points: &[Vec3],
+        first: usize,
+    ) -> Result<Vec<Option<(Vec3, ShRgb)>>, PlacementError> {
+        let offset = self.settings.validity.virtual_offset;
+        self.settings.validity.virtual_offset = false;
+        let out = self.capture_numbered(points, first);
+        self.settings.validity.virtual_offset = offset;
+        out
     }
 
     fn filter_free(&mut self, pts: Vec<Vec3>) -> Vec<Vec3> {
@@ -458,6 +485,7 @@ pub fn place_timed(
         },
         layer: None,
         clock: Clock::new(baker.tracer().rays()),
+        free_points: Vec::new(),
     };
     let ls = LeakSettings::default();
     match method {
@@ -476,6 +504,7 @@ pub fn place_timed(
                     positions: pts,
                     captured: None,
                     stats: st.stats,
+                    free_points: Vec::new(),
                 },
                 Vec::new(),
             ));
@@ -493,6 +522,7 @@ pub fn place_timed(
                     positions: pts,
                     captured: None,
                     stats: st.stats,
+                    free_points: Vec::new(),
                 },
                 Vec::new(),
             ));
@@ -512,13 +542,16 @@ pub fn place_timed(
                     "tolerance {tolerance} must be ≥ 0"
                 )));
             }
-            // Auto places twice only where some light offers shells.
+            // Auto places twice only where some light offers shells, from
+            // one captured pool.
             if *light_shells == LightShells::Auto
                 && adaptive::has_shell_lights(baker.scene(), &bake_box)
             {
+                let pool = adaptive::capture_pool(&mut st, &bake_box, *budget, true, progress)?;
+                let pool_captures = st.stats.captures;
                 let mut plain = st.clone();
                 adaptive::adaptive(
-                    &mut plain, &bake_box, *budget, *tolerance, false, &ls, progress,
+                    &mut plain, &bake_box, *budget, *tolerance, &pool, false, &ls, progress,
                 )?;
                 // The second run's phases say so (a progress bar restarts).
                 let shelled_progress =
@@ -531,25 +564,31 @@ pub fn place_timed(
                     &bake_box,
                     *budget,
                     *tolerance,
+                    &pool,
                     true,
                     &ls,
                     &shelled_progress,
                 )?;
                 progress("held-out", 0, 1);
                 st.clock = shelled.clock.clone();
-                let e = adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                let (e, held_out) =
+                    adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
                 st.lap("held-out");
                 progress("held-out", 1, 1);
-                let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures;
+                // The pool was captured once, for both.
+                let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures
+                    - 2 * pool_captures;
                 let clock = st.clock.clone();
                 st = if e[1] < e[0] { shelled } else { plain };
                 st.clock = clock;
                 st.stats.captures = captures;
                 st.stats.held_out_error = Some(e);
+                st.free_points.extend(held_out);
             } else {
                 let shells = *light_shells == LightShells::On;
+                let pool = adaptive::capture_pool(&mut st, &bake_box, *budget, shells, progress)?;
                 adaptive::adaptive(
-                    &mut st, &bake_box, *budget, *tolerance, shells, &ls, progress,
+                    &mut st, &bake_box, *budget, *tolerance, &pool, shells, &ls, progress,
                 )?;
             }
         }
@@ -561,6 +600,7 @@ pub fn place_timed(
             positions: st.positions,
             captured,
             stats: st.stats,
+            free_points: st.free_points,
         },
         phases,
     ))

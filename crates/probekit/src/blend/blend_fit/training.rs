@@ -21,8 +21,9 @@ const CELL_STREAM: u64 = 0x6365_6c6c; // "cell"
 /// training points never share a probe's random numbers.
 const TRAINING_INDEX: usize = 1 << 32;
 
-/// Captured training points: positions (metres) and their radiance SH.
-#[derive(Clone, Debug, PartialEq)]
+/// Captured training points: positions (metres) and their radiance SH
+/// (empty by default).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TrainingSet {
     /// Where each point was captured.
     pub positions: Vec<Vec3>,
@@ -71,7 +72,15 @@ pub fn capture_training_set(
         u.sort_by(f32::total_cmp);
         let b = [u[0], u[1] - u[0], u[2] - u[1], 1.0 - u[2]];
         let p = (0..4).fold(Vec3::ZERO, |acc, k| acc + b[k] * pos[t[k] as usize]);
-        if bake_box.contains(p) && is_free(baker.tracer(), p, SURFACE_CLEARANCE) {
+        // Not in a sphere light either: captured without the virtual
+        // offset, a point there would keep the lamp's radiance.
+        if bake_box.contains(p)
+            && baker
+                .scene()
+                .sphere_light_at(p, SURFACE_CLEARANCE)
+                .is_none()
+            && is_free(baker.tracer(), p, SURFACE_CLEARANCE)
+        {
             pts.push(p);
             cell_points += 1;
         }
@@ -82,6 +91,10 @@ pub fn capture_training_set(
     let mut s = capture.clone();
     s.samples = fit.samples;
     s.groups = false;
+    // The points keep a clearance from every surface (`is_free`): the
+    // virtual offset's pre-pass would trace its rays to leave them where
+    // they are.
+    s.validity.virtual_offset = false;
     let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
     let (positions, sh) = rs
         .into_iter()

@@ -112,12 +112,14 @@ pub(super) fn held_out_points(
 /// [`PROBE_CLEARANCE`](super::PROBE_CLEARANCE)), each sum weighted by the volume its point
 /// stands for, captured with `st`'s settings and their own random numbers.
 /// A placement whose tetrahedra the runtime rejects scores infinity.
+/// Also returns the captured held-out points (position, SH): points of free
+/// space, training points for the probe-weight fit.
 pub(in crate::placement) fn held_out_errors(
     st: &mut State,
     bbox: &Aabb,
     budget: usize,
     candidates: [&State; 2],
-) -> Result<[f32; 2], PlacementError> {
+) -> Result<([f32; 2], Vec<(Vec3, ShRgb)>), PlacementError> {
     let tracer = st.baker.tracer();
     let pts: Vec<(Vec3, f32)> = held_out_points(
         &st.baker.scene().lights,
@@ -131,7 +133,7 @@ pub(in crate::placement) fn held_out_errors(
     let at: Vec<Vec3> = pts.iter().map(|(p, _)| *p).collect();
     // (point, volume weight, captured SH), in free space of the box.
     let captured: Vec<(Vec3, f32, ShRgb)> = st
-        .capture_numbered(&at, HELD_OUT_FIRST_INDEX)?
+        .capture_free(&at, HELD_OUT_FIRST_INDEX)?
         .into_iter()
         .zip(&pts)
         .filter_map(|(c, &(_, w))| c.map(|(p, sh)| (p, w, sh)))
@@ -172,5 +174,6 @@ pub(in crate::placement) fn held_out_errors(
             *o = (err / total).sqrt() as f32;
         }
     }
-    Ok(out)
+    let points = captured.into_iter().map(|(p, _, sh)| (p, sh)).collect();
+    Ok((out, points))
 }

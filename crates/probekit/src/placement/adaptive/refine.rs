@@ -121,8 +121,12 @@ impl Adaptive<'_, '_, '_> {
             })
             .collect();
         self.st.stats.rejected_inside += n - cands.len();
-        let captured = self.st.capture(&cands)?;
-        for (p, sh) in captured.into_iter().filter(|(p, _)| bbox.contains(*p)) {
+        // They keep the clearance: captured in free space.
+        let first = self.st.next_index;
+        let captured = self.st.capture_free(&cands, first)?;
+        self.st.next_index += cands.len();
+        let captured = captured.into_iter().flatten();
+        for (p, sh) in captured.filter(|(p, _)| bbox.contains(*p)) {
             self.pool.energy.push(energy(&self.w, &sh));
             self.pool.pos.push(p);
             self.pool.sh.push(sh);
