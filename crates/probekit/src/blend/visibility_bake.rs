@@ -11,7 +11,7 @@
 //! probe weights.
 
 use super::blend_fit::{
-    capture_training_set, fit_blend, BlendFitError, BlendFitSettings, TrainingSet,
+    capture_training_points, fit_blend, BlendFitError, BlendFitSettings, TrainingSet,
 };
 use super::cell_planes::bake_file_cell_planes;
 use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
@@ -170,8 +170,10 @@ impl VisibilityBake {
     /// the bake stores), when selected; removes them otherwise.
     /// `captured`: training points already captured (a bake's placement
     /// captured them in free space; radiance SH as `file` stores it): they
-    /// count towards the `points_per_probe ×` probes the fit wants, and
-    /// only the rest are captured here ([`capture_training_set`]).
+    /// stand in for the half of the `points_per_probe ×` probes training
+    /// points that [`super::blend_fit::capture_training_set`] draws uniformly in the box, and
+    /// only the rest of those and the half in the cells are captured here
+    /// ([`capture_training_points`]).
     /// `progress(done, total)` counts training points. Deterministic (any
     /// thread count). Returns the time of its steps (`training points`:
     /// their capture; `fit`), empty when there are no weights to fit.
@@ -193,20 +195,27 @@ impl VisibilityBake {
         let mut clock = Clock::new(rays());
         let cloud = ProbeCloud::from_file(file).map_err(BlendFitError::from)?;
         let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
+        // Half uniform in the box: the captured points stand in for them;
+        // half in the cells, captured here.
+        let uniform = count.div_ceil(2);
+        let counts = [
+            uniform.saturating_sub(captured.positions.len()),
+            count - uniform,
+        ];
         let mut training = captured.clone();
-        let more = count.saturating_sub(captured.positions.len());
-        if more > 0 {
-            let new = capture_training_set(
-                baker,
-                &baker.scene().bake_box(),
-                cloud.mesh(),
-                more,
-                capture,
-                fit,
-                progress,
-            )?;
-            training.positions.extend(new.positions);
-            training.sh.extend(new.sh);
+        let new = capture_training_points(
+            baker,
+            &baker.scene().bake_box(),
+            cloud.mesh(),
+            counts,
+            capture,
+            fit,
+            progress,
+        )?;
+        training.positions.extend(new.positions);
+        training.sh.extend(new.sh);
+        if training.positions.is_empty() {
+            return Err(BlendFitError::NoTrainingPoints.into());
         }
         clock.lap("training points", rays());
         let f = fit_blend(&cloud, &training, fit, &fit.exponents())?;

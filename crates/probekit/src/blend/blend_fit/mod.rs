@@ -75,7 +75,7 @@ pub use exponent::{
     fit_blend, fit_file_probe_weights, FittedBlend, BRIGHTNESS_ABSOLUTE_TOLERANCE,
     BRIGHTNESS_CHOICES, DEFAULT_DIRECTIONAL,
 };
-pub use training::{capture_training_set, TrainingSet};
+pub use training::{capture_training_points, capture_training_set, TrainingSet};
 pub use weights::fit_probe_weights;
 
 use crate::capture::BakeError;

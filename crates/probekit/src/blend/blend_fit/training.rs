@@ -51,16 +51,40 @@ pub fn capture_training_set(
     fit: &BlendFitSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TrainingSet, BlendFitError> {
+    let uniform = count.div_ceil(2);
+    capture_training_points(
+        baker,
+        bake_box,
+        mesh,
+        [uniform, count - uniform],
+        capture,
+        fit,
+        progress,
+    )
+}
+
+/// [`capture_training_set`] with its two halves sized apart: `counts[0]`
+/// points uniform in the box, `counts[1]` uniform in tetrahedra chosen
+/// uniformly (a bake whose placement captured points of free space uses
+/// those for the first kind and captures only the second).
+pub fn capture_training_points(
+    baker: &Baker,
+    bake_box: &Aabb,
+    mesh: &TetMesh,
+    counts: [usize; 2],
+    capture: &CaptureSettings,
+    fit: &BlendFitSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TrainingSet, BlendFitError> {
     fit.validate()?;
     let seed = fit.seed ^ TRAINING_STREAM;
-    let uniform = count.div_ceil(2);
+    let [uniform, want] = counts;
     let mut pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, uniform, seed)
         .into_iter()
         .map(|p| p.position)
         .collect();
     let tets = mesh.tets();
     let pos = mesh.positions();
-    let want = count - uniform;
     let mut tries = 0u64;
     let mut cell_points = 0;
     while !tets.is_empty() && cell_points < want && tries < 200 * want as u64 + 1000 {
@@ -86,6 +110,9 @@ pub fn capture_training_set(
         }
     }
     if pts.is_empty() {
+        if counts == [0, 0] {
+            return Ok(TrainingSet::default());
+        }
         return Err(BlendFitError::NoTrainingPoints);
     }
     let mut s = capture.clone();
