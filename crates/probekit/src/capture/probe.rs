@@ -124,14 +124,14 @@ pub struct CaptureResult {
 }
 
 impl Baker<'_> {
-    /// One chunk of probe samples `[start, end)`.
+    /// One chunk of probe samples `[start, end)`; `keys`: the R2 rotation
+    /// of the directions and the key of the light samples' scrambles.
     fn capture_chunk(
         &self,
         x: Vec3,
         probe_index: u64,
         s: &CaptureSettings,
-        rot: Vec2,
-        light_key: u64,
+        (rot, light_key): (Vec2, u64),
         range: (u32, u32),
         slots: usize,
     ) -> (Accum, HitStats) {
@@ -193,7 +193,7 @@ impl Baker<'_> {
             .collect();
         let parts: Vec<(Accum, HitStats)> = chunks
             .par_iter()
-            .map(|&r| self.capture_chunk(x, probe_index, s, rot, light_key, r, slots))
+            .map(|&r| self.capture_chunk(x, probe_index, s, (rot, light_key), r, slots))
             .collect();
         let ncoef = num_coeffs(s.order);
         let mut acc = Accum::new(slots, ncoef);

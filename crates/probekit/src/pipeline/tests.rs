@@ -7,11 +7,13 @@ use crate::recipe::Recipe;
 /// A quick default-shaped bake of the demo: adaptive placement with
 /// `auto` light shells and every kind of blend data, few samples.
 fn quick_recipe() -> Recipe {
-    let mut r = Recipe::default();
-    r.placement = Placement::Adaptive {
-        budget: 24,
-        tolerance: 0.0,
-        light_shells: crate::recipe::LightShellsName::Auto,
+    let mut r = Recipe {
+        placement: Placement::Adaptive {
+            budget: 24,
+            tolerance: 0.0,
+            light_shells: crate::recipe::LightShellsName::Auto,
+        },
+        ..Recipe::default()
     };
     r.capture.samples = 32;
     r.capture.bounces = 1;

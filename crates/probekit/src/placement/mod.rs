@@ -111,8 +111,11 @@ pub enum LightShells {
     /// for (a stratified estimate of the same error with far less variance,
     /// `adaptive::held_out_points`), captured like the pool but with their
     /// own random numbers and never offered as candidates.
-    /// Costs about 2.5× the placement time of `Off`, plus the held-out
-    /// captures (at least 4096). The default.
+    /// The candidate pool is captured once for both placements; the
+    /// held-out points are captured at half the pool's samples, in rounds
+    /// until the choice is clear, and become training points of the probe
+    /// weights, which need no capture of their own for that half. The
+    /// default.
     #[default]
     Auto,
 }

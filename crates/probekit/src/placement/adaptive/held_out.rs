@@ -114,6 +114,9 @@ pub(super) fn held_out_points(
 /// bake (BENCHMARKS.md, "Where a bake's time goes").
 const HELD_OUT_SAMPLES: u32 = 128;
 
+/// Captured points of free space: (position, radiance SH).
+type FreePoints = Vec<(Vec3, ShRgb)>;
+
 /// Held-out points captured per round of [`held_out_errors`].
 const HELD_OUT_ROUND: usize = 1024;
 
@@ -146,7 +149,7 @@ pub(in crate::placement) fn held_out_errors(
     bbox: &Aabb,
     budget: usize,
     candidates: [&State; 2],
-) -> Result<([f32; 2], Vec<(Vec3, ShRgb)>), PlacementError> {
+) -> Result<([f32; 2], FreePoints), PlacementError> {
     let tracer = st.baker.tracer();
     let salt = st.settings.seed ^ HELD_OUT_SALT;
     let mut pts: Vec<(Vec3, f32)> = held_out_points(

@@ -8,7 +8,9 @@
 //! 1. **Pool.** About `4 × budget` points, jittered-stratified over the bake
 //!    box, kept when in free space (not inside geometry, no surface within
 //!    [`PROBE_CLEARANCE`], up to [`CLEARANCE_TOLERANCE`]), captured at the
-//!    placement sample count; the outermost layer sits just inside the box's
+//!    placement sample count without the virtual offset (they have
+//!    clearance), once for both placements of `auto` light shells
+//!    ([`capture_pool`]); the outermost layer sits just inside the box's
 //!    faces ([`BOUNDARY_SNAP`]), its points exactly co-planar
 //!    ([`super::snap_to_layer`]).
 //!    The pool is both the candidate set and the validation set. Nothing
