@@ -170,10 +170,9 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         check_outputs(&[Some(&output), a.render.as_deref()])?;
     }
     let progress = crate::progress::Progress::new();
+    // The scene's loading joins the bake's `load` phase (no progress line:
+    // an error in the recipe must stay the only line on stderr).
     let mut clock = Clock::new(0);
-    if !a.recipe.print_recipe {
-        progress.update("load", 0, 1);
-    }
     let scene = load_scene(&a.scene)?;
     let recipe = a.recipe.resolve(&a.scene, &scene, a.flag_layer())?;
     if a.recipe.print_recipe {

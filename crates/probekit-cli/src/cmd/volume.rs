@@ -134,7 +134,6 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         let record = BakeRecord::without_scene(LIGHTS_DEMO, recipe.clone());
         bake_volume_from(&src, &recipe.recorded_box(), &recipe, 0.5, record)
     } else {
-        progress.update("load", 0, 1);
         let scene = load_scene(&a.scene)?;
         let recipe = a.recipe.resolve(&a.scene, &scene, a.flag_layer())?;
         if a.recipe.print_recipe {
