@@ -348,7 +348,12 @@ fn progress_off_a_terminal_is_a_line_per_phase() {
     );
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    for phase in ["capture", "visibility", "cell visibility", "probe weights"] {
+    for phase in [
+        "capture",
+        "distance moments",
+        "cell visibility",
+        "weight fit",
+    ] {
         assert!(err.contains(&format!("{phase}: started (")), "{err}");
         assert!(err.contains(&format!("{phase}: done (")), "{err}");
     }

@@ -112,6 +112,40 @@ pub fn r2_point(i: u64, offset: Vec2) -> Vec2 {
     )
 }
 
+/// Point `i` of the Sobol' (0,2)-sequence in `[0,1)²`, randomised by the
+/// digital shift `scramble` (XOR on the 32-bit binary fractions): the first
+/// two dimensions of Sobol's sequence, the van der Corput sequence in base
+/// 2 and the dimension whose generator matrix is Pascal's triangle mod 2
+/// (Kollig & Keller, "Efficient Multidimensional Sampling", 2002; pbrt-v3
+/// `Sobol2D`). Every aligned block of `2^k` consecutive points is a
+/// `(0, k, 2)`-net, for any shift: each elementary interval of area `2^-k`
+/// holds exactly one point, so a sum over the block stratifies both
+/// coordinates at once. The shift keeps each point uniform over the square.
+pub fn sobol02_point(i: u32, scramble: [u32; 2]) -> Vec2 {
+    let x = i.reverse_bits() ^ scramble[0];
+    let mut y = 0u32;
+    let mut v = 1u32 << 31;
+    let mut n = i;
+    while n != 0 {
+        if n & 1 != 0 {
+            y ^= v;
+        }
+        n >>= 1;
+        v ^= v >> 1;
+    }
+    let y = y ^ scramble[1];
+    // The top 24 bits: exact in f32 and below one.
+    let f = |b: u32| (b >> 8) as f32 * (1.0 / (1u32 << 24) as f32);
+    Vec2::new(f(x), f(y))
+}
+
+/// The digital shift of [`sobol02_point`] for dimension pair `k` of the
+/// random key `key` (a SplitMix64 mix of both).
+pub fn sobol02_scramble(key: u64, k: u64) -> [u32; 2] {
+    let h = mix64(key ^ mix64(k.wrapping_add(1).wrapping_mul(SPLITMIX_GAMMA)));
+    [h as u32, (h >> 32) as u32]
+}
+
 /// The largest f32 below one; uniform samples are clamped to it.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
@@ -248,6 +282,47 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The first points of the unscrambled (0,2)-sequence are the
+    /// textbook ones, and every aligned block of `2^k` points (k ≤ 8) of a
+    /// scrambled sequence puts exactly one point in each elementary
+    /// interval `[a/2^j, (a+1)/2^j) × [b/2^(k−j), (b+1)/2^(k−j))`, counted
+    /// here by brute force.
+    #[test]
+    fn sobol02_points_form_nets_for_any_scramble() {
+        let first: Vec<Vec2> = (0..4).map(|i| sobol02_point(i, [0, 0])).collect();
+        assert_eq!(
+            first,
+            [
+                Vec2::new(0.0, 0.0),
+                Vec2::new(0.5, 0.5),
+                Vec2::new(0.25, 0.75),
+                Vec2::new(0.75, 0.25)
+            ]
+        );
+        for key in [0u64, 1, 0xdead_beef] {
+            let sc = sobol02_scramble(key, 3);
+            for k in 0..=8u32 {
+                let n = 1u32 << k;
+                for block in [0u32, 5] {
+                    let pts: Vec<Vec2> = (0..n).map(|i| sobol02_point(block * n + i, sc)).collect();
+                    for j in 0..=k {
+                        let (nx, ny) = (1u32 << j, 1u32 << (k - j));
+                        let mut cells = vec![0u32; n as usize];
+                        for p in &pts {
+                            assert!(p.x >= 0.0 && p.x < 1.0 && p.y >= 0.0 && p.y < 1.0);
+                            let (cx, cy) = ((p.x * nx as f32) as u32, (p.y * ny as f32) as u32);
+                            cells[(cx * ny + cy) as usize] += 1;
+                        }
+                        assert!(cells.iter().all(|&c| c == 1), "k {k} j {j} key {key}");
+                    }
+                }
+            }
+        }
+        // Different keys and pairs scramble differently.
+        assert_ne!(sobol02_scramble(1, 0), sobol02_scramble(1, 1));
+        assert_ne!(sobol02_scramble(1, 0), sobol02_scramble(2, 0));
+    }
 
     /// Pearson chi-square of direction samples against a density, binned in
     /// `(cos θ, φ)` cells whose expected counts are integrated from `pdf` by

@@ -11,6 +11,7 @@ use anyhow::{anyhow, Context, Result};
 use clap::{Args, ValueEnum};
 use probekit::format::{write_probe_file, ProbeFile};
 use probekit::pipeline::{Bake, Baked};
+use probekit::progress::Clock;
 use std::path::PathBuf;
 use toml::Value;
 
@@ -97,7 +98,9 @@ pub struct BakeArgs {
         help_heading = "Output"
     )]
     pub render: Option<PathBuf>,
-    /// Print the report as JSON.
+    /// Print the report as JSON, with `phases`: wall and CPU seconds and
+    /// rays traced per phase (load, placement and its steps, capture,
+    /// assembly, distance moments, cell visibility, weight fit, picture).
     #[arg(long, help_heading = "Output")]
     pub json: bool,
 }
@@ -166,6 +169,10 @@ pub fn run(a: &BakeArgs) -> Result<()> {
     if !a.recipe.print_recipe {
         check_outputs(&[Some(&output), a.render.as_deref()])?;
     }
+    let progress = crate::progress::Progress::new();
+    // The scene's loading joins the bake's `load` phase (no progress line:
+    // an error in the recipe must stay the only line on stderr).
+    let mut clock = Clock::new(0);
     let scene = load_scene(&a.scene)?;
     let recipe = a.recipe.resolve(&a.scene, &scene, a.flag_layer())?;
     if a.recipe.print_recipe {
@@ -173,10 +180,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         return Ok(());
     }
     let outname = output.display().to_string();
-    let progress = crate::progress::Progress::new();
-    let bake = Bake::new(&scene, &a.scene, &recipe).with_context(|| a.scene.clone())?;
+    let scene_load = clock.lap("load", 0).clone();
+    let bake = Bake::new(&scene, &a.scene, &recipe)
+        .with_context(|| a.scene.clone())?
+        .with_load_time(&scene_load);
     let callback = progress.callback();
-    let Baked { file, report } = match shard {
+    let Baked { file, mut report } = match shard {
         Some((i, n)) => bake.run_part(i, n, &callback),
         None => bake.run(&callback),
     }
@@ -192,8 +201,11 @@ pub fn run(a: &BakeArgs) -> Result<()> {
         .clone()
         .or_else(|| default_demo.then(|| output.with_extension("png")));
     if let Some(png) = &picture {
+        clock.restart(0);
         let rs = super::render::bake_settings(&file, &scene);
         super::render::render_to_png(&scene, &file, &rs, png, &outname)?;
+        // The picture is not part of the bake, but of the command's time.
+        report.phases.push(clock.lap("picture", 0).clone());
     }
     if a.json {
         let mut v = serde_json::to_value(&report)?;

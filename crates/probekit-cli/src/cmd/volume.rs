@@ -13,6 +13,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use probekit::format::write_probe_file;
 use probekit::pipeline::{bake_volume, bake_volume_from};
+use probekit::progress::Clock;
 use probekit::recipe::{BakeRecord, RecipeLayers};
 use probekit::volume::{inspect_json, plot_depths, LightsDemo};
 use std::path::PathBuf;
@@ -76,8 +77,9 @@ pub struct VolumeArgs {
     /// octree spent its samples).
     #[arg(long, value_name = "FILE.png", help_heading = "Output")]
     pub plot: Option<PathBuf>,
-    /// Print the statistics as JSON (`inspect --json`'s, plus `captures`
-    /// and `dilated`).
+    /// Print the statistics as JSON (`inspect --json`'s, plus `captures`,
+    /// `dilated` and `phases`: wall and CPU seconds and rays traced per
+    /// phase: load, build with its capture and refinement, assembly).
     #[arg(long, help_heading = "Output")]
     pub json: bool,
 }
@@ -117,7 +119,8 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         check_outputs(&[Some(&a.output), a.plot.as_deref()])?;
     }
     let progress = crate::progress::Progress::new();
-    let (file, report) = if a.scene == LIGHTS_DEMO {
+    let mut clock = Clock::new(0);
+    let (file, mut report) = if a.scene == LIGHTS_DEMO {
         let mut layers = RecipeLayers::new();
         let (lo, hi) = LightsDemo::demo_box();
         let bx = Value::try_from([lo.to_array(), hi.to_array()])?;
@@ -137,10 +140,18 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
             print!("{}", recipe.resolved_for(&scene).to_toml());
             return Ok(());
         }
+        clock.lap("load", 0);
         bake_volume(&scene, &a.scene, &recipe, &progress.callback())
     }
     .with_context(|| a.scene.clone())?;
     progress.finish();
+    // The scene's loading joins the bake's `load` phase (the tracer).
+    if let (Some(l), Some(scene_load)) = (
+        report.phases.iter_mut().find(|p| p.phase == "load"),
+        clock.phases().first(),
+    ) {
+        l.add(scene_load);
+    }
     let out = a.output.display().to_string();
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;
     if let Some(p) = &a.plot {
@@ -151,6 +162,7 @@ pub fn run(a: &VolumeArgs) -> Result<()> {
         let mut j = inspect_json(&file).with_context(|| out.clone())?;
         j["captures"] = report.captures.into();
         j["dilated"] = report.dilated.into();
+        j["phases"] = serde_json::to_value(&report.phases)?;
         println!("{j}");
     } else {
         println!(

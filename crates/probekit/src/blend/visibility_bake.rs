@@ -10,12 +10,16 @@
 //! exactly as a baked one; [`VisibilityBake::fit_weights_into`] then fits the
 //! probe weights.
 
-use super::blend_fit::{fit_file_probe_weights, BlendFitError, BlendFitSettings};
+use super::blend_fit::{
+    capture_training_points, fit_blend, BlendFitError, BlendFitSettings, TrainingSet,
+};
 use super::cell_planes::bake_file_cell_planes;
 use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
 use crate::capture::{Baker, CaptureSettings};
+use crate::progress::{Clock, PhaseTime};
 use crate::trace::Tracer;
+use probekit_runtime::cloud::ProbeCloud;
 use probekit_runtime::format::ProbeFile;
 use thiserror::Error;
 
@@ -104,7 +108,8 @@ impl VisibilityBake {
     /// `moments_progress(done, total)` counts probes,
     /// `cells_progress` cells and hull faces, then the cells whose planes
     /// are fitted. Deterministic (any thread
-    /// count).
+    /// count). The same as [`VisibilityBake::bake_moments_into`] then
+    /// [`VisibilityBake::bake_cells_into`].
     pub fn bake_into(
         &self,
         tracer: &Tracer<'_>,
@@ -112,27 +117,46 @@ impl VisibilityBake {
         moments_progress: &(dyn Fn(usize, usize) + Sync),
         cells_progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(), VisibilityBakeError> {
+        self.bake_moments_into(tracer, file, moments_progress)?;
+        self.bake_cells_into(tracer, file, cells_progress)
+    }
+
+    /// The first half of [`VisibilityBake::bake_into`]: the distance
+    /// moments (or none), and no probe weights. `progress(done, total)`
+    /// counts probes.
+    pub fn bake_moments_into(
+        &self,
+        tracer: &Tracer<'_>,
+        file: &mut ProbeFile,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
         file.visibility = match &self.moments {
-            Some(v) => Some(bake_distance_moments(
-                tracer,
-                &file.positions,
-                v,
-                moments_progress,
-            )?),
+            Some(v) => Some(bake_distance_moments(tracer, &file.positions, v, progress)?),
             None => None,
         };
+        file.probe_weights = None;
+        file.brightness_exponent = 0.0;
+        file.directional_exponent = 0.0;
+        Ok(())
+    }
+
+    /// The second half of [`VisibilityBake::bake_into`]: the cell
+    /// visibility and occluder planes (or none), and no probe weights.
+    /// `progress(done, total)` counts cells and hull faces, then the cells
+    /// whose planes are fitted.
+    pub fn bake_cells_into(
+        &self,
+        tracer: &Tracer<'_>,
+        file: &mut ProbeFile,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<(), VisibilityBakeError> {
         file.cell_visibility = match self.cell_subdivision {
-            Some(lattice) => Some(bake_file_cell_visibility(
-                tracer,
-                file,
-                lattice,
-                cells_progress,
-            )?),
+            Some(lattice) => Some(bake_file_cell_visibility(tracer, file, lattice, progress)?),
             None => None,
         };
         file.cell_planes = None;
         if self.cell_planes {
-            file.cell_planes = bake_file_cell_planes(tracer, file, cells_progress)?;
+            file.cell_planes = bake_file_cell_planes(tracer, file, progress)?;
         }
         file.probe_weights = None;
         file.brightness_exponent = 0.0;
@@ -141,35 +165,65 @@ impl VisibilityBake {
     }
 
     /// After [`VisibilityBake::bake_into`]: fits probe weights to the blend
-    /// `file` now has ([`fit_file_probe_weights`]), training points captured
+    /// `file` now has (as [`super::blend_fit::fit_file_probe_weights`]), training points captured
     /// with `capture` (indirect light only when `capture.split_direct`, as
     /// the bake stores), when selected; removes them otherwise.
+    /// `captured`: training points already captured (a bake's placement
+    /// captured them in free space; radiance SH as `file` stores it): they
+    /// stand in for the half of the `points_per_probe ×` probes training
+    /// points that [`super::blend_fit::capture_training_set`] draws uniformly in the box, and
+    /// only the rest of those and the half in the cells are captured here
+    /// ([`capture_training_points`]).
     /// `progress(done, total)` counts training points. Deterministic (any
-    /// thread count).
+    /// thread count). Returns the time of its steps (`training points`:
+    /// their capture; `fit`), empty when there are no weights to fit.
     pub fn fit_weights_into(
         &self,
         baker: &Baker,
         capture: &CaptureSettings,
         file: &mut ProbeFile,
+        captured: &TrainingSet,
         progress: &(dyn Fn(usize, usize) + Sync),
-    ) -> Result<(), VisibilityBakeError> {
+    ) -> Result<Vec<PhaseTime>, VisibilityBakeError> {
         file.probe_weights = None;
         file.brightness_exponent = 0.0;
         file.directional_exponent = 0.0;
-        if let Some(fit) = &self.probe_weights {
-            let f = fit_file_probe_weights(
-                baker,
-                file,
-                &baker.scene().bake_box(),
-                capture,
-                fit,
-                progress,
-            )?;
-            file.probe_weights = Some(f.weights);
-            file.brightness_exponent = f.brightness;
-            file.directional_exponent = f.directional;
+        let Some(fit) = &self.probe_weights else {
+            return Ok(Vec::new());
+        };
+        let rays = || baker.tracer().rays();
+        let mut clock = Clock::new(rays());
+        let cloud = ProbeCloud::from_file(file).map_err(BlendFitError::from)?;
+        let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
+        // Half uniform in the box: the captured points stand in for them;
+        // half in the cells, captured here.
+        let uniform = count.div_ceil(2);
+        let counts = [
+            uniform.saturating_sub(captured.positions.len()),
+            count - uniform,
+        ];
+        let mut training = captured.clone();
+        let new = capture_training_points(
+            baker,
+            &baker.scene().bake_box(),
+            cloud.mesh(),
+            counts,
+            capture,
+            fit,
+            progress,
+        )?;
+        training.positions.extend(new.positions);
+        training.sh.extend(new.sh);
+        if training.positions.is_empty() {
+            return Err(BlendFitError::NoTrainingPoints.into());
         }
-        Ok(())
+        clock.lap("training points", rays());
+        let f = fit_blend(&cloud, &training, fit, &fit.exponents())?;
+        clock.lap("fit", rays());
+        file.probe_weights = Some(f.weights);
+        file.brightness_exponent = f.brightness;
+        file.directional_exponent = f.directional;
+        Ok(clock.take_phases())
     }
 }
 

@@ -5,7 +5,8 @@
 use super::validity::HitStats;
 use super::Baker;
 use crate::sampling::{
-    power_heuristic, sample_cosine_hemisphere, sample_uniform_sphere, Frame, SampleRng, INV_FOUR_PI,
+    mix64, power_heuristic, sample_cosine_hemisphere, sample_uniform_sphere, sobol02_point,
+    sobol02_scramble, Frame, SampleRng, INV_FOUR_PI,
 };
 use crate::trace::{offset_ray_origin, Ray, SHADOW_EPSILON};
 use glam::{DVec3, Vec2, Vec3};
@@ -106,15 +107,22 @@ impl Baker<'_> {
 
     /// Next-event estimation at a Lambertian vertex: `o` the offset point,
     /// `n` the facing normal, `f = throughput · ρ/π`. Calls `sink(value, group)`.
+    /// With `stratified = Some((i, key))` the sphere/disk lights and the
+    /// environment map draw their 2D sample as [`Baker::nee_receiver`] does.
     fn nee_surface(
         &self,
         o: Vec3,
         n: Vec3,
         f: Vec3,
         rng: &mut SampleRng,
+        stratified: Option<(u32, u64)>,
         sink: &mut impl FnMut(Vec3, u16),
     ) {
         let e = &self.emitters;
+        let u2 = |k: u64, rng: &mut SampleRng| match stratified {
+            Some((i, key)) => sobol02_point(i, sobol02_scramble(key, k)),
+            None => rng.next_2d(),
+        };
         for d in &e.delta {
             if let Some((wi, irr, dist)) = d.incident(o) {
                 let cos = n.dot(wi);
@@ -127,7 +135,7 @@ impl Baker<'_> {
             }
         }
         for (k, s) in e.shapes.iter().enumerate() {
-            if let Some(ls) = s.sample(o, rng.next_2d()) {
+            if let Some(ls) = s.sample(o, u2(k as u64, rng)) {
                 let cos = n.dot(ls.wi);
                 if cos > 0.0 && ls.pdf > 0.0 {
                     let t = self.shadow(o, ls.wi, ls.dist, Some(k));
@@ -152,7 +160,7 @@ impl Baker<'_> {
             }
         }
         if e.env.is_sampled() {
-            if let Some(ls) = e.env.sample(rng.next_2d()) {
+            if let Some(ls) = e.env.sample(u2(u64::MAX, rng)) {
                 let cos = n.dot(ls.wi);
                 if cos > 0.0 {
                     let t = self.shadow(o, ls.wi, f32::INFINITY, None);
@@ -166,17 +174,30 @@ impl Baker<'_> {
     }
 
     /// Light sampling at the receiver point `x` (no surface there). Calls
-    /// `sink(direction, value, group)` with `value = L·T·w/pdf`.
+    /// `sink(direction, value, group)` with `value = L·T·w/pdf`. With
+    /// `stratified = Some((i, key))` the sphere/disk lights and the
+    /// environment map draw their 2D sample from point `i` of a scrambled
+    /// (0,2)-sequence ([`sobol02_point`], one scramble per light from
+    /// `key`) instead of `rng`: over the receiver's samples `0..n` the
+    /// light samples are stratified, which cuts the noise of the direct
+    /// light from small lamps (one sample of the lamp per receiver
+    /// direction) far below independent draws; each sample stays uniform,
+    /// so the estimate stays unbiased.
     pub(super) fn nee_receiver(
         &self,
         x: Vec3,
         recv: &Receiver,
         rng: &mut SampleRng,
+        stratified: Option<(u32, u64)>,
         sink: &mut impl FnMut(Vec3, Vec3, u16),
     ) {
         let e = &self.emitters;
+        let u2 = |k: u64, rng: &mut SampleRng| match stratified {
+            Some((i, key)) => sobol02_point(i, sobol02_scramble(key, k)),
+            None => rng.next_2d(),
+        };
         for (k, s) in e.shapes.iter().enumerate() {
-            if let Some(ls) = s.sample(x, rng.next_2d()) {
+            if let Some(ls) = s.sample(x, u2(k as u64, rng)) {
                 let p0 = recv.pdf(ls.wi);
                 if p0 > 0.0 && ls.pdf > 0.0 {
                     let t = self.shadow(x, ls.wi, ls.dist, Some(k));
@@ -201,7 +222,7 @@ impl Baker<'_> {
             }
         }
         if e.env.is_sampled() {
-            if let Some(ls) = e.env.sample(rng.next_2d()) {
+            if let Some(ls) = e.env.sample(u2(u64::MAX, rng)) {
                 let p0 = recv.pdf(ls.wi);
                 if p0 > 0.0 {
                     let t = self.shadow(x, ls.wi, f32::INFINITY, None);
@@ -230,7 +251,12 @@ impl Baker<'_> {
 
     /// Follows one receiver direction: calls `sink(value, group, direct)` with
     /// value = (radiance contribution)/p0, already MIS-weighted. Records the
-    /// first geometric hit into `stats` when given.
+    /// first geometric hit into `stats` when given. With `stratified =
+    /// Some((i, key))` the first surface vertex draws its light samples and
+    /// its next direction from point `i` of scrambled (0,2)-sequences
+    /// (scrambles from `key`, apart from the receiver's): the light that
+    /// reaches the probe after one bounce, most of the indirect light, is
+    /// then stratified over the receiver's samples too.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn trace_path(
         &self,
@@ -240,6 +266,7 @@ impl Baker<'_> {
         params: PathParams,
         rng: &mut SampleRng,
         mut stats: Option<&mut HitStats>,
+        stratified: Option<(u32, u64)>,
         sink: &mut impl FnMut(Vec3, u16, bool),
     ) {
         let e = &self.emitters;
@@ -316,7 +343,11 @@ impl Baker<'_> {
             let n = h.facing_normal();
             let o = offset_ray_origin(h.point, n);
             let f = beta * albedo / PI;
-            self.nee_surface(o, n, f, rng, &mut |v, g| sink(v, g, false));
+            // The first vertex's samples, stratified when asked.
+            let first = stratified
+                .filter(|_| depth == 0)
+                .map(|(i, key)| (i, mix64(!key)));
+            self.nee_surface(o, n, f, rng, first, &mut |v, g| sink(v, g, false));
             depth += 1;
             if depth > params.rr_depth {
                 let q = beta.max_element().min(0.95);
@@ -325,7 +356,11 @@ impl Baker<'_> {
                 }
                 beta /= q;
             }
-            let local = sample_cosine_hemisphere(rng.next_2d());
+            let u = match first {
+                Some((i, key)) => sobol02_point(i, sobol02_scramble(key, u64::MAX - 1)),
+                None => rng.next_2d(),
+            };
+            let local = sample_cosine_hemisphere(u);
             if local.z <= 0.0 {
                 return;
             }

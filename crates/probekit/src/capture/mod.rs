@@ -26,7 +26,11 @@
 //!   `L(x, ω_i)/p(ω_i)`; emitters it hits are weighted by the power heuristic
 //!   against light sampling (Veach & Guibas 1995).
 //! - **Light samples** at `x` (sphere and disk lights, emissive triangles, an
-//!   environment map) with the complementary MIS weight.
+//!   environment map) with the complementary MIS weight; a probe's samples
+//!   of each sphere or disk light and of the environment map are points of
+//!   a scrambled Sobol' (0,2)-sequence ([`crate::sampling::sobol02_point`],
+//!   one scramble per light and probe), stratified over its receiver
+//!   samples like the directions.
 //!
 //! At every surface vertex (Lambertian, albedo `ρ`) the path does next-event
 //! estimation to every light (delta lights exactly, area lights and the
@@ -59,6 +63,8 @@ mod probe;
 mod reference;
 pub mod validity;
 
+#[cfg(test)]
+mod stratified_tests;
 #[cfg(test)]
 pub(crate) mod tests;
 
@@ -119,6 +125,9 @@ pub struct Baker<'s> {
     scene: &'s Scene,
     tracer: Tracer<'s>,
     emitters: Emitters,
+    /// Light samples at a probe from a scrambled (0,2)-sequence (the
+    /// default) or, for the tests that compare the two, independent draws.
+    stratified_lights: bool,
 }
 
 impl<'s> Baker<'s> {
@@ -133,6 +142,7 @@ impl<'s> Baker<'s> {
             scene,
             tracer,
             emitters: Emitters::new(scene)?,
+            stratified_lights: true,
         })
     }
 

@@ -20,6 +20,10 @@ pub const CHUNK: u32 = 256;
 /// Stream index (per receiver) reserved for the R2 rotation of the capture directions.
 pub(super) const STREAM_ROTATION: u64 = u64::MAX;
 
+/// Stream index (per receiver) of the key of its light samples' scrambles
+/// (`Baker::nee_receiver`); `STREAM_ROTATION − 1` is the validity pre-pass's.
+const STREAM_LIGHTS: u64 = u64::MAX - 2;
+
 /// How to capture one probe.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CaptureSettings {
@@ -120,13 +124,14 @@ pub struct CaptureResult {
 }
 
 impl Baker<'_> {
-    /// One chunk of probe samples `[start, end)`.
+    /// One chunk of probe samples `[start, end)`; `keys`: the R2 rotation
+    /// of the directions and the key of the light samples' scrambles.
     fn capture_chunk(
         &self,
         x: Vec3,
         probe_index: u64,
         s: &CaptureSettings,
-        rot: Vec2,
+        (rot, light_key): (Vec2, u64),
         range: (u32, u32),
         slots: usize,
     ) -> (Accum, HitStats) {
@@ -144,6 +149,7 @@ impl Baker<'_> {
             let mut rng = SampleRng::new(s.seed, probe_index, i as u64);
             let dir = recv.sample(r2_point(i as u64, rot));
             pending.clear();
+            let stratified = self.stratified_lights.then_some((i, light_key));
             self.trace_path(
                 x,
                 dir,
@@ -151,6 +157,7 @@ impl Baker<'_> {
                 params,
                 &mut rng,
                 Some(&mut st),
+                stratified,
                 &mut |v, g, d| pending.push((v, g, d)),
             );
             if !pending.is_empty() {
@@ -159,7 +166,7 @@ impl Baker<'_> {
                     acc.add(slot(g, d), &basis[..ncoef], v);
                 }
             }
-            self.nee_receiver(x, &recv, &mut rng, &mut |wi, v, g| {
+            self.nee_receiver(x, &recv, &mut rng, stratified, &mut |wi, v, g| {
                 eval_basis(s.order, wi, &mut basis);
                 acc.add(slot(g, true), &basis[..ncoef], v);
             });
@@ -179,13 +186,14 @@ impl Baker<'_> {
     ) -> (Accum, HitStats, Option<Vec<DVec3>>) {
         let slots = 2 * self.emitters.groups.len();
         let rot = SampleRng::new(s.seed, probe_index, STREAM_ROTATION).next_2d();
+        let light_key = SampleRng::new(s.seed, probe_index, STREAM_LIGHTS).next_u64();
         let n = s.samples;
         let chunks: Vec<(u32, u32)> = (0..n.div_ceil(CHUNK))
             .map(|c| (c * CHUNK, ((c + 1) * CHUNK).min(n)))
             .collect();
         let parts: Vec<(Accum, HitStats)> = chunks
             .par_iter()
-            .map(|&r| self.capture_chunk(x, probe_index, s, rot, r, slots))
+            .map(|&r| self.capture_chunk(x, probe_index, s, (rot, light_key), r, slots))
             .collect();
         let ncoef = num_coeffs(s.order);
         let mut acc = Accum::new(slots, ncoef);

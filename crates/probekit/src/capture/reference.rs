@@ -99,11 +99,20 @@ impl Baker<'_> {
                 let p0 = recv.pdf(dir);
                 if p0 > 0.0 {
                     let cos = n.dot(dir).max(0.0);
-                    self.trace_path(point, dir, p0, params, &mut rng, None, &mut |v, _, _| {
-                        sum += (v * cos).as_dvec3();
-                    });
+                    self.trace_path(
+                        point,
+                        dir,
+                        p0,
+                        params,
+                        &mut rng,
+                        None,
+                        None,
+                        &mut |v, _, _| {
+                            sum += (v * cos).as_dvec3();
+                        },
+                    );
                 }
-                self.nee_receiver(point, &recv, &mut rng, &mut |wi, v, _| {
+                self.nee_receiver(point, &recv, &mut rng, None, &mut |wi, v, _| {
                     sum += (v * n.dot(wi).max(0.0)).as_dvec3();
                 });
             }

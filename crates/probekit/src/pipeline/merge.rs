@@ -1,11 +1,12 @@
 //! Joining shard parts into the file a single machine writes.
 
-use super::{PipelineError, Progress};
+use super::PipelineError;
 use crate::blend::cell_planes::bake_file_cell_planes;
 use crate::blend::cell_visibility::bake_file_cell_visibility;
 use crate::format::check_scene_hash;
 use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
 use crate::format::ProbeFile;
+use crate::progress::Progress;
 use crate::recipe::BakeRecord;
 use crate::scene::Scene;
 use probekit_sh::ShRgb;
@@ -193,9 +194,23 @@ pub fn merge(
                 .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
             }
         }
-        kinds.fit_weights_into(&baker, &recipe.capture_settings(), &mut file, &|d, t| {
-            progress("probe weights", d, t)
-        })?;
+        // The fit trains on what placement captured, where it did: place
+        // again (placement is deterministic) for the same points.
+        let training = match (&kinds.probe_weights, &recipe.placement) {
+            (Some(_), crate::recipe::Placement::Adaptive { .. }) => {
+                let bake = super::Bake::new(scene, scene_name, recipe)?;
+                let placed = bake.place(progress)?;
+                bake.captured_training(&placed)
+            }
+            _ => crate::blend::blend_fit::TrainingSet::default(),
+        };
+        kinds.fit_weights_into(
+            &baker,
+            &recipe.capture_settings(),
+            &mut file,
+            &training,
+            &|d, t| progress("weight fit", d, t),
+        )?;
     }
     file.validate()?;
     Ok(file)

@@ -17,33 +17,37 @@
 //! [`Bake::run`] runs them all; [`Bake::run_part`] bakes one shard into a
 //! part file and [`merge`] joins the parts into the file a single machine
 //! writes, byte for byte. [`bake_volume`] is the pipeline of an irradiance
-//! volume. Each stage reports progress as `(phase, done, total)` and its
-//! wall time in the [`BakeReport`].
+//! volume. Each stage reports progress as `(phase, done, total)` and, in
+//! the [`BakeReport`], its wall and CPU seconds and the rays it traced
+//! ([`PhaseTime`]): `load` (the tracer; the caller may add the scene's
+//! loading, [`Bake::with_load_time`]), `placement` (with its sub-phases),
+//! `capture`, `assembly`, `distance moments`, `cell visibility` and
+//! `weight fit`.
 
 mod merge;
 mod positions;
 pub mod sweep;
+#[cfg(test)]
+mod tests;
 mod volume;
 
 pub use merge::merge;
 pub use positions::read_positions;
 pub use volume::{bake_volume, bake_volume_from, VolumeReport};
 
+use crate::blend::blend_fit::TrainingSet;
 use crate::blend::visibility_bake::VisibilityBakeError;
 use crate::capture::{BakeError, BakeOutput, Baker, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity, light_groups, CloudFileError};
 use crate::format::{Codec, FormatError, ProbeFile};
 use crate::placement::{grid_points, PlacementError};
+use crate::progress::{Clock, PhaseTime, Progress};
 use crate::recipe::{BakeRecord, Part, Placement, PlacementReport, Recipe, RecipeError};
 use crate::scene::{Aabb, BakeBoxError, Scene};
 use glam::Vec3;
 use probekit_sh::ShRgb;
 use serde::Serialize;
-use std::time::Instant;
 use thiserror::Error;
-
-/// Progress of a long step: `(phase, done, total)`.
-pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 
 /// Why a bake failed. Each names what it could (a file, a key, a stage).
 #[derive(Debug, Error)]
@@ -90,21 +94,18 @@ pub enum PipelineError {
 }
 
 /// Placed positions and what placement did.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Placed {
     /// Probe positions, metres.
     pub positions: Vec<Vec3>,
     /// The report the file records.
     pub report: PlacementReport,
-}
-
-/// The wall time of one stage.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct PhaseTime {
-    /// `placement`, `capture`, `blend data`, `assembly`.
-    pub phase: String,
-    /// Wall-clock seconds.
-    pub wall_seconds: f64,
+    /// The sub-phases of placement (adaptive: pool, scoring, candidates,
+    /// leaks, …), for the [`BakeReport`].
+    pub phases: Vec<PhaseTime>,
+    /// Points of free space placement captured that are not probes
+    /// ([`crate::placement::Placement::free_points`]).
+    pub free_points: Vec<(Vec3, ShRgb)>,
 }
 
 /// What a bake produced, in numbers (serialised by `probekit bake --json`).
@@ -124,7 +125,8 @@ pub struct BakeReport {
     pub shard: Option<[usize; 2]>,
     /// What placement did.
     pub placement: PlacementReport,
-    /// Wall time per stage, in order.
+    /// Wall and CPU seconds and rays per stage, in order (see the module
+    /// docs).
     pub phases: Vec<PhaseTime>,
 }
 
@@ -144,6 +146,7 @@ pub struct Bake<'s> {
     recipe: Recipe,
     bake_box: Aabb,
     baker: Baker<'s>,
+    load: PhaseTime,
 }
 
 impl<'s> Bake<'s> {
@@ -151,17 +154,36 @@ impl<'s> Bake<'s> {
     /// builds the ray tracer. `scene_name` is the scene as named, which
     /// the file records.
     pub fn new(scene: &'s Scene, scene_name: &str, recipe: &Recipe) -> Result<Self, PipelineError> {
+        let mut clock = Clock::new(0);
         recipe.validate()?;
         let bake_box = recipe.bake_box_in(scene);
         bake_box.check_bake_box()?;
         recipe.placement_method(None).check_size(&bake_box)?;
+        let baker = Baker::new(scene)?;
+        let load = clock.lap("load", baker.tracer().rays()).clone();
         Ok(Bake {
             scene,
             scene_name: scene_name.to_string(),
             recipe: recipe.resolved_for(scene),
             bake_box,
-            baker: Baker::new(scene)?,
+            baker,
+            load,
         })
+    }
+
+    /// Adds `scene_load` (the caller's loading of the scene, timed with a
+    /// [`Clock`]) to the `load` phase this bake reports, which otherwise
+    /// holds the building of the tracer only.
+    pub fn with_load_time(mut self, scene_load: &PhaseTime) -> Self {
+        let mut t = scene_load.clone();
+        t.phase = self.load.phase.clone();
+        self.load.add(&t);
+        self
+    }
+
+    /// The tracer's ray count now (for [`Clock`]).
+    fn rays(&self) -> u64 {
+        self.baker.tracer().rays()
     }
 
     /// The resolved recipe (its box written out).
@@ -200,6 +222,8 @@ impl<'s> Bake<'s> {
             held_out_error: None,
             light_shells: None,
         };
+        let mut phases = Vec::new();
+        let mut free_points = Vec::new();
         let positions = match &self.recipe.placement {
             Placement::Grid { budget, cell } => {
                 let n = budget.or(cell.is_none().then_some(Placement::DEFAULT_BUDGET));
@@ -225,13 +249,15 @@ impl<'s> Bake<'s> {
             }
             _ => {
                 let method = self.recipe.placement_method(None);
-                let placed = crate::placement::place(
+                let (placed, sub) = crate::placement::place_timed(
                     &self.baker,
                     self.bake_box,
                     &method,
                     &capture,
-                    &|phase, d, t| progress(&format!("placing: {phase}"), d, t),
+                    &|phase, d, t| progress(&format!("placement: {phase}"), d, t),
                 )?;
+                phases = sub;
+                free_points = placed.free_points;
                 if let Placement::Adaptive { .. } = self.recipe.placement {
                     report.held_out_error = placed.stats.held_out_error;
                     report.light_shells = Some(placed.stats.light_shells);
@@ -240,7 +266,12 @@ impl<'s> Bake<'s> {
             }
         };
         report.count = positions.len();
-        Ok(Placed { positions, report })
+        Ok(Placed {
+            positions,
+            report,
+            phases,
+            free_points,
+        })
     }
 
     /// Stage 2: captures shard `shard` of `shards` of `positions` (`0, 1`:
@@ -315,41 +346,63 @@ impl<'s> Bake<'s> {
         Ok(f)
     }
 
+    /// The training points of the probe-weight fit that `placed` already
+    /// captured: its free-space points, when they hold what the file stores
+    /// (all light; not with `capture.indirect_only`, since placement
+    /// captures all light). Empty otherwise, and for placements that
+    /// capture none (grid, manual).
+    pub fn captured_training(&self, placed: &Placed) -> TrainingSet {
+        let settings = self.recipe.capture_settings();
+        let (positions, sh) = if settings.split_direct || !settings.exclude_direct.is_empty() {
+            (Vec::new(), Vec::new())
+        } else {
+            placed.free_points.iter().cloned().unzip()
+        };
+        TrainingSet { positions, sh }
+    }
+
     /// Stage 4: the blend data the recipe asks for, baked into `file`.
     /// `whole`: false for a part, which gets only its probes' distance
     /// moments (the rest depends on every probe; `merge` bakes it).
+    /// `captured`: training points of the weight fit already captured
+    /// ([`Bake::captured_training`]). Laps `clock` after each kind:
+    /// `distance moments`, `cell visibility` (occluder planes included),
+    /// `weight fit` (with its sub-phases).
     pub fn blend_data(
         &self,
         file: &mut ProbeFile,
         whole: bool,
+        captured: &TrainingSet,
         progress: Progress<'_>,
+        clock: &mut Clock,
     ) -> Result<(), PipelineError> {
         let kinds = self.recipe.visibility_bake(&self.bake_box, whole);
-        kinds.bake_into(
-            self.baker.tracer(),
-            file,
-            &|d, t| progress("visibility", d, t),
-            &|d, t| progress("cell visibility", d, t),
-        )?;
-        kinds.fit_weights_into(
+        let tracer = self.baker.tracer();
+        kinds.bake_moments_into(tracer, file, &|d, t| progress("distance moments", d, t))?;
+        clock.lap("distance moments", self.rays());
+        kinds.bake_cells_into(tracer, file, &|d, t| progress("cell visibility", d, t))?;
+        clock.lap("cell visibility", self.rays());
+        let sub = kinds.fit_weights_into(
             &self.baker,
             &self.recipe.capture_settings(),
             file,
-            &|d, t| progress("probe weights", d, t),
+            captured,
+            &|d, t| progress("weight fit", d, t),
         )?;
+        clock.lap_with("weight fit", self.rays(), sub);
         Ok(())
     }
 
     /// The whole pipeline: the file a single machine writes.
     pub fn run(&self, progress: Progress<'_>) -> Result<Baked, PipelineError> {
-        let mut clock = Clock::new();
+        let mut clock = Clock::new(self.rays());
         let placed = self.place(progress)?;
-        clock.lap("placement");
+        clock.lap_with("placement", self.rays(), placed.phases.clone());
         self.finish(&placed, progress, clock)
     }
 
     /// The stages after placement for `placed` positions (the sweeps place
-    /// once and bake here).
+    /// once and bake here); `clock` has timed what ran before.
     pub fn finish(
         &self,
         placed: &Placed,
@@ -357,15 +410,16 @@ impl<'s> Bake<'s> {
         mut clock: Clock,
     ) -> Result<Baked, PipelineError> {
         let out = self.capture(&placed.positions, 0, 1, progress)?;
-        clock.lap("capture");
+        clock.lap("capture", self.rays());
         let mut record = self.record();
         record.placed = Some(placed.report.clone());
         let mut file = self.assemble(&out, &record)?;
-        clock.lap("assembly");
-        self.blend_data(&mut file, true, progress)?;
-        clock.lap("blend data");
+        clock.lap("assembly", self.rays());
+        let training = self.captured_training(placed);
+        self.blend_data(&mut file, true, &training, progress, &mut clock)?;
         file.validate()?;
-        let report = report(&file, &out, None, placed.report.clone(), clock)?;
+        let phases = self.phases(clock);
+        let report = report(&file, &out, None, placed.report.clone(), phases)?;
         Ok(Baked { file, report })
     }
 
@@ -378,59 +432,34 @@ impl<'s> Bake<'s> {
         shards: usize,
         progress: Progress<'_>,
     ) -> Result<Baked, PipelineError> {
-        let mut clock = Clock::new();
+        let mut clock = Clock::new(self.rays());
         let placed = self.place(progress)?;
-        clock.lap("placement");
+        clock.lap_with("placement", self.rays(), placed.phases.clone());
         let out = self.capture(&placed.positions, shard, shards, progress)?;
-        clock.lap("capture");
+        clock.lap("capture", self.rays());
         let mut record = self.record();
         record.placed = Some(placed.report.clone());
         let mut file = self.assemble_part(&out, &record, shard, shards, placed.positions.len())?;
-        clock.lap("assembly");
-        self.blend_data(&mut file, false, progress)?;
-        clock.lap("blend data");
+        clock.lap("assembly", self.rays());
+        let none = TrainingSet::default();
+        self.blend_data(&mut file, false, &none, progress, &mut clock)?;
         file.validate()?;
+        let phases = self.phases(clock);
         let report = report(
             &file,
             &out,
             Some([shard, shards]),
             placed.report.clone(),
-            clock,
+            phases,
         )?;
         Ok(Baked { file, report })
     }
-}
 
-/// Wall time per stage, for the [`BakeReport`].
-#[derive(Clone, Debug)]
-pub struct Clock {
-    last: Instant,
-    phases: Vec<PhaseTime>,
-}
-
-impl Clock {
-    /// Starts timing now.
-    pub fn new() -> Self {
-        Clock {
-            last: Instant::now(),
-            phases: Vec::new(),
-        }
-    }
-
-    /// Ends `phase` now and starts the next.
-    pub fn lap(&mut self, phase: &str) {
-        let now = Instant::now();
-        self.phases.push(PhaseTime {
-            phase: phase.to_string(),
-            wall_seconds: (now - self.last).as_secs_f64(),
-        });
-        self.last = now;
-    }
-}
-
-impl Default for Clock {
-    fn default() -> Self {
-        Self::new()
+    /// The report's phases: `load`, then what `clock` timed.
+    fn phases(&self, mut clock: Clock) -> Vec<PhaseTime> {
+        let mut phases = vec![self.load.clone()];
+        phases.extend(clock.take_phases());
+        phases
     }
 }
 
@@ -452,7 +481,7 @@ fn report(
     out: &BakeOutput,
     shard: Option<[usize; 2]>,
     placement: PlacementReport,
-    clock: Clock,
+    phases: Vec<PhaseTime>,
 ) -> Result<BakeReport, PipelineError> {
     Ok(BakeReport {
         probes: file.positions.len(),
@@ -462,7 +491,7 @@ fn report(
         groups: file.group_names().map(str::to_string).collect(),
         shard,
         placement,
-        phases: clock.phases,
+        phases,
     })
 }
 

@@ -14,9 +14,10 @@
 //! `gradient-ascent` an initial grid of `B` (merging, dark clustering and
 //! leak prevention change the count).
 
-use super::{Bake, PipelineError, Progress};
+use super::{Bake, PipelineError};
 use crate::eval::{mean_luminance, metrics, predict, Metrics};
 use crate::plot::{line_chart_log, PlotError};
+use crate::progress::Progress;
 use crate::recipe::{CellVisibility, Placement, Recipe};
 use crate::scene::Scene;
 use crate::trace::free_space::EvalPoint;

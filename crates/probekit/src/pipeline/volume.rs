@@ -1,8 +1,9 @@
 //! The pipeline of an irradiance volume: a uniform grid or an octree of
 //! captured samples, with gradients, as the recipe's `[volume]` says.
 
-use super::{Clock, PhaseTime, PipelineError, Progress};
+use super::PipelineError;
 use crate::format::ProbeFile;
+use crate::progress::{Clock, PhaseTime, Progress};
 use crate::recipe::{BakeRecord, GradientModeName, Recipe, VolumeSettings};
 use crate::scene::{Aabb, Scene};
 use crate::volume::{
@@ -21,7 +22,10 @@ pub struct VolumeReport {
     pub captures: usize,
     /// Samples replaced by dilation.
     pub dilated: usize,
-    /// Wall time per stage.
+    /// Wall and CPU seconds and rays per stage: `load` (the tracer, with
+    /// the caller's scene loading where it adds it), `build` (the grid or
+    /// octree, with its sub-phases `capture`, the path tracing, and
+    /// `refinement`, the rest) and `assembly` (the file).
     pub phases: Vec<PhaseTime>,
 }
 
@@ -49,18 +53,31 @@ pub fn bake_volume(
     let bake_box = recipe.bake_box_in(scene);
     bake_box.check_bake_box()?;
     let recipe = recipe.resolved_for(scene);
+    let mut clock = Clock::new(0);
     let src = BakerSource::new(scene, recipe.capture_settings())?
-        .with_progress(Box::new(|done, requested| {
-            progress("capture", done, requested)
-        }))
+        .with_progress(progress)
         .with_max_offset(0.25 * recipe.finest_volume_cell(&bake_box));
+    let load = clock.lap("load", src.rays()).clone();
     let record = BakeRecord::new(scene_name, scene, recipe.clone());
     let threshold = src.validity_threshold();
     let built = bake_volume_from(&src, &bake_box, &recipe, threshold, record);
     if let Some(e) = src.take_error() {
         return Err(e.into());
     }
-    built
+    let (file, mut report) = built?;
+    // The build's rays and its capture sub-phase, from the tracer.
+    let capture = src.capture_time();
+    if let Some(build) = report.phases.iter_mut().find(|p| p.phase == "build") {
+        build.rays = src.rays();
+        let mut rest = build.clone();
+        rest.phase = "refinement".into();
+        rest.wall_seconds = (rest.wall_seconds - capture.wall_seconds).max(0.0);
+        rest.cpu_seconds = (rest.cpu_seconds - capture.cpu_seconds).max(0.0);
+        rest.rays = rest.rays.saturating_sub(capture.rays);
+        build.phases = vec![capture, rest];
+    }
+    report.phases.insert(0, load);
+    Ok((file, report))
 }
 
 /// Bakes the volume `recipe` describes from any source (an analytic one,
@@ -75,20 +92,21 @@ pub fn bake_volume_from(
     record: BakeRecord,
 ) -> Result<(ProbeFile, VolumeReport), PipelineError> {
     bake_box.check_bake_box()?;
-    let mut clock = Clock::new();
+    let mut clock = Clock::new(0);
     let (mut file, stats): (ProbeFile, BuildStats) = match recipe
         .volume_settings(bake_box, validity_threshold)?
     {
         VolumeSettings::Uniform { common, resolution } => build_uniform(src, &common, resolution)?,
         VolumeSettings::Octree(s) => build_adaptive(src, &s)?,
     };
-    clock.lap("build");
+    clock.lap("build", 0);
     if let Some(g) = recipe.volume.gradients.order {
         truncate_gradients(&mut file, g)?;
     }
     file.metadata = record.to_json();
     file.l1_mode = recipe.l1_evaluation.l1_mode();
     file.validate()?;
+    clock.lap("assembly", 0);
     Ok((
         file,
         VolumeReport {
@@ -96,7 +114,7 @@ pub fn bake_volume_from(
             leaves: stats.leaves,
             captures: stats.captures,
             dilated: stats.dilated,
-            phases: clock.phases,
+            phases: clock.take_phases(),
         },
     ))
 }

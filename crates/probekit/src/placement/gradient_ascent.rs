@@ -524,6 +524,8 @@ mod tests {
             next_index: 0,
             stats: PlacementStats::default(),
             layer: None,
+            clock: crate::progress::Clock::new(0),
+            free_points: Vec::new(),
         };
         let p = GradientAscentParams {
             initial: 64,

@@ -40,7 +40,7 @@ pub use orphans::{orphan_points, ORPHAN_COVER_RADIUS, ORPHAN_SPACING};
 
 use crate::capture::{BakeError, Baker, CaptureSettings};
 use crate::delaunay::DelaunayError;
-use crate::progress::Progress;
+use crate::progress::{Clock, PhaseTime, Progress};
 use crate::scene::{Aabb, BakeBoxError};
 use crate::trace::free_space::inside_geometry;
 use glam::Vec3;
@@ -111,8 +111,11 @@ pub enum LightShells {
     /// for (a stratified estimate of the same error with far less variance,
     /// `adaptive::held_out_points`), captured like the pool but with their
     /// own random numbers and never offered as candidates.
-    /// Costs about 2.5× the placement time of `Off`, plus the held-out
-    /// captures (at least 4096). The default.
+    /// The candidate pool is captured once for both placements; the
+    /// held-out points are captured at half the pool's samples, in rounds
+    /// until the choice is clear, and become training points of the probe
+    /// weights, which need no capture of their own for that half. The
+    /// default.
     #[default]
     Auto,
 }
@@ -251,6 +254,14 @@ pub struct Placement {
     pub captured: Option<Vec<ShRgb>>,
     /// What happened.
     pub stats: PlacementStats,
+    /// Points in free space of the bake box that placement captured (with
+    /// the settings' light transport at its sample count) and that are
+    /// not probes: adaptive placement's candidate pool and, for
+    /// [`LightShells::Auto`], its held-out points; empty for the other
+    /// methods. Each is (position, radiance SH, all light), what a
+    /// training point of the probe-weight fit is
+    /// (`blend::blend_fit::capture_training_set`).
+    pub free_points: Vec<(Vec3, ShRgb)>,
 }
 
 /// Probes so far: positions, captured SH, and the next capture index.
@@ -265,7 +276,15 @@ struct State<'a, 'b> {
     /// The layer box of [`snap_to_layer`], when the method keeps its probes
     /// on layers along the bake box's faces (`adaptive`).
     layer: Option<Aabb>,
+    /// Times the sub-phases (adaptive: pool, scoring, candidates, leaks, …).
+    clock: Clock,
+    /// See [`Placement::free_points`].
+    free_points: Vec<(Vec3, ShRgb)>,
 }
+
+/// Fewest candidates [`State::admit`] captures in one batch: enough for
+/// every thread of a small machine to have work.
+const ADMIT_BATCH_MIN: usize = 16;
 
 /// Points within this distance (metres) of a face of the layer box, or beyond
 /// it, are moved onto it ([`snap_to_layer`]).
@@ -298,6 +317,12 @@ pub fn snap_to_layer(p: Vec3, layer: &Aabb) -> Vec3 {
 }
 
 impl State<'_, '_> {
+    /// Ends the sub-phase `phase` (see [`Clock::lap`]).
+    fn lap(&mut self, phase: &str) {
+        let rays = self.baker.tracer().rays();
+        self.clock.lap(phase, rays);
+    }
+
     /// `pts` moved onto the layer box's faces ([`snap_to_layer`]) when the
     /// method has one; unchanged otherwise.
     fn snap(&self, mut pts: Vec<Vec3>) -> Vec<Vec3> {
@@ -345,6 +370,23 @@ impl State<'_, '_> {
         Ok(out)
     }
 
+    /// [`Self::capture_numbered`] of points already known to keep a
+    /// clearance from every surface (`adaptive`'s `has_clearance`): without
+    /// the virtual offset, whose pre-pass would trace its rays only to
+    /// leave them where they are; one that sees mostly back faces all the
+    /// same comes back invalid and is dropped, not moved.
+    fn capture_free(
+        &mut self,
+        points: &[Vec3],
+        first: usize,
+    ) -> Result<Vec<Option<(Vec3, ShRgb)>>, PlacementError> {
+        let offset = self.settings.validity.virtual_offset;
+        self.settings.validity.virtual_offset = false;
+        let out = self.capture_numbered(points, first);
+        self.settings.validity.virtual_offset = offset;
+        out
+    }
+
     fn filter_free(&mut self, pts: Vec<Vec3>) -> Vec<Vec3> {
         let tracer = self.baker.tracer();
         let n = pts.len();
@@ -363,9 +405,13 @@ impl State<'_, '_> {
         }
     }
 
-    /// Snaps `new` onto the box layers, keeps those in free space, captures
-    /// them and adds up to `room` of the valid captures for which `inside`
-    /// holds as probes; returns how many.
+    /// Snaps `new` onto the box layers, keeps those in free space, and
+    /// adds as probes the first `room` of them (in order) whose capture is
+    /// valid and for which `inside` holds; returns how many. Captures in
+    /// batches of about what is still wanted, so the candidates beyond the
+    /// last one admitted are never captured: each point keeps the capture
+    /// index it has in `new`, so the probes are those of capturing them
+    /// all and keeping the first `room`.
     fn admit(
         &mut self,
         new: Vec<Vec3>,
@@ -374,9 +420,23 @@ impl State<'_, '_> {
     ) -> Result<usize, PlacementError> {
         let new = self.snap(new);
         let new = self.filter_free(new);
-        let mut got = self.capture(&new)?;
-        got.retain(|(p, _)| inside(p));
-        got.truncate(room);
+        let first = self.next_index;
+        self.next_index += new.len();
+        let mut got = Vec::new();
+        let mut at = 0;
+        while got.len() < room && at < new.len() {
+            // What is still wanted, a quarter more for captures that come
+            // back invalid, and enough to keep the threads busy.
+            let want = room - got.len();
+            let end = (at + want + want / 4 + ADMIT_BATCH_MIN).min(new.len());
+            for c in self.capture_numbered(&new[at..end], first + at)? {
+                match c {
+                    Some(c) if got.len() < room && inside(&c.0) => got.push(c),
+                    _ => {}
+                }
+            }
+            at = end;
+        }
         let n = got.len();
         self.add(got);
         Ok(n)
@@ -394,6 +454,20 @@ pub fn place(
     settings: &CaptureSettings,
     progress: Progress<'_>,
 ) -> Result<Placement, PlacementError> {
+    place_timed(baker, bake_box, method, settings, progress).map(|p| p.0)
+}
+
+/// [`place`], and the time of its sub-phases (wall and CPU seconds, rays;
+/// adaptive placement's `pool`, `seed set`, `scoring`, `candidates`,
+/// `leaks`, `decimation`, `orphans` and, for [`LightShells::Auto`],
+/// `held-out`, each summed over both placements).
+pub fn place_timed(
+    baker: &Baker,
+    bake_box: Aabb,
+    method: &PlacementMethod,
+    settings: &CaptureSettings,
+    progress: Progress<'_>,
+) -> Result<(Placement, Vec<PhaseTime>), PlacementError> {
     settings.validate()?;
     // Before any work: a box that can hold probes, and a request that
     // bounds the memory it takes.
@@ -413,6 +487,8 @@ pub fn place(
             ..Default::default()
         },
         layer: None,
+        clock: Clock::new(baker.tracer().rays()),
+        free_points: Vec::new(),
     };
     let ls = LeakSettings::default();
     match method {
@@ -426,11 +502,15 @@ pub fn place(
             let pts = grid_points(&bake_box, *cell, *budget)?;
             let pts = st.filter_free(pts);
             progress("grid", pts.len(), pts.len());
-            return Ok(Placement {
-                positions: pts,
-                captured: None,
-                stats: st.stats,
-            });
+            return Ok((
+                Placement {
+                    positions: pts,
+                    captured: None,
+                    stats: st.stats,
+                    free_points: Vec::new(),
+                },
+                Vec::new(),
+            ));
         }
         PlacementMethod::Manual(p) => {
             if let Some(i) = p.iter().position(|q| !q.is_finite()) {
@@ -440,11 +520,15 @@ pub fn place(
             }
             let pts = st.filter_free(p.clone());
             progress("manual", pts.len(), pts.len());
-            return Ok(Placement {
-                positions: pts,
-                captured: None,
-                stats: st.stats,
-            });
+            return Ok((
+                Placement {
+                    positions: pts,
+                    captured: None,
+                    stats: st.stats,
+                    free_points: Vec::new(),
+                },
+                Vec::new(),
+            ));
         }
         PlacementMethod::Adaptive {
             budget,
@@ -461,48 +545,68 @@ pub fn place(
                     "tolerance {tolerance} must be ≥ 0"
                 )));
             }
-            // Auto places twice only where some light offers shells.
+            // Auto places twice only where some light offers shells, from
+            // one captured pool.
             if *light_shells == LightShells::Auto
                 && adaptive::has_shell_lights(baker.scene(), &bake_box)
             {
+                let pool = adaptive::capture_pool(&mut st, &bake_box, *budget, true, progress)?;
+                let pool_captures = st.stats.captures;
                 let mut plain = st.clone();
                 adaptive::adaptive(
-                    &mut plain, &bake_box, *budget, *tolerance, false, &ls, progress,
+                    &mut plain, &bake_box, *budget, *tolerance, &pool, false, &ls, progress,
                 )?;
                 // The second run's phases say so (a progress bar restarts).
                 let shelled_progress =
                     |phase: &str, done, total| progress(&format!("{phase}+shells"), done, total);
                 let mut shelled = st.clone();
+                // Its clock goes on from the first run's.
+                shelled.clock = plain.clock.clone();
                 adaptive::adaptive(
                     &mut shelled,
                     &bake_box,
                     *budget,
                     *tolerance,
+                    &pool,
                     true,
                     &ls,
                     &shelled_progress,
                 )?;
                 progress("held-out", 0, 1);
-                let e = adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                st.clock = shelled.clock.clone();
+                let (e, held_out) =
+                    adaptive::held_out_errors(&mut st, &bake_box, *budget, [&plain, &shelled])?;
+                st.lap("held-out");
                 progress("held-out", 1, 1);
-                let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures;
+                // The pool was captured once, for both.
+                let captures = plain.stats.captures + shelled.stats.captures + st.stats.captures
+                    - 2 * pool_captures;
+                let clock = st.clock.clone();
                 st = if e[1] < e[0] { shelled } else { plain };
+                st.clock = clock;
                 st.stats.captures = captures;
                 st.stats.held_out_error = Some(e);
+                st.free_points.extend(held_out);
             } else {
                 let shells = *light_shells == LightShells::On;
+                let pool = adaptive::capture_pool(&mut st, &bake_box, *budget, shells, progress)?;
                 adaptive::adaptive(
-                    &mut st, &bake_box, *budget, *tolerance, shells, &ls, progress,
+                    &mut st, &bake_box, *budget, *tolerance, &pool, shells, &ls, progress,
                 )?;
             }
         }
     }
     let captured = reusable.then(|| st.sh.clone());
-    Ok(Placement {
-        positions: st.positions,
-        captured,
-        stats: st.stats,
-    })
+    let phases = st.clock.take_phases();
+    Ok((
+        Placement {
+            positions: st.positions,
+            captured,
+            stats: st.stats,
+            free_points: st.free_points,
+        },
+        phases,
+    ))
 }
 
 #[cfg(test)]

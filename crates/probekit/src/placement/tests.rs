@@ -28,26 +28,32 @@ fn grid_points_cover_box_at_cell_centres() {
 /// with no positional light in the box it is `off` and places once.
 #[test]
 fn auto_light_shells_keep_the_placement_with_the_lower_held_out_error() {
-    let run = |scene: &Scene, light_shells| {
+    let timed = |scene: &Scene, light_shells| {
         let baker = Baker::new(scene).unwrap();
         let m = PlacementMethod::Adaptive {
             budget: 32,
             tolerance: 0.0,
             light_shells,
         };
-        place(
+        let (p, phases) = place_timed(
             &baker,
             scene.bake_box(),
             &m,
             &fast_settings(),
             &|_, _, _| {},
         )
-        .unwrap()
+        .unwrap();
+        let pool = phases.iter().find(|p| p.phase == "pool").unwrap().rays;
+        (p, pool)
     };
+    let run = |scene: &Scene, light_shells| timed(scene, light_shells).0;
     let scene = Scene::builtin_demo();
-    let off = run(&scene, LightShells::Off);
-    let on = run(&scene, LightShells::On);
-    let auto = run(&scene, LightShells::Auto);
+    let (off, off_pool) = timed(&scene, LightShells::Off);
+    let (on, on_pool) = timed(&scene, LightShells::On);
+    let (auto, auto_pool) = timed(&scene, LightShells::Auto);
+    // Auto captures the pool once, with the shells: the rays of `on`'s.
+    assert_eq!(auto_pool, on_pool);
+    assert!(off_pool < on_pool);
     assert_ne!(
         off.positions, on.positions,
         "the shells change the placement"
@@ -60,7 +66,16 @@ fn auto_light_shells_keep_the_placement_with_the_lower_held_out_error() {
     assert_eq!(auto.positions, kept.positions);
     assert_eq!(auto.captured, kept.captured);
     assert_eq!(auto.stats.light_shells, e_on < e_off);
-    assert!(auto.stats.captures > on.stats.captures + off.stats.captures);
+    // Both placements and the held-out points, the shared pool once.
+    assert!(auto.stats.captures > on.stats.captures);
+    assert!(auto.stats.captures > off.stats.captures);
+    // The points of free space it captured, the held-out ones among them,
+    // for the probe-weight fit; none is a probe.
+    assert!(auto.free_points.len() > kept.free_points.len());
+    assert!(auto
+        .free_points
+        .iter()
+        .all(|(p, _)| !auto.positions.contains(p)));
     // The sun alone offers no shell: auto is off, placed once.
     let mut sunlit = Scene::builtin_demo();
     sunlit

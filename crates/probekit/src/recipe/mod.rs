@@ -509,8 +509,8 @@ pub struct Fit {
 impl Default for Fit {
     fn default() -> Self {
         Fit {
-            points_per_probe: 32,
-            samples: 128,
+            points_per_probe: 16,
+            samples: 64,
             regularization: 1e-5,
             absolute_weight: 1.0,
         }

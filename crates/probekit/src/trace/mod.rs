@@ -28,8 +28,14 @@
 //!
 //! Threading: a `Tracer` is `Sync`; queries take `&self` and allocate nothing, so call them from
 //! any number of rayon threads.
+//!
+//! Counting: every query above (but the benchmark-only raw obvhs one) counts one ray
+//! ([`Tracer::rays`]), for the phase report of a bake.
 
+mod counter;
 pub mod free_space;
+
+use counter::RayCounter;
 
 use crate::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -241,6 +247,7 @@ pub struct Tracer<'s> {
     scene: &'s Scene,
     bvh: CwBvh,
     prims: Vec<Prim>,
+    rays: RayCounter,
 }
 
 /// Relative padding of triangle boxes in the BVH (≈ 8 ulps of the largest coordinate).
@@ -323,7 +330,19 @@ impl<'s> Tracer<'s> {
                 }
             })
             .collect();
-        Tracer { scene, bvh, prims }
+        Tracer {
+            scene,
+            bvh,
+            prims,
+            rays: RayCounter::new(),
+        }
+    }
+
+    /// Rays intersected with the scene so far (closest-hit, any-hit and
+    /// transmittance queries with a valid ray, one each), by every thread.
+    /// The work of a bake is deterministic, so is this count.
+    pub fn rays(&self) -> u64 {
+        self.rays.total()
     }
 
     /// The scene this tracer was built over.
@@ -345,6 +364,7 @@ impl<'s> Tracer<'s> {
     /// docs for partly transparent surfaces), or `None`.
     pub fn closest_hit(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let (dir, len, t_max) = normalized(ray, t_max)?;
+        self.rays.add_one();
         let wr = WatertightRay::new(ray.origin, dir);
         let mut hit = ORayHit::none();
         let mut best = (0.0f32, 0.0f32);
@@ -398,6 +418,7 @@ impl<'s> Tracer<'s> {
         let Some((dir, _, t_max)) = normalized(ray, t_max) else {
             return false;
         };
+        self.rays.add_one();
         let wr = WatertightRay::new(ray.origin, dir);
         !self
             .bvh
@@ -431,6 +452,7 @@ impl<'s> Tracer<'s> {
         let Some((dir, _, t_max)) = normalized(ray, t_max) else {
             return Vec3::ONE;
         };
+        self.rays.add_one();
         let wr = WatertightRay::new(ray.origin, dir);
         let r = oray(ray.origin, dir, t_max);
         let mut tr = 1.0f32;

@@ -554,6 +554,26 @@ fn tracer_is_usable_from_many_threads() {
         .map(|r| tr.closest_hit(r, 100.0).map(|h| h.triangle))
         .collect();
     assert_eq!(serial, parallel);
+    // Each query counted once, from any thread.
+    assert_eq!(tr.rays(), 8000);
+}
+
+/// Every query with a valid ray counts one ray; one refused before the
+/// traversal (zero direction, no range) counts none.
+#[test]
+fn rays_are_counted_per_query() {
+    let s = Scene::builtin_demo();
+    let tr = Tracer::new(&s);
+    let (o, d) = (Vec3::new(2.0, 1.5, 2.0), Vec3::X);
+    tr.closest_hit(&Ray::new(o, d), f32::INFINITY);
+    tr.occluded_ray(&Ray::new(o, d), 10.0);
+    tr.occluded(o, o + Vec3::Y);
+    tr.transmittance(o, o - Vec3::Y);
+    assert_eq!(tr.rays(), 4);
+    tr.closest_hit(&Ray::new(o, Vec3::ZERO), 1.0);
+    tr.occluded_ray(&Ray::new(o, d), 0.0);
+    tr.transmittance_ray(&Ray::new(o, d), -1.0);
+    assert_eq!(tr.rays(), 4);
 }
 
 mod prop {

@@ -26,6 +26,7 @@
 
 use super::source::{central_difference, central_points, Captured, VolumeSource};
 use crate::capture::{BakeError, Baker, CaptureSettings};
+use crate::progress::{Clock, PhaseTime, Progress};
 use crate::scene::{Aabb, LightKind, Scene};
 use crate::sh::compare::spherical_fibonacci;
 use crate::trace::Ray;
@@ -33,10 +34,6 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
-
-/// Progress callback: `(captured so far, captures requested so far)`. The
-/// octree builder asks for captures level by level, so the total grows.
-pub type Progress = dyn Fn(usize, usize) + Sync;
 
 /// A [`VolumeSource`] that path-traces a [`Scene`] with [`Baker`].
 pub struct BakerSource<'s> {
@@ -54,8 +51,10 @@ pub struct BakerSource<'s> {
     dirs: Vec<Vec3>,
     requested: AtomicUsize,
     done: AtomicUsize,
-    progress: Option<Box<dyn Fn(usize, usize) + Sync + 's>>,
+    progress: Option<Progress<'s>>,
     error: Mutex<Option<BakeError>>,
+    /// Time and rays spent in capture batches, summed.
+    capture_time: Mutex<PhaseTime>,
     max_offset: f32,
 }
 
@@ -96,12 +95,16 @@ impl<'s> BakerSource<'s> {
             done: AtomicUsize::new(0),
             progress: None,
             error: Mutex::new(None),
+            capture_time: Mutex::new(PhaseTime::zero("capture")),
             max_offset: f32::INFINITY,
         })
     }
 
-    /// Calls `f(done, requested)` after every capture (from worker threads).
-    pub fn with_progress(mut self, f: Box<dyn Fn(usize, usize) + Sync + 's>) -> Self {
+    /// Calls `f("capture", done, requested)` after every capture (from
+    /// worker threads): `done` points captured of the `requested` so far
+    /// (the octree builder asks for captures level by level, so the total
+    /// grows).
+    pub fn with_progress(mut self, f: Progress<'s>) -> Self {
         self.progress = Some(f);
         self
     }
@@ -140,6 +143,21 @@ impl<'s> BakerSource<'s> {
         self.done.load(Ordering::Relaxed)
     }
 
+    /// The tracer's ray count so far (every query of this source's
+    /// tracer: captures, depth rays).
+    pub fn rays(&self) -> u64 {
+        self.baker.tracer().rays()
+    }
+
+    /// Wall and CPU seconds and rays spent in capture batches so far,
+    /// summed (phase `capture`).
+    pub fn capture_time(&self) -> PhaseTime {
+        self.capture_time
+            .lock()
+            .map(|t| t.clone())
+            .unwrap_or_else(|_| PhaseTime::zero("capture"))
+    }
+
     /// The first capture error (a non-finite point), if any; captures that
     /// failed return black, invalid samples until then.
     pub fn take_error(&self) -> Option<BakeError> {
@@ -147,6 +165,16 @@ impl<'s> BakerSource<'s> {
     }
 
     fn capture_keyed(&self, points: &[Vec3], keys: &[u64]) -> Vec<Captured> {
+        let mut clock = Clock::new(self.rays());
+        let out = self.capture_batch(points, keys);
+        let t = clock.lap("capture", self.rays()).clone();
+        if let Ok(mut sum) = self.capture_time.lock() {
+            sum.add(&t);
+        }
+        out
+    }
+
+    fn capture_batch(&self, points: &[Vec3], keys: &[u64]) -> Vec<Captured> {
         let total = self.requested.fetch_add(points.len(), Ordering::Relaxed) + points.len();
         let n = self.settings.order * self.settings.order;
         let thr = self.validity_threshold();
@@ -156,8 +184,8 @@ impl<'s> BakerSource<'s> {
             .map(|(p, k)| {
                 let r = self.baker.capture_with_error(*p, *k, &self.settings);
                 let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
-                if let Some(f) = &self.progress {
-                    f(done, total);
+                if let Some(f) = self.progress {
+                    f("capture", done, total);
                 }
                 match r {
                     Ok((r, se)) if r.validity.offset.length() > self.max_offset => Captured {

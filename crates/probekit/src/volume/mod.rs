@@ -20,7 +20,7 @@ mod source;
 mod tests;
 mod uniform;
 
-pub use baker_source::{position_key, triangle_box_overlap, BakerSource, Progress};
+pub use baker_source::{position_key, triangle_box_overlap, BakerSource};
 pub use finish::{dilate, relative_difference, truncate_gradients};
 pub use octree::build_adaptive;
 pub use probekit_runtime::volume::{Interp, Volume, VolumeError};

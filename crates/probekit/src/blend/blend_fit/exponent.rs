@@ -8,6 +8,7 @@ use super::{BlendFitError, BlendFitSettings};
 use crate::capture::{Baker, CaptureSettings};
 use crate::scene::Aabb;
 use probekit_runtime::cloud::{ProbeCloud, MAX_BRIGHTNESS_EXPONENT};
+use rayon::prelude::*;
 
 /// Brightness exponents [`fit_blend`] chooses from by default (`probekit
 /// bake --brightness-weight auto`): the plain blend, and the blends between
@@ -109,28 +110,34 @@ pub fn fit_blend(
     let rho = fit.regularization as f64;
     let nprobes = cloud.probe_count();
     let n = training.positions.len() as f64;
-    // Per exponent: its rows, held-out objective score, held-out absolute score.
-    let mut candidates = Vec::with_capacity(exponents.len());
-    for &alpha in exponents {
-        let (rows, to_absolute) = rows(&with(alpha)?, training, beta);
-        let fold = |k: usize| -> Vec<f64> {
-            let part: Vec<Row> = rows.iter().skip(k).step_by(2).cloned().collect();
-            descend(&part, nprobes, rho)
-                .iter()
-                .map(|&x| (x as f64).exp())
-                .collect()
-        };
-        let (even, odd) = (fold(0), fold(1));
-        // Weights fitted on one fold score the other; a row's error is
-        // linear in its Gram matrix, so the absolute score rescales it.
-        let (mut objective, mut absolute) = (0.0, 0.0);
-        for (j, r) in rows.iter().enumerate() {
-            let e = r.error(factors(r, if j % 2 == 0 { &odd } else { &even }));
-            objective += e;
-            absolute += e * to_absolute[j];
-        }
-        candidates.push((rows, objective / n, absolute / n));
-    }
+    // Per exponent: its rows, held-out objective score, held-out absolute
+    // score. The exponents and folds are independent descents, run in
+    // parallel; each is sequential, so the result is the same for any
+    // thread count.
+    let candidates: Vec<(Vec<Row>, f64, f64)> = exponents
+        .par_iter()
+        .map(|&alpha| -> Result<_, BlendFitError> {
+            let (rows, to_absolute) = rows(&with(alpha)?, training, beta);
+            let fold = |k: usize| -> Vec<f64> {
+                let part: Vec<Row> = rows.iter().skip(k).step_by(2).cloned().collect();
+                descend(&part, nprobes, rho)
+                    .iter()
+                    .map(|&x| (x as f64).exp())
+                    .collect()
+            };
+            let (even, odd) = rayon::join(|| fold(0), || fold(1));
+            // Weights fitted on one fold score the other; a row's error is
+            // linear in its Gram matrix, so the absolute score rescales it.
+            let (mut objective, mut absolute) = (0.0, 0.0);
+            for (j, r) in rows.iter().enumerate() {
+                let e = r.error(factors(r, if j % 2 == 0 { &odd } else { &even }));
+                objective += e;
+                absolute += e * to_absolute[j];
+            }
+            Ok((rows, objective / n, absolute / n))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut candidates = candidates;
     let lowest = candidates.iter().map(|c| c.2).fold(f64::INFINITY, f64::min);
     let best = (0..candidates.len())
         .filter(|&i| candidates[i].2 <= lowest * (1.0 + BRIGHTNESS_ABSOLUTE_TOLERANCE))

@@ -75,7 +75,7 @@ pub use exponent::{
     fit_blend, fit_file_probe_weights, FittedBlend, BRIGHTNESS_ABSOLUTE_TOLERANCE,
     BRIGHTNESS_CHOICES, DEFAULT_DIRECTIONAL,
 };
-pub use training::{capture_training_set, TrainingSet};
+pub use training::{capture_training_points, capture_training_set, TrainingSet};
 pub use weights::fit_probe_weights;
 
 use crate::capture::BakeError;
@@ -88,11 +88,16 @@ pub const LOG_WEIGHT_MIN: f32 = -7.0;
 /// Largest fitted log-weight `t_i` (`s_i = e^t ≈ 20`).
 pub const LOG_WEIGHT_MAX: f32 = 3.0;
 
-/// Training points per probe by default.
-pub const DEFAULT_POINTS_PER_PROBE: u32 = 32;
+/// Training points per probe by default (the recipe's
+/// `blend.fit.points_per_probe`): with 32, and with the 128 samples of
+/// the fit before stratified light samples, the demo's default bake and
+/// its 500-probe grid had no lower `rel_rmse` (BENCHMARKS.md, "Where a
+/// bake's time goes").
+pub const DEFAULT_POINTS_PER_PROBE: u32 = 16;
 
-/// Samples per training point by default.
-pub const DEFAULT_FIT_SAMPLES: u32 = 128;
+/// Samples per training point by default (the recipe's
+/// `blend.fit.samples`; see [`DEFAULT_POINTS_PER_PROBE`]).
+pub const DEFAULT_FIT_SAMPLES: u32 = 64;
 
 /// Default `ρ` of the objective (see the module docs).
 pub const DEFAULT_REGULARIZATION: f32 = 1e-5;

@@ -21,8 +21,9 @@ const CELL_STREAM: u64 = 0x6365_6c6c; // "cell"
 /// training points never share a probe's random numbers.
 const TRAINING_INDEX: usize = 1 << 32;
 
-/// Captured training points: positions (metres) and their radiance SH.
-#[derive(Clone, Debug, PartialEq)]
+/// Captured training points: positions (metres) and their radiance SH
+/// (empty by default).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TrainingSet {
     /// Where each point was captured.
     pub positions: Vec<Vec3>,
@@ -50,16 +51,40 @@ pub fn capture_training_set(
     fit: &BlendFitSettings,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TrainingSet, BlendFitError> {
+    let uniform = count.div_ceil(2);
+    capture_training_points(
+        baker,
+        bake_box,
+        mesh,
+        [uniform, count - uniform],
+        capture,
+        fit,
+        progress,
+    )
+}
+
+/// [`capture_training_set`] with its two halves sized apart: `counts[0]`
+/// points uniform in the box, `counts[1]` uniform in tetrahedra chosen
+/// uniformly (a bake whose placement captured points of free space uses
+/// those for the first kind and captures only the second).
+pub fn capture_training_points(
+    baker: &Baker,
+    bake_box: &Aabb,
+    mesh: &TetMesh,
+    counts: [usize; 2],
+    capture: &CaptureSettings,
+    fit: &BlendFitSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TrainingSet, BlendFitError> {
     fit.validate()?;
     let seed = fit.seed ^ TRAINING_STREAM;
-    let uniform = count.div_ceil(2);
+    let [uniform, want] = counts;
     let mut pts: Vec<Vec3> = sample_points(baker.tracer(), bake_box, uniform, seed)
         .into_iter()
         .map(|p| p.position)
         .collect();
     let tets = mesh.tets();
     let pos = mesh.positions();
-    let want = count - uniform;
     let mut tries = 0u64;
     let mut cell_points = 0;
     while !tets.is_empty() && cell_points < want && tries < 200 * want as u64 + 1000 {
@@ -71,17 +96,32 @@ pub fn capture_training_set(
         u.sort_by(f32::total_cmp);
         let b = [u[0], u[1] - u[0], u[2] - u[1], 1.0 - u[2]];
         let p = (0..4).fold(Vec3::ZERO, |acc, k| acc + b[k] * pos[t[k] as usize]);
-        if bake_box.contains(p) && is_free(baker.tracer(), p, SURFACE_CLEARANCE) {
+        // Not in a sphere light either: captured without the virtual
+        // offset, a point there would keep the lamp's radiance.
+        if bake_box.contains(p)
+            && baker
+                .scene()
+                .sphere_light_at(p, SURFACE_CLEARANCE)
+                .is_none()
+            && is_free(baker.tracer(), p, SURFACE_CLEARANCE)
+        {
             pts.push(p);
             cell_points += 1;
         }
     }
     if pts.is_empty() {
+        if counts == [0, 0] {
+            return Ok(TrainingSet::default());
+        }
         return Err(BlendFitError::NoTrainingPoints);
     }
     let mut s = capture.clone();
     s.samples = fit.samples;
     s.groups = false;
+    // The points keep a clearance from every surface (`is_free`): the
+    // virtual offset's pre-pass would trace its rays to leave them where
+    // they are.
+    s.validity.virtual_offset = false;
     let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
     let (positions, sh) = rs
         .into_iter()

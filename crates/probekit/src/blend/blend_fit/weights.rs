@@ -7,6 +7,7 @@ use super::{BlendFitError, BlendFitSettings, FittedBlend, LOG_WEIGHT_MAX, LOG_WE
 use glam::Vec3;
 use probekit_runtime::cloud::{ProbeCloud, WalkState};
 use probekit_sh::convolve::clamped_cosine_band;
+use rayon::prelude::*;
 
 /// Step sizes of the coordinate-descent sweeps, in `t`.
 const SWEEP_STEPS: [f32; 6] = [1.0, 0.5, 0.25, 0.25, 0.125, 0.0625];
@@ -153,14 +154,11 @@ pub(super) fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Ve
         / count)
         .max(1e-30);
     let floor = 0.01 * mean;
-    let mut ws = WalkState::new();
-    let mut rows = Vec::with_capacity(training.positions.len());
-    let mut to_absolute = Vec::with_capacity(training.positions.len());
-    for (j, p) in training.positions.iter().enumerate() {
-        let (probes, w) = plain.weights_at(*p, &mut ws);
+    // Each point's row on its own: in parallel, chunks in order.
+    let row = |j: usize, p: Vec3, ws: &mut WalkState| -> (Row, f64) {
+        let (probes, w) = plain.weights_at(p, ws);
         let e = truth(j);
         let scale = 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square;
-        to_absolute.push(1.0 / mean_square / scale);
         let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
             if w[k] > 0.0 {
                 let c = plain.probe_sh(probes[k] as usize);
@@ -185,9 +183,21 @@ pub(super) fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Ve
                 i += 1;
             }
         }
-        rows.push(Row { probes, w, g });
-    }
-    (rows, to_absolute)
+        (Row { probes, w, g }, 1.0 / mean_square / scale)
+    };
+    const CHUNK: usize = 256;
+    training
+        .positions
+        .par_chunks(CHUNK)
+        .enumerate()
+        .flat_map_iter(|(c, pts)| {
+            let mut ws = WalkState::new();
+            pts.iter()
+                .enumerate()
+                .map(|(k, p)| row(c * CHUNK + k, *p, &mut ws))
+                .collect::<Vec<_>>()
+        })
+        .unzip()
 }
 
 /// Per-slot factors of `r` for probe weights `s`.

@@ -8,7 +8,9 @@
 //! 1. **Pool.** About `4 × budget` points, jittered-stratified over the bake
 //!    box, kept when in free space (not inside geometry, no surface within
 //!    [`PROBE_CLEARANCE`], up to [`CLEARANCE_TOLERANCE`]), captured at the
-//!    placement sample count; the outermost layer sits just inside the box's
+//!    placement sample count without the virtual offset (they have
+//!    clearance), once for both placements of `auto` light shells
+//!    ([`capture_pool`]); the outermost layer sits just inside the box's
 //!    faces ([`BOUNDARY_SNAP`]), its points exactly co-planar
 //!    ([`super::snap_to_layer`]).
 //!    The pool is both the candidate set and the validation set. Nothing
@@ -176,18 +178,43 @@ fn final_allowances(budget: usize) -> (usize, usize) {
     )
 }
 
-/// Runs `adaptive` placement into `st` (see the module docs). It places at
-/// most `budget` probes.
-pub(super) fn adaptive(
+/// Capture index of the first candidate captured after the pool (spawned
+/// candidates, leak and orphan probes): above any pool's, and the same
+/// with and without light shells, so [`LightShells::Auto`](super::LightShells::Auto)'s two
+/// placements are those of `off` and `on`.
+const AFTER_POOL_INDEX: usize = 1 << 30;
+
+/// The captured candidate pool of a box: what every adaptive placement of
+/// it shares (jittered points, emitter layers) and what one with light
+/// shells adds. [`LightShells::Auto`](super::LightShells::Auto) captures it
+/// once for both of its placements.
+#[derive(Clone)]
+pub(super) struct PoolCapture {
+    /// (captured position, SH) of the jittered points and emitter layers,
+    /// in the bake box.
+    base: Vec<(Vec3, ShRgb)>,
+    /// Those of the light shells (empty when not asked for).
+    shells: Vec<(Vec3, ShRgb)>,
+    /// Points of `base` and `shells` rejected (no clearance, invalid,
+    /// inside geometry).
+    rejected: [usize; 2],
+}
+
+/// Builds and captures the pool of adaptive placement in `bbox` for
+/// `budget` (see the module docs), with light shells when `shells`: about
+/// `4 × budget` jittered points with the box layer, layers along emissive
+/// surfaces, then the shells; those without clearance dropped, the rest
+/// captured in that order as capture indices `0..` (so the shared points
+/// draw the same random numbers with and without shells), in free space
+/// (no virtual offset: they have clearance), and those that come back
+/// invalid, inside geometry or outside the box dropped.
+pub(super) fn capture_pool(
     st: &mut State,
     bbox: &Aabb,
     budget: usize,
-    tolerance: f32,
     shells: bool,
-    ls: &LeakSettings,
     progress: Progress<'_>,
-) -> Result<(), PlacementError> {
-    st.stats.light_shells = shells;
+) -> Result<PoolCapture, PlacementError> {
     let tracer = st.baker.tracer();
     st.layer = Some(layer_box(st.baker.scene(), bbox));
     let mut raw = jittered(
@@ -199,6 +226,15 @@ pub(super) fn adaptive(
     // Shells reach out to where the uniform pool is about as dense.
     let size = bbox.size();
     let spacing = (size.x * size.y * size.z / raw.len().max(1) as f32).cbrt();
+    let limit = raw.len() / 4;
+    raw.extend(emitter_layers(
+        st.baker.scene(),
+        bbox,
+        spacing,
+        st.settings.seed,
+        limit,
+    ));
+    let nbase = raw.len();
     if shells {
         // The budget's mean probe spacing.
         let h = (size.x * size.y * size.z / budget.max(1) as f32).cbrt();
@@ -209,32 +245,66 @@ pub(super) fn adaptive(
             (1.5 * spacing).min(LIGHT_SHELL_MAX),
         ));
     }
-    let limit = raw.len() / 4;
-    raw.extend(emitter_layers(
-        st.baker.scene(),
-        bbox,
-        spacing,
-        st.settings.seed,
-        limit,
-    ));
-    let nraw = raw.len();
-    let raw: Vec<Vec3> = st
+    let nshells = raw.len() - nbase;
+    let kept: Vec<(usize, Vec3)> = st
         .snap(raw)
         .into_par_iter()
-        .filter(|p| has_clearance(tracer, *p))
+        .enumerate()
+        .filter(|(_, p)| has_clearance(tracer, *p))
         .collect();
-    st.stats.rejected_inside += nraw - raw.len();
-    progress("pool", 0, raw.len());
-    let captured = st.capture(&raw)?;
-    progress("pool", raw.len(), raw.len());
-    let order = captured.first().map_or(1, |c| c.1.order());
-    let w = band_weights(order);
+    let pts: Vec<Vec3> = kept.iter().map(|k| k.1).collect();
+    progress("pool", 0, pts.len());
+    // Rejections count per placement, from `rejected` (in `adaptive`).
+    let rejected = st.stats.rejected_inside;
+    let captured = st.capture_free(&pts, 0)?;
+    st.stats.rejected_inside = rejected;
+    st.next_index = st.next_index.max(AFTER_POOL_INDEX);
+    progress("pool", pts.len(), pts.len());
+    let mut pool = PoolCapture {
+        base: Vec::new(),
+        shells: Vec::new(),
+        rejected: [nbase, nshells],
+    };
     // The virtual offset may push a capture out of the box (through an
     // outer wall): drop those.
-    let (pos, sh): (Vec<Vec3>, Vec<ShRgb>) = captured
-        .into_iter()
-        .filter(|(p, _)| bbox.contains(*p))
-        .unzip();
+    for ((i, _), c) in kept.iter().zip(captured) {
+        let Some((p, sh)) = c.filter(|(p, _)| bbox.contains(*p)) else {
+            continue;
+        };
+        let part = usize::from(*i >= nbase);
+        pool.rejected[part] -= 1;
+        [&mut pool.base, &mut pool.shells][part].push((p, sh));
+    }
+    st.lap("pool");
+    Ok(pool)
+}
+
+/// Runs `adaptive` placement into `st` (see the module docs) from the
+/// captured `pool`, with its light shells when `shells`. It places at most
+/// `budget` probes. Leaves in `st.free_points` the pool points that are
+/// not probes.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn adaptive(
+    st: &mut State,
+    bbox: &Aabb,
+    budget: usize,
+    tolerance: f32,
+    pool: &PoolCapture,
+    shells: bool,
+    ls: &LeakSettings,
+    progress: Progress<'_>,
+) -> Result<(), PlacementError> {
+    st.stats.light_shells = shells;
+    st.layer = Some(layer_box(st.baker.scene(), bbox));
+    st.stats.rejected_inside += pool.rejected[0] + if shells { pool.rejected[1] } else { 0 };
+    let parts = if shells {
+        [&pool.base[..], &pool.shells[..]]
+    } else {
+        [&pool.base[..], &[][..]]
+    };
+    let (pos, sh): (Vec<Vec3>, Vec<ShRgb>) = parts.iter().flat_map(|p| p.iter().cloned()).unzip();
+    let order = sh.first().map_or(1, |c| c.order());
+    let w = band_weights(order);
     let floor =
         0.01 * sh.iter().map(mean_irradiance_luminance).sum::<f32>() / sh.len().max(1) as f32;
     let n = pos.len();
@@ -261,6 +331,7 @@ pub(super) fn adaptive(
     for i in seeds {
         a.push_pool(i);
     }
+    a.st.lap("seed set");
     progress("adaptive", a.st.positions.len(), budget);
     // The budget is a hard cap: the last leak pass and the orphan pass get
     // allowances of their own, kept out of the error-driven placement.
@@ -272,6 +343,7 @@ pub(super) fn adaptive(
     a.st.stats.crossing_before = before;
     let room = core.saturating_sub(a.st.positions.len());
     a.st.fix_leaks_within(ls, room, Some(bbox))?;
+    a.st.lap("leaks");
     a.origin.resize(a.st.positions.len(), None);
     if !done {
         done = a.refine_to(core, tolerance, progress, budget)?;
@@ -292,6 +364,7 @@ pub(super) fn adaptive(
     // still fail the leak test, within the same allowance.
     let before = a.st.positions.len();
     a.st.fix_leaks_within(ls, extra, Some(bbox))?;
+    a.st.lap("leaks");
     let mut left = extra.saturating_sub(a.st.positions.len() - before);
     // Pockets behind a wall's end or corner that see none of their
     // tetrahedron's probes get one, within an allowance of their own: from
@@ -303,6 +376,7 @@ pub(super) fn adaptive(
         orphans,
         bbox,
     )?;
+    a.st.lap("orphans");
     left += orphans - used;
     a.origin.resize(a.st.positions.len(), None);
     while let Some(s) = a.score()? {
@@ -317,8 +391,14 @@ pub(super) fn adaptive(
         }
         left -= k;
     }
+    a.st.lap("scoring");
     let (_, after) = super::crossing_extent(a.st.baker.tracer(), &a.st.positions)?;
     a.st.stats.crossing_after = after;
+    a.st.lap("leaks");
+    a.st.free_points = (0..a.pool.pos.len())
+        .filter(|&i| a.pool.probe[i].is_none())
+        .map(|i| (a.pool.pos[i], a.pool.sh[i].clone()))
+        .collect();
     progress("leaks", a.st.positions.len(), budget);
     Ok(())
 }

@@ -80,6 +80,7 @@ impl Adaptive<'_, '_, '_> {
             [-1.0, 1.0, -1.0],
             [-1.0, -1.0, 1.0],
         ];
+        self.st.lap("scoring");
         let tracer = self.st.baker.tracer();
         let mut cands = Vec::with_capacity(SPAWN * inserted.len());
         for &i in inserted {
@@ -120,19 +121,37 @@ impl Adaptive<'_, '_, '_> {
             })
             .collect();
         self.st.stats.rejected_inside += n - cands.len();
-        let captured = self.st.capture(&cands)?;
-        for (p, sh) in captured.into_iter().filter(|(p, _)| bbox.contains(*p)) {
+        // They keep the clearance: captured in free space.
+        let first = self.st.next_index;
+        let captured = self.st.capture_free(&cands, first)?;
+        self.st.next_index += cands.len();
+        let captured = captured.into_iter().flatten();
+        for (p, sh) in captured.filter(|(p, _)| bbox.contains(*p)) {
             self.pool.energy.push(energy(&self.w, &sh));
             self.pool.pos.push(p);
             self.pool.sh.push(sh);
             self.pool.probe.push(None);
         }
+        self.st.lap("candidates");
         Ok(())
     }
 
     /// Greedy insertion until `target` probes or the tolerance is met;
     /// returns `true` when the tolerance was met.
     pub(super) fn refine_to(
+        &mut self,
+        target: usize,
+        tolerance: f32,
+        progress: Progress<'_>,
+        budget: usize,
+    ) -> Result<bool, PlacementError> {
+        let r = self.refine_rounds(target, tolerance, progress, budget);
+        self.st.lap("scoring");
+        r
+    }
+
+    /// The rounds of [`Self::refine_to`].
+    fn refine_rounds(
         &mut self,
         target: usize,
         tolerance: f32,
@@ -250,6 +269,7 @@ impl Adaptive<'_, '_, '_> {
         st.positions.truncate(keep);
         st.sh.truncate(keep);
         self.origin.truncate(keep);
+        st.lap("decimation");
         Ok(removed)
     }
 }

@@ -265,6 +265,8 @@ fn constructed_leak(origin: Vec3) -> (usize, usize, usize, bool) {
         next_index: 0,
         stats: Default::default(),
         layer: None,
+        clock: crate::progress::Clock::new(0),
+        free_points: Vec::new(),
     };
     let mut pos = Vec::new();
     let mut sh = Vec::new();
@@ -327,6 +329,8 @@ fn spawned_candidates_stay_in_box_and_in_sight() {
         next_index: 0,
         stats: Default::default(),
         layer: None,
+        clock: crate::progress::Clock::new(0),
+        free_points: Vec::new(),
     };
     // Next to the back wall (z = 0) and the ceiling (y = 3) of room B.
     let parents = [Vec3::new(5.0, 2.8, 0.15), Vec3::new(6.5, 0.2, 0.2)];
