@@ -1,7 +1,8 @@
 //! Probe capture rate: probes per second at 4096 samples and 3 bounces, on the
 //! built-in demo scene and on every `*.toml` scene under `shared/data/scenes`
 //! (found by walking up from this crate; skipped with a message when absent).
-//! Run: `cargo bench -p probekit --bench capture`.
+//! Prints each scene's rays per probe, so probes per second read as rays per
+//! second. Run: `cargo bench -p probekit --bench capture`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
@@ -35,6 +36,14 @@ fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene) {
         .iter()
         .map(|t| bb.min + (bb.max - bb.min) * Vec3::new(*t, 0.45, 1.0 - *t))
         .collect();
+    // Rays per probe (closest-hit, any-hit and transmittance queries), so the
+    // rate reads as rays per second beside the tracer's own in `trace`.
+    let before = baker.tracer().rays();
+    for (k, p) in points.iter().enumerate() {
+        baker.capture(*p, k as u64, &settings).expect("capture");
+    }
+    let per_probe = (baker.tracer().rays() - before) / points.len() as u64;
+    eprintln!("{name}: {per_probe} rays per probe");
     let mut group = c.benchmark_group("capture_4096spp_3bounces");
     group.sample_size(10);
     group.throughput(Throughput::Elements(1));
