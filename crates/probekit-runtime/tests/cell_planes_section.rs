@@ -124,7 +124,7 @@ fn files_without_cell_planes_keep_their_minor_version() {
     assert_eq!(minor_of(&cvis_file().to_bytes().unwrap()), 5);
     assert_eq!(minor_of(&weights_file().to_bytes().unwrap()), 6);
     assert!(minor_of(&full_file().to_bytes().unwrap()) < 4);
-    assert_eq!(layout::VERSION_MINOR, 10);
+    assert_eq!(layout::VERSION_MINOR, 11);
     assert_eq!(layout::minor_for_sections([ID]), 7);
 }
 
