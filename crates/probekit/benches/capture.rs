@@ -2,13 +2,22 @@
 //! built-in demo scene and on every `*.toml` scene under `shared/data/scenes`
 //! (found by walking up from this crate; skipped with a message when absent).
 //! Prints each scene's rays per probe, so probes per second read as rays per
-//! second. Run: `cargo bench -p probekit --bench capture`.
+//! second, and measures the peer in the same run: obvhs's raw closest-hit
+//! rate on the same scene's BVH, for rays leaving the same points in uniform
+//! directions (`raw_obvhs_rays`, two threads like the capture).
+//! Run: `cargo bench -p probekit --bench capture`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit::capture::{Baker, CaptureSettings};
+use probekit::sampling::{sample_uniform_sphere, SampleRng};
 use probekit::scene::Scene;
+use probekit::trace::Ray;
+use rayon::prelude::*;
 use std::path::PathBuf;
+
+/// Rays per iteration of the raw obvhs peer.
+const RAW_RAYS: usize = 20_000;
 
 fn scenes_dir() -> Option<PathBuf> {
     let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
@@ -54,6 +63,35 @@ fn bench_scene(c: &mut Criterion, name: &str, scene: &Scene) {
             baker
                 .capture(points[i % points.len()], i as u64, &settings)
                 .expect("capture")
+        })
+    });
+    // The peer: obvhs's own traversal and triangle test on the same BVH,
+    // closest hit only, rays from the same points in uniform directions.
+    let tracer = baker.tracer();
+    let raw_tris = tracer.obvhs_triangles_in_leaf_order();
+    let mut rng = SampleRng::from_state(7);
+    let rays: Vec<Ray> = (0..RAW_RAYS)
+        .map(|k| {
+            Ray::new(
+                points[k % points.len()],
+                sample_uniform_sphere(rng.next_2d()),
+            )
+        })
+        .collect();
+    group.throughput(Throughput::Elements(RAW_RAYS as u64));
+    group.bench_function(format!("{name}/raw_obvhs_rays"), |b| {
+        b.iter(|| {
+            rays.par_chunks(256)
+                .map(|ch| {
+                    ch.iter()
+                        .filter(|r| {
+                            tracer
+                                .raw_obvhs_closest(r, f32::INFINITY, &raw_tris)
+                                .is_some()
+                        })
+                        .count()
+                })
+                .sum::<usize>()
         })
     });
     group.finish();
