@@ -500,17 +500,7 @@ pub fn place_timed(
         }
         PlacementMethod::Grid { cell, budget } => {
             let pts = grid_points(&bake_box, *cell, *budget)?;
-            let pts = st.filter_free(pts);
-            progress("grid", pts.len(), pts.len());
-            return Ok((
-                Placement {
-                    positions: pts,
-                    captured: None,
-                    stats: st.stats,
-                    free_points: Vec::new(),
-                },
-                Vec::new(),
-            ));
+            return Ok(fixed_positions(st, pts, "grid", progress));
         }
         PlacementMethod::Manual(p) => {
             if let Some(i) = p.iter().position(|q| !q.is_finite()) {
@@ -518,17 +508,7 @@ pub fn place_timed(
                     "manual position {i} is not finite"
                 )));
             }
-            let pts = st.filter_free(p.clone());
-            progress("manual", pts.len(), pts.len());
-            return Ok((
-                Placement {
-                    positions: pts,
-                    captured: None,
-                    stats: st.stats,
-                    free_points: Vec::new(),
-                },
-                Vec::new(),
-            ));
+            return Ok(fixed_positions(st, p.clone(), "manual", progress));
         }
         PlacementMethod::Adaptive {
             budget,
@@ -607,6 +587,25 @@ pub fn place_timed(
         },
         phases,
     ))
+}
+
+/// The placement of given positions (a grid's or a manual list): those in
+/// free space, with no captures and no timed sub-phases.
+fn fixed_positions(
+    mut st: State,
+    pts: Vec<Vec3>,
+    method: &str,
+    progress: Progress<'_>,
+) -> (Placement, Vec<PhaseTime>) {
+    let positions = st.filter_free(pts);
+    progress(method, positions.len(), positions.len());
+    let placement = Placement {
+        positions,
+        captured: None,
+        stats: st.stats,
+        free_points: Vec::new(),
+    };
+    (placement, Vec::new())
 }
 
 #[cfg(test)]
