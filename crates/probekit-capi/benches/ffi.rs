@@ -1,15 +1,16 @@
 //! Cost of the C boundary: the same coherent irradiance queries (one object
 //! walking through a 20³-probe Kuhn-grid cloud, L2) through
-//! `ProbeCloud::irradiance` directly, through `pk_irradiance` per point, and
-//! through `pk_irradiance_many`; and a uniform volume the same three ways.
+//! `Probes::irradiance` directly, through `pk_irradiance` per point, and
+//! through `pk_irradiance_many`; and a uniform volume (trilinear) the same
+//! three ways.
 //! The difference is argument checking and the `catch_unwind` frame.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit_capi::*;
-use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh, WalkState};
+use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh};
 use probekit_runtime::format::{Coefficients, ProbeFile, ProbeFileKind, TetSection, VolumeGrid};
-use probekit_runtime::{Interp, ProbeCloud, Volume};
+use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use std::hint::black_box;
 use std::ptr::null_mut;
 
@@ -89,42 +90,24 @@ fn bench(c: &mut Criterion) {
     let (ps, ns) = path(n);
     let mut out = vec![0.0f32; 3 * n];
     for (name, bytes) in [("cloud", cloud_bytes()), ("volume", volume_bytes())] {
-        let file = ProbeFile::from_bytes(&bytes).unwrap();
         let h = unsafe { pk_load_bytes(bytes.as_ptr(), bytes.len(), null_mut()) };
         assert!(!h.is_null());
         let mut g = c.benchmark_group(format!("{name}_irradiance_1024_coherent"));
         g.throughput(Throughput::Elements(n as u64));
-        if name == "cloud" {
-            let cloud = ProbeCloud::from_file(&file).unwrap();
-            g.bench_function("rust", |b| {
-                let mut ws = WalkState::new();
-                b.iter(|| {
-                    for (p, q) in ps.chunks_exact(3).zip(ns.chunks_exact(3)) {
-                        black_box(cloud.irradiance(
-                            Vec3::from_slice(p),
-                            Vec3::from_slice(q),
-                            &mut ws,
-                        ));
-                    }
-                })
-            });
-        } else {
-            let vol = Volume::from_file(&file).unwrap();
-            g.bench_function("rust", |b| {
-                b.iter(|| {
-                    for (p, q) in ps.chunks_exact(3).zip(ns.chunks_exact(3)) {
-                        black_box(
-                            vol.irradiance(
-                                Vec3::from_slice(p),
-                                Vec3::from_slice(q),
-                                Interp::Trilinear,
-                            )
+        // The peer: the engine's Rust type, loaded from the same bytes.
+        let probes = Probes::from_bytes(&bytes, LoadOptions::default()).unwrap();
+        g.bench_function("rust", |b| {
+            let mut state = ObjectState::new();
+            b.iter(|| {
+                for (p, q) in ps.chunks_exact(3).zip(ns.chunks_exact(3)) {
+                    black_box(
+                        probes
+                            .irradiance(&mut state, Vec3::from_slice(p), Vec3::from_slice(q))
                             .unwrap(),
-                        );
-                    }
-                })
-            });
-        }
+                    );
+                }
+            })
+        });
         let ws = pk_walk_state_new();
         g.bench_function("pk_irradiance", |b| {
             b.iter(|| {
