@@ -94,8 +94,9 @@ use probekit::eval::{
     is_leak, leaks_at, metrics, region_leaks_at, region_metrics, unlit_points, worst_points,
 };
 use probekit::format::ProbeFile;
-use probekit::pipeline::{Bake, Clock, Placed};
+use probekit::pipeline::{Bake, Placed};
 use probekit::placement::{orphan_points, PROBE_CLEARANCE};
+use probekit::progress::Clock;
 use probekit::query::{blends_hidden_probes, outside_hull};
 use probekit::recipe::{
     Blend, CellVisibility, Exponent, LightShellsName, Placement, Recipe, RecipeLayers,
@@ -327,7 +328,7 @@ fn main() -> Result<(), Box<dyn Error>> {
 /// The pipeline's stages after placement: the cloud file `probekit bake`
 /// writes for `placed`.
 fn finish(bake: &Bake, placed: &Placed) -> Result<ProbeFile, Box<dyn Error>> {
-    Ok(bake.finish(placed, &quiet, Clock::new())?.file)
+    Ok(bake.finish(placed, &quiet, Clock::new(0))?.file)
 }
 
 impl<'a> Evaluation<'a> {
