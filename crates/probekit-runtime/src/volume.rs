@@ -40,7 +40,7 @@
 //! through the volume (tested on random lines). Points outside the box are
 //! clamped to it.
 //!
-//! An octree may be a **forest** (format 1.3, [`Volume::root_grid`]): the
+//! An octree may be a **forest** ([`Volume::root_grid`]): the
 //! box is first cut into a grid of near-cubic root cells, each the root of
 //! an octree, so leaves stay near-cubic in a long room instead of copying
 //! the box's aspect ratio. A query finds its root cell by position, then

@@ -1,4 +1,4 @@
-//! Occluder planes of cells: `CPLN` (format 1.7) round trips at minor 7 with
+//! Occluder planes of cells: `CPLN` round trips with
 //! the bytes of the documented layout, reaches [`ProbeCloud`], and hostile
 //! sections (truncated, counts past the body, unsorted, repeated or
 //! out-of-range indices, non-finite values, normals that are not unit, a
@@ -22,10 +22,9 @@ fn sections_of(bytes: &[u8]) -> Vec<(SectionId, Vec<u8>)> {
     sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect()
 }
 
-/// A file of `kind` from `sections`, at the lowest minor that holds them.
+/// A file of `kind` from `sections`, at this version's minor.
 fn assemble(kind: u32, sections: &[(SectionId, Vec<u8>)]) -> Vec<u8> {
-    let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id));
-    assemble_file(kind, minor, 0, sections)
+    assemble_file(kind, layout::VERSION_MINOR, 0, sections)
 }
 
 /// [`planes_file`]'s bytes with its `CPLN` section replaced by `body`.
@@ -48,13 +47,12 @@ fn cpln(tet_count: u32, tets: &[u32], planes: &[[f32; 4]]) -> Vec<u8> {
 }
 
 #[test]
-fn cell_planes_round_trip_at_minor_7_with_the_documented_bytes() {
+fn cell_planes_round_trip_with_the_documented_bytes() {
     let f = planes_file();
     let p = f.cell_planes.clone().unwrap();
     let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
     assert_eq!((p.tet_count(), p.len()), (tets, 2));
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 7);
     let back = ProbeFile::from_bytes(&bytes).unwrap();
     assert_eq!(back, f);
     assert_eq!(back.cell_planes.as_ref().unwrap().planes(), &PLANES[..]);
@@ -84,12 +82,11 @@ fn cell_planes_round_trip_at_minor_7_with_the_documented_bytes() {
     // After the cell visibility (and probe weights), before the metadata.
     let order: Vec<SectionId> = sections_of(&bytes).iter().map(|s| s.0).collect();
     let at = |id| order.iter().position(|&x| x == id).unwrap();
-    assert!(at(SectionId::CELL_VISIBILITY_SPARSE) < at(ID));
+    assert!(at(SectionId::CELL_VISIBILITY) < at(ID));
     assert!(at(ID) < at(SectionId::METADATA));
     let mut both = f.clone();
     both.probe_weights = weights_file().probe_weights;
     let b = both.to_bytes().unwrap();
-    assert_eq!(minor_of(&b), 7);
     let order: Vec<SectionId> = sections_of(&b).iter().map(|s| s.0).collect();
     let at = |id| order.iter().position(|&x| x == id).unwrap();
     assert!(at(SectionId::PROBE_WEIGHTS) < at(ID));
@@ -117,15 +114,10 @@ fn the_documented_example_section() {
 }
 
 #[test]
-fn files_without_cell_planes_keep_their_minor_version() {
+fn files_without_cell_planes_are_the_files_without_them() {
     let mut old = planes_file();
     old.cell_planes = None;
     assert_eq!(old.to_bytes().unwrap(), cvis_file().to_bytes().unwrap());
-    assert_eq!(minor_of(&cvis_file().to_bytes().unwrap()), 5);
-    assert_eq!(minor_of(&weights_file().to_bytes().unwrap()), 6);
-    assert!(minor_of(&full_file().to_bytes().unwrap()) < 4);
-    assert_eq!(layout::VERSION_MINOR, 10);
-    assert_eq!(layout::minor_for_sections([ID]), 7);
 }
 
 #[test]
@@ -134,7 +126,6 @@ fn an_empty_plane_set_round_trips() {
     let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
     f.cell_planes = Some(CellPlanes::new(tets, vec![], vec![]).unwrap());
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 7);
     assert_eq!(find_section(&bytes, ID).1, SECTION_HEADER_LEN);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
 }
@@ -323,15 +314,13 @@ fn cell_planes_need_a_cloud_with_cell_visibility() {
     // Without cell visibility: the reader and the writer refuse.
     let sections: Vec<_> = sections_of(&good)
         .into_iter()
-        .filter(|(id, _)| *id != SectionId::CELL_VISIBILITY_SPARSE)
+        .filter(|(id, _)| *id != SectionId::CELL_VISIBILITY)
         .collect();
     let r = ProbeFile::from_bytes(&assemble(0, &sections));
     assert!(
         matches!(
             r,
-            Err(FormatError::MissingSection(
-                SectionId::CELL_VISIBILITY_SPARSE
-            ))
+            Err(FormatError::MissingSection(SectionId::CELL_VISIBILITY))
         ),
         "{r:?}"
     );
@@ -339,9 +328,7 @@ fn cell_planes_need_a_cloud_with_cell_visibility() {
     f.cell_visibility = None;
     assert!(matches!(
         f.to_bytes(),
-        Err(FormatError::MissingSection(
-            SectionId::CELL_VISIBILITY_SPARSE
-        ))
+        Err(FormatError::MissingSection(SectionId::CELL_VISIBILITY))
     ));
     // Without tetrahedra (and so without a count to check against).
     let sections: Vec<_> = sections_of(&good)
@@ -390,8 +377,8 @@ fn cell_planes_need_a_cloud_with_cell_visibility() {
 
 #[test]
 fn a_reader_skips_unknown_sections_of_newer_minors_only() {
-    // A CPLN-bearing file is a 1.7 file; an unknown id next to it is
-    // refused at this reader's minor (1.9) and skipped at 1.10.
+    // An unknown id next to CPLN is refused at this reader's minor and
+    // skipped at the next one.
     let good = planes_file().to_bytes().unwrap();
     let mut sections = sections_of(&good);
     sections.insert(

@@ -1,7 +1,8 @@
 //! The corpus of broken files in `tests/corpus/`: each file is named for
 //! what is wrong with it and must give its error variant (and never panic).
-//! `valid_full.probes` is a good file from format 1.0 that must keep loading;
-//! `valid_groups.probes` is a good 1.1 file with light groups (`LGRP`).
+//! `valid_full.probes` is a good format 2.0 file that must keep loading
+//! (and that the writer must keep writing byte for byte);
+//! `valid_groups.probes` is the same with light groups (`LGRP`).
 //!
 //! Regenerate after a deliberate format change with
 //! `PROBEKIT_REGEN_CORPUS=1 cargo test -p probekit-runtime --test corpus`.

@@ -1,4 +1,4 @@
-//! Light groups (`LGRP`, format 1.1): round trip, version handling, and
+//! Light groups (`LGRP`): round trip, version handling, and
 //! relighting checked against a direct per-probe sum `Σ_g s_g·G_g`
 //! computed in f64 from the decoded groups.
 
@@ -10,10 +10,9 @@ use probekit_runtime::format::layout;
 use probekit_runtime::format::*;
 
 #[test]
-fn groups_round_trip_and_set_minor_1_only_when_present() {
+fn groups_round_trip_and_leave_no_trace_when_absent() {
     let g = groups_file();
     let bytes = g.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 1);
     let back = ProbeFile::from_bytes(&bytes).unwrap();
     assert_eq!(back, g);
     assert_eq!(back.group_names().collect::<Vec<_>>(), ["lamp", "sün"]);
@@ -23,11 +22,10 @@ fn groups_round_trip_and_set_minor_1_only_when_present() {
     assert_eq!(by.values().sum::<u64>(), bytes.len() as u64);
     assert_eq!(g.bytes_by_section().unwrap(), by);
 
-    // Without groups the writer still writes 1.0, byte for byte what it
-    // wrote before light groups existed (also pinned by the corpus).
+    // Without groups the writer writes the file without them, byte for
+    // byte (also pinned by the corpus).
     let f = full_file();
     let old = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&old), 0);
     let mut f2 = g.clone();
     f2.groups.clear();
     f2.coefficients = f.coefficients.clone();
@@ -36,8 +34,8 @@ fn groups_round_trip_and_set_minor_1_only_when_present() {
 
 #[test]
 fn a_reader_skips_sections_of_a_newer_minor_but_keeps_groups() {
-    // A 1.2 file with an unknown section next to LGRP loads, groups intact:
-    // how a 1.0 reader treats a 1.1 file with LGRP.
+    // A 2.1 file with an unknown section next to LGRP loads, groups
+    // intact: how this reader treats a file of a newer minor.
     let g = groups_file();
     let bytes = g.to_bytes().unwrap();
     let (_, sections) = read_sections(&bytes).unwrap();
@@ -46,7 +44,7 @@ fn a_reader_skips_sections_of_a_newer_minor_but_keeps_groups() {
     owned.insert(2, (SectionId::from_fourcc(*b"ZZZZ"), vec![7; 32]));
     let newer = assemble_file(0, layout::VERSION_MINOR + 1, 0, &owned);
     assert_eq!(ProbeFile::from_bytes(&newer).unwrap(), g);
-    // The same bytes at minor 1: the unknown section is refused.
+    // The same bytes at this reader's minor: the unknown section is refused.
     let same = assemble_file(0, layout::VERSION_MINOR, 0, &owned);
     assert!(matches!(
         ProbeFile::from_bytes(&same),

@@ -1,10 +1,10 @@
-//! The intended L1 evaluation in the header's flags (format 1.10): written
+//! The intended L1 evaluation in the header's flags: written
 //! only when not linear, read back, refused where it makes no sense, and
-//! read as linear from older files and unknown values of newer ones.
+//! read as linear from unknown values of newer minors.
 
 mod common;
 
-use common::{load_patched, minor_of, put_u32};
+use common::{load_patched, put_u32};
 use glam::Vec3;
 use probekit_runtime::format::layout::{self, header};
 use probekit_runtime::format::{Codec, Coefficients, FormatError, L1Mode, ProbeFile};
@@ -35,10 +35,9 @@ fn flags_of(bytes: &[u8]) -> u32 {
 }
 
 #[test]
-fn linear_files_keep_flags_zero_and_their_minor() {
+fn linear_files_keep_flags_zero() {
     let bytes = l1_file(Codec::F32).to_bytes().unwrap();
     assert_eq!(flags_of(&bytes), 0);
-    assert_eq!(minor_of(&bytes), 0);
     assert_eq!(
         ProbeFile::from_bytes(&bytes).unwrap().l1_mode,
         L1Mode::Linear
@@ -46,13 +45,12 @@ fn linear_files_keep_flags_zero_and_their_minor() {
 }
 
 #[test]
-fn hallucinated_zh3_round_trips_in_the_flags_at_minor_10() {
+fn hallucinated_zh3_round_trips_in_the_flags() {
     for codec in [Codec::F32, Codec::F16, Codec::L1Q13] {
         let mut f = l1_file(codec);
         f.l1_mode = L1Mode::Zh3Hallucinated;
         let bytes = f.to_bytes().unwrap();
         assert_eq!(flags_of(&bytes) & layout::FLAGS_L1_MODE, 1, "{codec:?}");
-        assert_eq!(minor_of(&bytes), layout::MINOR_L1_MODE);
         let back = ProbeFile::from_bytes(&bytes).unwrap();
         assert_eq!(back, f);
         assert_eq!(back.to_bytes().unwrap(), bytes);

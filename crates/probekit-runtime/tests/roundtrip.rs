@@ -38,7 +38,7 @@ fn writing_is_deterministic_and_sections_are_aligned() {
     assert_eq!(a, c);
     assert_eq!(&a[..8], &MAGIC);
     let (_, sections) = read_sections(&a).unwrap();
-    assert_eq!(sections.len(), 10);
+    assert_eq!(sections.len(), 9);
     let mut end = HEADER_LEN + 32 * sections.len();
     for s in &sections {
         assert_eq!(s.offset % 16, 0, "{} misaligned", s.id);
@@ -184,6 +184,47 @@ fn newer_minor_version_skips_unknown_sections() {
         ProbeFile::from_bytes(&same),
         Err(FormatError::UnknownSection(id)) if id == SectionId::from_fourcc(*b"FUTR")
     ));
+}
+
+/// Every 1.x file (and every layout of one: the sections inside are never
+/// looked at) is refused with [`FormatError::OlderVersion`], whose message
+/// tells the user to bake again; a newer major is `UnsupportedVersion`.
+#[test]
+fn files_of_format_1_are_refused_as_written_by_an_older_probekit() {
+    let bytes = full_file().to_bytes().unwrap();
+    assert_eq!(
+        u16::from_le_bytes([bytes[8], bytes[9]]),
+        layout::VERSION_MAJOR
+    );
+    assert_eq!(layout::VERSION_MAJOR, 2);
+    assert_eq!(minor_of(&bytes), 0);
+    for minor in [0u16, 1, 7, 11, 200] {
+        let e = load_patched(&bytes, |b| {
+            b[layout::header::MAJOR..][..2].copy_from_slice(&1u16.to_le_bytes());
+            b[layout::header::MINOR..][..2].copy_from_slice(&minor.to_le_bytes());
+        })
+        .unwrap_err();
+        assert!(
+            matches!(e, FormatError::OlderVersion { major: 1, minor: m, supported: 2 } if m == minor),
+            "{e:?}"
+        );
+        let msg = e.to_string();
+        assert!(msg.contains("older probekit"), "{msg}");
+        assert!(msg.contains("baked again"), "{msg}");
+        assert!(msg.contains(&format!("1.{minor}")), "{msg}");
+    }
+    // Too short to hold sections, a 1.x header alone is still "older".
+    let mut head = bytes[..HEADER_LEN].to_vec();
+    head[8..10].copy_from_slice(&1u16.to_le_bytes());
+    assert!(matches!(
+        ProbeFile::from_bytes(&head),
+        Err(FormatError::OlderVersion { .. })
+    ));
+    let e = load_patched(&bytes, |b| b[8..10].copy_from_slice(&3u16.to_le_bytes())).unwrap_err();
+    assert!(
+        matches!(e, FormatError::UnsupportedVersion { major: 3, .. }),
+        "{e:?}"
+    );
 }
 
 use probekit_runtime::format::layout;

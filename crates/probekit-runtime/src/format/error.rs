@@ -23,6 +23,20 @@ pub enum FormatError {
     /// The first 8 bytes are not `PROBEKIT`.
     #[error("not a .probes file (bad magic bytes)")]
     BadMagic,
+    /// A file of an older major version (every 1.x file): written by an
+    /// older probekit, whose files this reader does not read. Bake the
+    /// scene again to get a file of the current format.
+    #[error(
+        "format version {major}.{minor}: the file was written by an older probekit and must be baked again (this reader reads {supported}.x)"
+    )]
+    OlderVersion {
+        /// The file's major version.
+        major: u16,
+        /// The file's minor version.
+        minor: u16,
+        /// The major version this reader reads.
+        supported: u16,
+    },
     /// A major version this reader does not know (newer, or 0).
     #[error("unsupported format version {major}.{minor} (this reader reads {supported}.x)")]
     UnsupportedVersion {

@@ -1,4 +1,4 @@
-//! Light groups (`LGRP`, format 1.1) and run-time relighting.
+//! Light groups (`LGRP`) and run-time relighting.
 //!
 //! A bake with `--groups` stores, besides the total radiance SH `T` of every
 //! probe (`COEF`), one radiance SH `G_g` per light group `g` (a `group` key on

@@ -19,13 +19,13 @@ use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use bytemuck::Pod;
 use cloud::{
-    build_cell_planes, parse_cell_planes, parse_cell_visibility, parse_cell_visibility_sparse,
-    parse_outer, parse_probe_weights, parse_tetrahedra, parse_visibility,
+    build_cell_planes, parse_cell_planes, parse_cell_visibility, parse_outer, parse_probe_weights,
+    parse_tetrahedra, parse_visibility,
 };
 use glam::Vec3;
 use probes::{parse_coefficients, parse_groups, parse_metadata, parse_positions, parse_validity};
 use rig::parse_rigs;
-use volume::{parse_gradients, parse_grid, parse_octree, parse_octree_compact};
+use volume::{parse_gradients, parse_grid, parse_octree};
 
 /// The decoded fixed header of a `.probes` file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,7 +36,7 @@ pub struct FileHeader {
     pub minor: u16,
     /// Raw kind id (see [`ProbeFileKind::from_id`]).
     pub kind: u32,
-    /// Header flags (none defined in 1.0).
+    /// Header flags (bits 0–1: [`layout::FLAGS_L1_MODE`]).
     pub flags: u32,
 }
 
@@ -96,6 +96,13 @@ pub fn read_sections(bytes: &[u8]) -> Result<(FileHeader, Vec<RawSection<'_>>), 
     }
     let major = u16_at(bytes, header::MAJOR).ok_or(truncated(HEADER_LEN, len))?;
     let minor = u16_at(bytes, header::MINOR).ok_or(truncated(HEADER_LEN, len))?;
+    if (1..VERSION_MAJOR).contains(&major) {
+        return Err(FormatError::OlderVersion {
+            major,
+            minor,
+            supported: VERSION_MAJOR,
+        });
+    }
     if major != VERSION_MAJOR {
         return Err(FormatError::UnsupportedVersion {
             major,
@@ -352,27 +359,13 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::VALIDITY => file.validity = Some(parse_validity(&s)?),
             SectionId::TETRAHEDRA => file.tetrahedra = Some(parse_tetrahedra(&s)?),
             SectionId::OUTER => file.outer = Some(parse_outer(&s)?),
-            SectionId::OCTREE => file.octree = Some(parse_octree(&s)?),
-            SectionId::OCTREE_COMPACT => compact = Some(parse_octree_compact(&s)?),
+            SectionId::OCTREE => compact = Some(parse_octree(&s)?),
             SectionId::GRID => file.grid = Some(parse_grid(&s)?),
             SectionId::GRADIENTS => file.gradients = Some(parse_gradients(&s)?),
             SectionId::RIGS => file.rigs = parse_rigs(&s)?,
             SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
             SectionId::VISIBILITY => file.visibility = Some(parse_visibility(&s)?),
-            SectionId::CELL_VISIBILITY | SectionId::CELL_VISIBILITY_SPARSE => {
-                if file.cell_visibility.is_some() {
-                    return Err(FormatError::InvalidValue {
-                        id: s.id,
-                        element: 0,
-                        reason: "both CVIS and CVSP: at most one cell visibility section",
-                    });
-                }
-                file.cell_visibility = Some(if raw.id == SectionId::CELL_VISIBILITY {
-                    parse_cell_visibility(&s)?
-                } else {
-                    parse_cell_visibility_sparse(&s)?
-                });
-            }
+            SectionId::CELL_VISIBILITY => file.cell_visibility = Some(parse_cell_visibility(&s)?),
             SectionId::PROBE_WEIGHTS => {
                 let (w, alpha, beta) = parse_probe_weights(&s)?;
                 file.probe_weights = Some(w);
@@ -391,13 +384,6 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     file.positions = positions.ok_or(FormatError::MissingSection(SectionId::POSITIONS))?;
     file.coefficients = coefficients.ok_or(FormatError::MissingSection(SectionId::COEFFICIENTS))?;
     if let Some(c) = compact {
-        if file.octree.is_some() {
-            return Err(FormatError::InvalidValue {
-                id: SectionId::OCTREE_COMPACT,
-                element: 0,
-                reason: "a file holds OCTR or OCTC, not both",
-            });
-        }
         file.octree = Some(c.expand(&file.positions)?);
     }
     if let Some(raw) = planes {

@@ -353,7 +353,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
-    // Light groups (1.1): one SH per probe each, at the coefficients' order.
+    // Light groups: one SH per probe each, at the coefficients' order.
     for (k, g) in f.groups.iter().enumerate() {
         let id = SectionId::LIGHT_GROUPS;
         let bad = |reason| FormatError::InvalidValue {
@@ -393,15 +393,15 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         })?;
     }
 
-    // Distance moments (1.3): one octahedral map per probe.
+    // Distance moments: one octahedral map per probe.
     if let Some(v) = &f.visibility {
         v.validate(probes)?;
     }
 
-    // Cell visibility (1.4, sparse 1.5): one cell per tetrahedron (hull faces are
+    // Cell visibility: one cell per tetrahedron (hull faces are
     // counted against the mesh when a `ProbeCloud` is built).
     if let Some(c) = &f.cell_visibility {
-        let id = SectionId::CELL_VISIBILITY_SPARSE;
+        let id = SectionId::CELL_VISIBILITY;
         let tets = f
             .tetrahedra
             .as_ref()
@@ -418,7 +418,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
-    // Fitted probe weights (1.6): one per probe of a cloud, each in range.
+    // Fitted probe weights: one per probe of a cloud, each in range.
     if let Some(w) = &f.probe_weights {
         let id = SectionId::PROBE_WEIGHTS;
         if f.kind != ProbeFileKind::Cloud {
@@ -442,7 +442,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             });
         }
     }
-    // Brightness exponent (1.8): in range, and only beside probe weights
+    // Brightness exponent: in range, and only beside probe weights
     // (it is stored in their header).
     if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.brightness_exponent) {
         return Err(FormatError::InvalidValue {
@@ -456,7 +456,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             "a brightness exponent is stored with probe weights (PWGT) only",
         ));
     }
-    // Directional brightness exponent (1.9): the same rules, header word w2.
+    // Directional brightness exponent: the same rules, header word w2.
     if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.directional_exponent) {
         return Err(FormatError::InvalidValue {
             id: SectionId::PROBE_WEIGHTS,
@@ -471,7 +471,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         ));
     }
 
-    // Occluder planes (1.7): a cloud's, refining its cell visibility, one
+    // Occluder planes: a cloud's, refining its cell visibility, one
     // lookup entry per tetrahedron (the planes themselves are checked by
     // `CellPlanes::new`).
     if let Some(p) = &f.cell_planes {
@@ -489,7 +489,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
     }
 }
 
-/// Whether occluder planes (`CPLN`, format 1.7) for a mesh of `tet_count`
+/// Whether occluder planes (`CPLN`) for a mesh of `tet_count`
 /// tetrahedra may stand in `f`: it is a cloud (`InvalidValue` otherwise),
 /// it has cell visibility, which the planes refine (`MissingSection`
 /// naming `CVSP` otherwise), and `tet_count` equals the number of
@@ -510,9 +510,7 @@ pub(super) fn check_cell_planes_context(
         });
     }
     if f.cell_visibility.is_none() {
-        return Err(FormatError::MissingSection(
-            SectionId::CELL_VISIBILITY_SPARSE,
-        ));
+        return Err(FormatError::MissingSection(SectionId::CELL_VISIBILITY));
     }
     let tets = f
         .tetrahedra

@@ -170,31 +170,18 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         out.push((SectionId::OUTER, s.finish()));
     }
 
-    if let Some(c) = f
-        .octree
-        .as_ref()
-        .and_then(|o| super::octree_compact::encode(o, &f.positions))
-    {
-        // Regular octree (every builder-made one): 1 bit per node.
+    if let Some(o) = &f.octree {
+        // One bit per node: only a regular octree (every one the volume
+        // builder makes) has this encoding.
+        let c = super::octree_compact::encode(o, &f.positions).ok_or(
+            FormatError::Unrepresentable(
+                "an octree that is not regular (breadth-first, octant children on the root lattice, leaves listing exactly their 8 corner probes)",
+            ),
+        )?;
         let [w2, w3] = roots_words(c.roots)?;
         let mut s = SectionBuilder::new([c.nodes, c.max_depth, w2, w3]);
         s.vec3s([&c.min, &c.max]).pad();
         s.bytes(&c.bits);
-        out.push((SectionId::OCTREE_COMPACT, s.finish()));
-    } else if let Some(o) = &f.octree {
-        let [w2, w3] = roots_words(o.roots)?;
-        let mut s = SectionBuilder::new([
-            count(o.nodes.len(), "octree nodes")?,
-            count(o.samples.len(), "octree samples")?,
-            w2,
-            w3,
-        ]);
-        for n in &o.nodes {
-            s.vec3s([&n.min, &n.max]);
-            s.u32s([n.first_child, n.depth, n.sample_offset, n.sample_count]);
-        }
-        s.pad();
-        s.u32s(o.samples.iter().copied());
         out.push((SectionId::OCTREE, s.finish()));
     }
 
@@ -286,7 +273,7 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
             0,
         ]);
         s.bytes(c.mask()).pad().bytes(c.records());
-        out.push((SectionId::CELL_VISIBILITY_SPARSE, s.finish()));
+        out.push((SectionId::CELL_VISIBILITY, s.finish()));
     }
 
     if let Some(w) = &f.probe_weights {
@@ -322,7 +309,7 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     Ok(out)
 }
 
-/// Header words `w2`, `w3` of `OCTR`/`OCTC` for a root grid.
+/// Header words `w2`, `w3` of `OCTC` for a root grid.
 fn roots_words(r: [u32; 3]) -> Result<[u32; 2], FormatError> {
     layout::pack_roots(r).ok_or(FormatError::InvalidValue {
         id: SectionId::OCTREE,
@@ -332,48 +319,17 @@ fn roots_words(r: [u32; 3]) -> Result<[u32; 2], FormatError> {
 }
 
 impl ProbeFile {
-    /// Serializes the file (after [`ProbeFile::validate`]). Deterministic:
-    /// equal contents give equal bytes. The header's minor version is the
-    /// lowest that holds the sections present
-    /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
-    /// (1), a regular octree, written compactly as `OCTC` (2), distance
-    /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
-    /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
-    /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7), or a
-    /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8), or a
-    /// non-zero directional one ([`layout::MINOR_DIRECTIONAL`], 9), or an
-    /// L1 evaluation other than linear ([`layout::MINOR_L1_MODE`], 10, in
-    /// the header's flags).
+    /// Serializes the file (after [`ProbeFile::validate`]) as format
+    /// [`VERSION_MAJOR`].[`VERSION_MINOR`]. Deterministic: equal contents
+    /// give equal bytes. Refuses ([`FormatError::Unrepresentable`]) an
+    /// octree that is not regular, which the compact `OCTC` encoding
+    /// cannot hold.
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
-        let forest = self.octree.as_ref().is_some_and(|o| o.is_forest());
-        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id))
-            .max(if forest { layout::MINOR_FOREST } else { 0 })
-            .max(if self.brightness_exponent != 0.0 {
-                layout::MINOR_BRIGHTNESS
-            } else {
-                0
-            })
-            .max(if self.directional_exponent != 0.0 {
-                layout::MINOR_DIRECTIONAL
-            } else {
-                0
-            })
-            .max(if self.l1_mode != super::L1Mode::Linear {
-                layout::MINOR_L1_MODE
-            } else {
-                0
-            })
-            .max(if self.rigs.iter().any(|r| r.bounding_radius != 0.0) {
-                layout::MINOR_RIG_RADIUS
-            } else {
-                0
-            });
-        debug_assert!(minor <= VERSION_MINOR);
         Ok(assemble_file(
             self.kind.id(),
-            minor,
+            VERSION_MINOR,
             self.l1_mode.flags(),
             &sections,
         ))

@@ -31,9 +31,10 @@ impl Rng {
     }
 }
 
-/// A cloud of 5 probes holding every section the format knows, with
+/// A cloud of 5 probes holding most sections the format knows, with
 /// consistent indices: two tetrahedra sharing a face, a 4-face hull table,
-/// a root-plus-8-leaves octree, gradients, two rigs and JSON metadata.
+/// a grid, gradients, two rigs and JSON metadata (the octree is
+/// [`compact_volume_file`]'s).
 pub fn full_file() -> ProbeFile {
     let mut rng = Rng(7);
     let positions = vec![
@@ -70,30 +71,6 @@ pub fn full_file() -> ProbeFile {
         adjacent: vec![[1, 2, 3], [2, 0, 3], [0, 1, 3], [0, 1, 2]],
         planes: (0..4).map(|_| [0; 4].map(|_| rng.f32())).collect(),
         tetrahedra: vec![0, 0, 0, 1],
-    });
-    let mut nodes = vec![OctreeNode {
-        min: Vec3::ZERO,
-        max: Vec3::ONE,
-        first_child: 1,
-        depth: 0,
-        sample_offset: 0,
-        sample_count: 0,
-    }];
-    for k in 0..8u32 {
-        let lo = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32) * 0.5;
-        nodes.push(OctreeNode {
-            min: lo,
-            max: lo + 0.5,
-            first_child: NONE,
-            depth: 1,
-            sample_offset: k * 8,
-            sample_count: 8 + (k == 3) as u32,
-        });
-    }
-    f.octree = Some(Octree {
-        nodes,
-        samples: (0..65).map(|i| i % 5).collect(),
-        roots: [1, 1, 1],
     });
     f.grid = Some(VolumeGrid {
         min: Vec3::splat(-1.0),
@@ -151,7 +128,7 @@ pub fn full_file() -> ProbeFile {
 }
 
 /// [`full_file`] relit-ready: two light groups, `"lamp"` (f32) and `"sün"`
-/// (f16, a non-ASCII name), whose sum is the file's coefficients (format 1.1).
+/// (f16, a non-ASCII name), whose sum is the file's coefficients.
 pub fn groups_file() -> ProbeFile {
     let mut f = full_file();
     let mut rng = Rng(11);
@@ -305,8 +282,7 @@ fn with_sections(f: &ProbeFile, edit: impl FnOnce(&mut Vec<(SectionId, Vec<u8>)>
     let mut owned: Vec<(SectionId, Vec<u8>)> =
         sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect();
     edit(&mut owned);
-    let minor = layout::minor_for_sections(owned.iter().map(|(id, _)| *id));
-    assemble_file(f.kind.id(), minor, 0, &owned)
+    assemble_file(f.kind.id(), layout::VERSION_MINOR, 0, &owned)
 }
 
 /// Patches `edit` into section `id`'s bytes (offsets relative to the
@@ -356,9 +332,26 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
     v.push((
         "newer_major_version",
         patch_header(&good, |b| {
-            b[header::MAJOR..header::MAJOR + 2].copy_from_slice(&2u16.to_le_bytes())
+            b[header::MAJOR..header::MAJOR + 2].copy_from_slice(&3u16.to_le_bytes())
         }),
-        |e| matches!(e, FormatError::UnsupportedVersion { major: 2, .. }),
+        |e| matches!(e, FormatError::UnsupportedVersion { major: 3, .. }),
+    ));
+    v.push((
+        "older_major_version",
+        patch_header(&good, |b| {
+            b[header::MAJOR..header::MAJOR + 2].copy_from_slice(&1u16.to_le_bytes());
+            b[header::MINOR..header::MINOR + 2].copy_from_slice(&11u16.to_le_bytes());
+        }),
+        |e| {
+            matches!(
+                e,
+                FormatError::OlderVersion {
+                    major: 1,
+                    minor: 11,
+                    ..
+                }
+            )
+        },
     ));
     v.push(("truncated_header", good[..40].to_vec(), |e| {
         matches!(
@@ -624,47 +617,30 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
             )
         },
     ));
-    v.push((
-        "octree_child_before_parent",
-        patch(&good, SectionId::OCTREE, |s| {
-            // Node 1 (a leaf) claims node 1.. as children: a cycle.
-            put_u32(s, 16 + 40 + 24, 1)
-        }),
-        |e| matches!(e, FormatError::IndexOutOfRange { element: 1, .. }),
-    ));
-    v.push((
-        "octree_sample_list_out_of_range",
-        patch(&good, SectionId::OCTREE, |s| {
-            put_u32(s, 16 + 40 * 8 + 32, 60)
-        }),
-        |e| matches!(e, FormatError::IndexOutOfRange { element: 8, .. }),
-    ));
-    v.push((
-        "octree_inverted_box",
-        patch(&good, SectionId::OCTREE, |s| {
-            s[16..20].copy_from_slice(&5.0f32.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::InvalidValue { element: 0, .. }),
-    ));
     v.push(("grid_resolution_mismatch", {
-        let mut g = f.clone();
-        g.octree = None;
-        let bytes = g.to_bytes().unwrap();
-        patch(&bytes, SectionId::GRID, |s| put_u32(s, 4, 2))
+        patch(&good, SectionId::GRID, |s| put_u32(s, 4, 2))
     }, |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 10 } if *id == SectionId::GRID)));
     let compact = compact_volume_file().to_bytes().unwrap();
     v.push((
         "octc_node_count_not_one_plus_eight_per_parent",
-        patch(&compact, SectionId::OCTREE_COMPACT, |s| put_u32(s, 0, 10)),
-        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE_COMPACT),
+        patch(&compact, SectionId::OCTREE, |s| put_u32(s, 0, 10)),
+        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE),
+    ));
+    v.push((
+        "octree_inverted_box",
+        // Root box min x 0 → 5, past its max.
+        patch(&compact, SectionId::OCTREE, |s| {
+            s[16..20].copy_from_slice(&5.0f32.to_le_bytes())
+        }),
+        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE),
     ));
     v.push((
         "octc_leaf_corner_without_probe",
         // Root box max x 1 → 2: the octants' corners leave the probe lattice.
-        patch(&compact, SectionId::OCTREE_COMPACT, |s| {
+        patch(&compact, SectionId::OCTREE, |s| {
             s[28..32].copy_from_slice(&2.0f32.to_le_bytes())
         }),
-        |e| matches!(e, FormatError::InvalidTopology { id, .. } if *id == SectionId::OCTREE_COMPACT),
+        |e| matches!(e, FormatError::InvalidTopology { id, .. } if *id == SectionId::OCTREE),
     ));
     v.push((
         "metadata_not_utf8",
@@ -688,7 +664,7 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
     v
 }
 
-/// Broken `LGRP` sections (format 1.1), around [`groups_file`].
+/// Broken `LGRP` sections, around [`groups_file`].
 fn light_group_cases(v: &mut Vec<(&'static str, Vec<u8>, Expect)>) {
     const LGRP: SectionId = SectionId::LIGHT_GROUPS;
     let g = groups_file();
@@ -799,8 +775,8 @@ fn light_group_cases(v: &mut Vec<(&'static str, Vec<u8>, Expect)>) {
     ));
     v.push((
         "groups_file_with_unknown_section",
-        // A 1.1 file (it has LGRP) is this reader's own minor: an unknown
-        // id is refused, not skipped.
+        // A file of this reader's own minor: an unknown id is refused, not
+        // skipped.
         with_sections(&g, |s| {
             s.push((SectionId::from_fourcc(*b"XXXX"), vec![0; 16]));
         }),
@@ -879,7 +855,7 @@ pub fn dense_records(tets: usize) -> Vec<u8> {
 }
 
 /// `full_file()` with cell visibility from [`dense_records`] (written as
-/// the sparse `CVSP` section, format 1.5).
+/// the sparse `CVSP` section).
 pub fn cvis_file() -> ProbeFile {
     let mut f = full_file();
     let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
@@ -889,7 +865,7 @@ pub fn cvis_file() -> ProbeFile {
     f
 }
 
-/// [`cvis_file`] with fitted probe weights (`PWGT`, format 1.6).
+/// [`cvis_file`] with fitted probe weights (`PWGT`).
 pub fn weights_file() -> ProbeFile {
     let mut f = cvis_file();
     let n = f.positions.len();
@@ -902,7 +878,7 @@ pub fn weights_file() -> ProbeFile {
 pub const PLANES: [[f32; 4]; 2] = [[0.6, 0.8, 0.0, 0.25], [0.0, 0.0, -1.0, -0.5]];
 
 /// [`cvis_file`] with an occluder plane for each of its two tetrahedra
-/// (`CPLN`, format 1.7).
+/// (`CPLN`).
 pub fn planes_file() -> ProbeFile {
     let mut f = cvis_file();
     let tets = f.tetrahedra.as_ref().unwrap().vertices.len();

@@ -1274,7 +1274,7 @@ mod forest {
     }
 
     /// Leaves of an auto-rooted forest are cubes; the file round-trips
-    /// through `OCTC` at minor 3; a constant field comes back everywhere.
+    /// through `OCTC` as format 2.0; a constant field comes back everywhere.
     #[test]
     fn forest_leaves_are_cubes_and_round_trip() {
         let (file, min, max) = wall_forest();
@@ -1286,8 +1286,9 @@ mod forest {
         }
         assert!(o.nodes.iter().any(|n| n.depth == 4));
         let bytes = file.to_bytes().unwrap();
-        let minor = crate::format::layout::header::MINOR;
-        assert_eq!(u16::from_le_bytes([bytes[minor], bytes[minor + 1]]), 3);
+        let major = crate::format::layout::header::MAJOR;
+        let version = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+        assert_eq!((version(major), version(major + 2)), (2, 0));
         let back = crate::format::ProbeFile::from_bytes(&bytes).unwrap();
         assert_eq!(back, file);
         let v = Volume::from_file(&back).unwrap();
