@@ -14,8 +14,8 @@ use probekit_runtime::format::*;
 #[test]
 fn cell_visibility_round_trips_with_the_documented_size() {
     let f = cvis_file();
-    let c = f.cell_visibility.as_ref().unwrap();
-    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
+    let tets = c(&f).tetrahedra.as_ref().unwrap().vertices.len();
+    let c = c(&f).blend.cell_visibility.as_ref().unwrap();
     let cells = tets + HULL;
     // Every third cell is clear and has no record.
     let clear = (0..cells).filter(|i| i % 3 == 0).count();
@@ -43,7 +43,7 @@ fn cell_visibility_round_trips_with_the_documented_size() {
     }
     // Without the section the file is the one without cell visibility.
     let mut old = f.clone();
-    old.cell_visibility = None;
+    cm(&mut old).blend.cell_visibility = None;
     assert_eq!(old.to_bytes().unwrap(), full_file().to_bytes().unwrap());
 }
 
@@ -52,11 +52,11 @@ fn the_writer_refuses_inconsistent_cell_visibility() {
     // A padding bit set in a stored record: a k = 2 hull record uses 18 of
     // its 24 bits; hull face h (cell tets + h) is not clear.
     let mut f = cvis_file();
-    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
+    let tets = c(&f).tetrahedra.as_ref().unwrap().vertices.len();
     let h = (0..HULL).find(|h| (tets + h) % 3 != 0).unwrap();
     let mut data = dense_records(tets);
     data[tets * 5 + 3 * h + 2] |= 0x80;
-    f.cell_visibility = Some(CellVisibility::new(K, tets, HULL, data).unwrap());
+    cm(&mut f).blend.cell_visibility = Some(CellVisibility::new(K, tets, HULL, data).unwrap());
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::InvalidValue { id, element, .. })
@@ -65,17 +65,17 @@ fn the_writer_refuses_inconsistent_cell_visibility() {
     // One record short of the tetrahedra.
     let mut f = cvis_file();
     let data = vec![0u8; (tets - 1) * record_bytes(4, K) + HULL * record_bytes(3, K)];
-    f.cell_visibility = Some(CellVisibility::new(K, tets - 1, HULL, data).unwrap());
+    cm(&mut f).blend.cell_visibility = Some(CellVisibility::new(K, tets - 1, HULL, data).unwrap());
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::CountMismatch { .. })
     ));
     // Without tetrahedra.
     let mut f = cvis_file();
-    f.tetrahedra = None;
+    cm(&mut f).tetrahedra = None;
     assert!(f.to_bytes().is_err());
     // A stored record that is clear, or a mask padding bit: not canonical.
-    let c = cvis_file().cell_visibility.unwrap();
+    let c = c(&cvis_file()).blend.cell_visibility.clone().unwrap();
     let mut mask = c.mask().to_vec();
     mask[0] |= 1; // cell 0 is clear: now it claims a record...
     let mut recs = vec![0xffu8; 5]; // ...which is all ones (a clear record).
@@ -146,7 +146,7 @@ fn truncated_or_corrupt_sections_are_typed_errors() {
     ));
     // A set padding bit in the last stored record (a hull face: bits 18..24
     // of 24).
-    let c = f.cell_visibility.as_ref().unwrap();
+    let c = c(&f).blend.cell_visibility.as_ref().unwrap();
     let last = mask_at + cells.div_ceil(8).div_ceil(16) * 16 + c.records().len() - 1;
     assert!(last < off + len);
     assert!(matches!(

@@ -79,14 +79,14 @@ fn regular_volume() -> ProbeFile {
     let coeffs: Vec<Vec3> = (0..positions.len())
         .map(|i| Vec3::splat(i as f32))
         .collect();
-    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.octree = Some(Octree {
-        nodes,
-        samples,
-        roots: [1, 1, 1],
-    });
-    f
+    ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, Coefficients::from_f32(1, &coeffs).unwrap()),
+        VolumeStructure::Adaptive(Octree {
+            nodes,
+            samples,
+            roots: [1, 1, 1],
+        }),
+    ))
 }
 
 fn section_ids(bytes: &[u8]) -> Vec<SectionId> {
@@ -101,7 +101,7 @@ fn section_ids(bytes: &[u8]) -> Vec<SectionId> {
 #[test]
 fn regular_octree_round_trips_compactly() {
     let f = regular_volume();
-    assert_eq!(f.positions.len(), 47);
+    assert_eq!(p(&f).positions.len(), 47);
     let bytes = f.to_bytes().unwrap();
     let ids = section_ids(&bytes);
     assert!(ids.contains(&SectionId::OCTREE));
@@ -129,7 +129,7 @@ fn irregular_octree_is_refused_by_the_writer() {
     // A leaf listing a 9th sample, or a corner moved off the lattice: the
     // compact encoding cannot hold either, and it is the only one.
     let mut f = regular_volume();
-    let o = f.octree.as_mut().unwrap();
+    let o = octree_mut(&mut f).unwrap();
     o.samples.push(0);
     o.nodes[2].sample_count = 9;
     assert!(f.validate().is_ok());
@@ -137,8 +137,8 @@ fn irregular_octree_is_refused_by_the_writer() {
     assert!(matches!(e, FormatError::Unrepresentable(_)), "{e:?}");
 
     let mut g = regular_volume();
-    let moved = g.octree.as_ref().unwrap().samples[0] as usize;
-    g.positions[moved].x += 1e-3;
+    let moved = octree(&g).unwrap().samples[0] as usize;
+    pm(&mut g).positions[moved].x += 1e-3;
     let e = g.to_bytes().unwrap_err();
     assert!(matches!(e, FormatError::Unrepresentable(_)), "{e:?}");
 }
@@ -167,13 +167,15 @@ fn octc_forest_bytes(words: [u32; 4], min: Vec3, max: Vec3, bits: &[u8]) -> Vec<
 /// A volume file of the given positions whose octree section is `octc`.
 fn file_with(positions: Vec<Vec3>, extra: Vec<(SectionId, Vec<u8>)>) -> Vec<u8> {
     let coeffs: Vec<Vec3> = vec![Vec3::ONE; positions.len()];
-    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::ONE,
-        resolution: [f.positions.len() as u32, 1, 1],
-    });
+    let resolution = [positions.len() as u32, 1, 1];
+    let f = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, Coefficients::from_f32(1, &coeffs).unwrap()),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+            resolution,
+        }),
+    ));
     let bytes = f.to_bytes().unwrap();
     let (_, sections) = read_sections(&bytes).unwrap();
     let mut owned: Vec<(SectionId, Vec<u8>)> = sections
@@ -214,7 +216,7 @@ fn documented_bytes_decode_to_root_and_eight_octants() {
     );
     assert_eq!(&SectionId::OCTREE.fourcc(), b"OCTC");
     let f = ProbeFile::from_bytes(&bytes).unwrap();
-    let o = f.octree.as_ref().unwrap();
+    let o = octree(&f).unwrap();
     assert_eq!(o.nodes.len(), 9);
     assert_eq!(o.nodes[0].first_child, 1);
     assert_eq!((o.nodes[0].min, o.nodes[0].max), (min, max));
@@ -327,7 +329,7 @@ fn documented_bytes_decode_to_a_forest() {
         )
     };
     let f = ProbeFile::from_bytes(&forest(2, 0, 11)).unwrap();
-    let o = f.octree.as_ref().unwrap();
+    let o = octree(&f).unwrap();
     assert_eq!(o.roots, [3, 1, 1]);
     assert_eq!(o.nodes.len(), 11);
     for i in 0..3usize {
@@ -352,7 +354,7 @@ fn documented_bytes_decode_to_a_forest() {
                 if c & 2 == 2 { n.max.y } else { n.min.y },
                 if c & 4 == 4 { n.max.z } else { n.min.z },
             );
-            assert_eq!(f.positions[s as usize], want);
+            assert_eq!(p(&f).positions[s as usize], want);
         }
     }
     // Writing it again keeps the root grid.
@@ -399,12 +401,12 @@ fn leaf_forest_round_trips_and_roots_must_match() {
     .unwrap();
     let bytes = f.to_bytes().unwrap();
     let back = ProbeFile::from_bytes(&bytes).unwrap();
-    assert_eq!(back.octree.as_ref().unwrap().roots, [2, 1, 1]);
+    assert_eq!(octree(&back).unwrap().roots, [2, 1, 1]);
     assert_eq!(back, f);
     let mut h = f.clone();
-    h.octree.as_mut().unwrap().roots = [3, 1, 1];
+    octree_mut(&mut h).unwrap().roots = [3, 1, 1];
     assert!(h.validate().is_err(), "3 roots, 2 nodes");
     let mut h = f;
-    h.octree.as_mut().unwrap().roots = [1, 1, 1];
+    octree_mut(&mut h).unwrap().roots = [1, 1, 1];
     assert!(h.validate().is_err(), "node 1 unreachable");
 }

@@ -108,6 +108,15 @@ pub enum FormatError {
     /// version or older (unknown ids are skipped only in newer-minor files).
     #[error("unknown section {0}")]
     UnknownSection(SectionId),
+    /// A section of the format in a file of a kind that does not hold it
+    /// (a grid in a cloud, tetrahedra in a volume, probes in a rigs file).
+    #[error("section {id} does not belong in a {kind} file")]
+    MisplacedSection {
+        /// The section.
+        id: SectionId,
+        /// The file's kind (`"cloud"`, `"volume"` or `"rig"`).
+        kind: &'static str,
+    },
     /// A section the file's kind needs is absent.
     #[error("required section {0} is missing")]
     MissingSection(SectionId),

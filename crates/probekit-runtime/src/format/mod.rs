@@ -18,6 +18,7 @@
 //! adds codec encoding and atomic file writing.
 
 mod codec;
+mod contents;
 mod crc;
 mod error;
 mod groups;
@@ -33,6 +34,9 @@ mod visibility;
 mod write;
 
 pub use codec::{Codec, Coefficients};
+pub use contents::{
+    CloudBlend, CloudFile, ProbeFile, ProbeSet, RigFile, VolumeFile, VolumeStructure,
+};
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
@@ -53,13 +57,12 @@ pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 #[cfg(feature = "write")]
 pub use write::{assemble_file, SectionBuilder};
 
-use crate::cloud::{CellPlanes, CellVisibility};
 use crate::prelude::*;
 use glam::Vec3;
 #[cfg(feature = "std")]
 use std::path::Path;
 
-/// What a file holds; decides which sections are required.
+/// What a file holds; decides which sections it must and may hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum ProbeFileKind {
@@ -67,7 +70,7 @@ pub enum ProbeFileKind {
     Cloud,
     /// An irradiance volume: uniform (`GRID`) or adaptive (`OCTC`). Id 1.
     Volume,
-    /// Irradiance rigs (`RIGS`), possibly without probes. Id 2.
+    /// Irradiance rigs (`RIGS`) without probes. Id 2.
     Rig,
 }
 
@@ -360,110 +363,7 @@ pub struct Rig {
     pub transitions: Vec<Transition>,
 }
 
-/// Everything a `.probes` file holds, decoded and validated.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ProbeFile {
-    /// Cloud, volume or rig.
-    pub kind: ProbeFileKind,
-    /// Probe (or volume sample) positions, metres, world space.
-    pub positions: Vec<Vec3>,
-    /// Radiance SH per probe, one per position.
-    pub coefficients: Coefficients,
-    /// Capture validity per probe.
-    pub validity: Option<Vec<Validity>>,
-    /// Tetrahedralization of a cloud.
-    pub tetrahedra: Option<TetSection>,
-    /// Outer cells (hull faces) of a cloud.
-    pub outer: Option<OuterCells>,
-    /// Octree of an adaptive volume.
-    pub octree: Option<Octree>,
-    /// Grid of a uniform volume.
-    pub grid: Option<VolumeGrid>,
-    /// SH gradients per probe.
-    pub gradients: Option<Gradients>,
-    /// Irradiance rigs (empty: no `RIGS` section).
-    pub rigs: Vec<Rig>,
-    /// Radiance SH per light group, for run-time relighting (empty: no
-    /// `LGRP` section). Each holds one entry per probe, in the
-    /// order of `positions`, at the order of `coefficients`; names unique.
-    /// See [`ProbeFile::relit`] and [`Relighter`].
-    pub groups: Vec<LightGroup>,
-    /// Per-probe distance moments for visibility-aware blending (`VISM`,
-    /// `None`: no section, clouds blend without visibility).
-    pub visibility: Option<DistanceMoments>,
-    /// Per-cell lattice visibility bits of a cloud's tetrahedra and hull
-    /// faces (`CVSP`; `None`: no section).
-    pub cell_visibility: Option<CellVisibility>,
-    /// Fitted per-probe blend weights of a cloud (`PWGT`; one
-    /// per probe, each in [`crate::cloud::PROBE_WEIGHT_RANGE`]; `None`: no
-    /// section, every probe weighs 1). See
-    /// [`crate::cloud::ProbeCloud::probe_weights`].
-    pub probe_weights: Option<Vec<f32>>,
-    /// Brightness exponent `α` the probe weights were fitted with and the
-    /// cloud blends with ([`crate::cloud::ProbeCloud::brightness_weighting`]),
-    /// stored in `PWGT`'s header word `w1` as `f32` bits (0: the plain blend). In
-    /// `0..=`[`crate::cloud::MAX_BRIGHTNESS_EXPONENT`]; non-zero only with
-    /// `probe_weights`.
-    pub brightness_exponent: f32,
-    /// Directional brightness exponent `γ` the cloud blends with on top of
-    /// the probe weights
-    /// ([`crate::cloud::ProbeCloud::directional_brightness`]), stored in
-    /// `PWGT`'s header word `w2` as `f32` bits (0: no directional
-    /// blend). Same range and rule as `brightness_exponent`.
-    pub directional_exponent: f32,
-    /// Occluder planes of a cloud's tetrahedra (`CPLN`), a
-    /// refinement of `cell_visibility` for cells one flat wall cuts; only
-    /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
-    pub cell_planes: Option<CellPlanes>,
-    /// How the coefficients are meant to be evaluated when they are L1
-    /// (order 2): stored in the header's flags ([`layout::FLAGS_L1_MODE`]).
-    /// Anything but `Linear` needs order-2 coefficients.
-    pub l1_mode: L1Mode,
-    /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
-    /// placement, tool version; never a wall-clock time).
-    pub metadata: String,
-}
-
 impl ProbeFile {
-    /// A cloud of `positions` with lossless `f32` coefficients and nothing else.
-    pub fn cloud(positions: Vec<Vec3>, order: u32, coeffs: &[Vec3]) -> Result<Self, FormatError> {
-        Ok(Self {
-            positions,
-            ..Self::new(ProbeFileKind::Cloud, Coefficients::from_f32(order, coeffs)?)
-        })
-    }
-
-    /// A file of `kind` holding `coefficients` and nothing else: no positions,
-    /// no optional sections, empty metadata. Fill the fields that apply.
-    pub fn new(kind: ProbeFileKind, coefficients: Coefficients) -> Self {
-        Self {
-            kind,
-            positions: Vec::new(),
-            coefficients,
-            validity: None,
-            tetrahedra: None,
-            outer: None,
-            octree: None,
-            grid: None,
-            gradients: None,
-            rigs: Vec::new(),
-            groups: Vec::new(),
-            visibility: None,
-            cell_visibility: None,
-            probe_weights: None,
-            brightness_exponent: 0.0,
-            directional_exponent: 0.0,
-            cell_planes: None,
-            l1_mode: L1Mode::Linear,
-            metadata: String::new(),
-        }
-    }
-
-    /// Number of probes (volume samples).
-    pub fn probe_count(&self) -> usize {
-        self.positions.len()
-    }
-
     /// Parses and validates a whole file. Never panics; every problem is a
     /// [`FormatError`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {

@@ -10,7 +10,7 @@ use crate::cloud::cell_visibility::{
 use crate::format::error::FormatError;
 use crate::format::layout::{SectionId, SECTION_HEADER_LEN};
 use crate::format::{
-    validate, DistanceMoments, OuterCells, ProbeFile, TetSection, MAX_VISIBILITY_RESOLUTION,
+    validate, CloudFile, DistanceMoments, OuterCells, TetSection, MAX_VISIBILITY_RESOLUTION,
 };
 use crate::prelude::*;
 
@@ -171,15 +171,15 @@ fn first_bad_cell_plane(raw: &RawCellPlanes) -> Option<FormatError> {
         })
 }
 
-/// Builds the planes of a `CPLN` section once `file` holds every other
+/// Builds the planes of a `CPLN` section once `cloud` holds every other
 /// section: where they may stand first
-/// ([`validate::check_cell_planes_context`]: a cloud with cell
-/// visibility, `tet_count` equal to `TETS`'s count), then each entry.
+/// ([`validate::check_cell_planes_context`]: cell visibility present,
+/// `tet_count` equal to `TETS`'s count), then each entry.
 pub(super) fn build_cell_planes(
-    file: &ProbeFile,
+    cloud: &CloudFile,
     raw: RawCellPlanes,
 ) -> Result<CellPlanes, FormatError> {
-    validate::check_cell_planes_context(file, raw.tet_count as usize)?;
+    validate::check_cell_planes_context(cloud, raw.tet_count as usize)?;
     if let Some(e) = first_bad_cell_plane(&raw) {
         return Err(e);
     }
