@@ -74,9 +74,9 @@ fn bake_demo_volume(scene: &Scene, layout: VolumeLayout) -> ProbeFile {
 /// `file` with its coefficients stored in the 13-byte L1 codec (bands ≤ 1
 /// of each probe) and its gradients, if any, cut to bands ≤ 1.
 fn as_l1(file: &ProbeFile) -> ProbeFile {
-    let n = (file.probes().unwrap().coefficients.order * file.probes().unwrap().coefficients.order)
-        as usize;
-    let c = file.probes().unwrap().coefficients.to_f32().unwrap();
+    let coefficients = &file.probes().unwrap().coefficients;
+    let n = (coefficients.order * coefficients.order) as usize;
+    let c = coefficients.to_f32().unwrap();
     let mut data = Vec::new();
     for p in c.chunks_exact(n) {
         data.extend_from_slice(&encode_l1(&[p[0], p[1], p[2], p[3]]));
@@ -87,12 +87,9 @@ fn as_l1(file: &ProbeFile) -> ProbeFile {
         order: 2,
         data,
     };
-    out.as_volume_mut().unwrap().gradients = file
-        .as_volume()
-        .unwrap()
-        .gradients
-        .as_ref()
-        .map(|g| cut_gradients(g, 2));
+    if let Some(v) = out.as_volume_mut() {
+        v.gradients = v.gradients.as_ref().map(|g| cut_gradients(g, 2));
+    }
     out
 }
 
@@ -482,7 +479,7 @@ fn uniform_volume_matches_runtime() {
         },
     );
     assert!(
-        file.as_volume().and_then(|v| v.grid()).cloned().is_some()
+        file.as_volume().and_then(|v| v.grid()).is_some()
             && file
                 .as_volume()
                 .unwrap()

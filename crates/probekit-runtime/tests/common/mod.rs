@@ -42,6 +42,13 @@ impl Rng {
 /// a 4-face hull table, two rigs and JSON metadata (volumes:
 /// [`grid_volume_file`], [`compact_volume_file`]).
 pub fn full_file() -> ProbeFile {
+    full_parts().0
+}
+
+/// [`full_file`] and the SH gradients of [`grid_volume_file`], drawn from
+/// one generator in the order the fixture of format 1 drew them, so every
+/// section the two share with it has the same bytes.
+fn full_parts() -> (ProbeFile, Gradients) {
     let mut rng = Rng(7);
     let positions = vec![
         Vec3::new(0.0, 0.0, 0.0),
@@ -78,6 +85,10 @@ pub fn full_file() -> ProbeFile {
         planes: (0..4).map(|_| [0; 4].map(|_| rng.f32())).collect(),
         tetrahedra: vec![0, 0, 0, 1],
     });
+    let gradients = Gradients {
+        order: 2,
+        data: (0..5 * 3 * 4).map(|_| rng.vec3()).collect(),
+    };
     *f.rigs_mut() = vec![
         Rig {
             name: "car".into(),
@@ -121,7 +132,7 @@ pub fn full_file() -> ProbeFile {
     ];
     *f.metadata_mut() =
         r#"{"placement":{"method":"adaptive"},"scene_hash":"abc","tool_version":"0.1.0"}"#.into();
-    f
+    (f, gradients)
 }
 
 /// [`full_file`] relit-ready: two light groups, `"lamp"` (f32) and `"sün"`
@@ -354,9 +365,8 @@ pub fn compact_volume_file() -> ProbeFile {
 /// [`full_file`]'s probes, validity and rigs as a uniform volume of 5 × 1
 /// × 1 samples with L1 SH gradients.
 pub fn grid_volume_file() -> ProbeFile {
-    let cloud = full_file();
+    let (cloud, gradients) = full_parts();
     let c = c(&cloud);
-    let mut rng = Rng(5);
     let mut v = VolumeFile::new(
         c.probes.clone(),
         VolumeStructure::Uniform(VolumeGrid {
@@ -365,10 +375,7 @@ pub fn grid_volume_file() -> ProbeFile {
             resolution: [5, 1, 1],
         }),
     );
-    v.gradients = Some(Gradients {
-        order: 2,
-        data: (0..5 * 3 * 4).map(|_| rng.vec3()).collect(),
-    });
+    v.gradients = Some(gradients);
     v.rigs = c.rigs.clone();
     v.metadata = c.metadata.clone();
     ProbeFile::Volume(v)
