@@ -9,7 +9,9 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use probekit_capi::*;
 use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh};
-use probekit_runtime::format::{Coefficients, ProbeFile, ProbeFileKind, TetSection, VolumeGrid};
+use probekit_runtime::format::{
+    Coefficients, ProbeFile, ProbeSet, TetSection, VolumeFile, VolumeGrid, VolumeStructure,
+};
 use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use std::hint::black_box;
 use std::ptr::null_mut;
@@ -44,7 +46,7 @@ fn cloud_bytes() -> Vec<u8> {
         })
         .collect();
     let mut f = ProbeFile::cloud(pos, 3, &coeffs).unwrap();
-    f.tetrahedra = Some(TetSection {
+    f.as_cloud_mut().unwrap().tetrahedra = Some(TetSection {
         vertices: tets,
         neighbours,
         barycentric,
@@ -54,16 +56,14 @@ fn cloud_bytes() -> Vec<u8> {
 
 fn volume_bytes() -> Vec<u8> {
     let (pos, coeffs) = grid();
-    let mut f = ProbeFile::new(
-        ProbeFileKind::Volume,
-        Coefficients::from_f32(3, &coeffs).unwrap(),
-    );
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::splat((K - 1) as f32),
-        resolution: [K; 3],
-    });
-    f.positions = pos;
+    let f = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(pos, Coefficients::from_f32(3, &coeffs).unwrap()),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::splat((K - 1) as f32),
+            resolution: [K; 3],
+        }),
+    ));
     f.to_bytes().unwrap()
 }
 

@@ -131,7 +131,7 @@ impl PkProbes {
             .copied()
             .unwrap_or_else(|| pk_load_options_default())
             .to_runtime()?;
-        let kind = match file.kind {
+        let kind = match file.kind() {
             ProbeFileKind::Cloud => PkKind::Cloud,
             ProbeFileKind::Volume => PkKind::Volume,
             ProbeFileKind::Rig => PkKind::Rig,
@@ -141,7 +141,7 @@ impl PkProbes {
         Ok(PkProbes {
             kind,
             probes,
-            rigs: file.rigs,
+            rigs: file.rigs().to_vec(),
         })
     }
 

@@ -338,8 +338,10 @@ fn hostile_input_never_panics() {
         }
     }
     // A rig-only file, and a null handle.
-    let mut rig_file = cloud_file();
-    rig_file.kind = probekit_runtime::ProbeFileKind::Rig;
+    let rig_file = probekit_runtime::ProbeFile::Rigs(probekit_runtime::format::RigFile {
+        rigs: cloud_file().rigs().to_vec(),
+        metadata: String::new(),
+    });
     let h = load(&rig_file.to_bytes().unwrap());
     assert_eq!(unsafe { pk_kind(h) }, PkKind::Rig);
     let p = [0.0f32; 3];

@@ -340,7 +340,7 @@ fn c_program_matches_the_rust_runtime() {
     close(&rec["S1"][&0], &rec["S"][&0], "pk_sh vs pk_sh_many");
 
     // Rig: sample the cloud at the rig's points + translation, update, evaluate.
-    let rig = &cloud.rigs[0];
+    let rig = &cloud.rigs()[0];
     assert_eq!(line("RIG"), "RIG name=crate ü samples=6 order=3");
     assert_eq!(
         line("RIGNAMELEN"),

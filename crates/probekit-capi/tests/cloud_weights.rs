@@ -22,7 +22,7 @@ fn load(bytes: &[u8]) -> *mut PkProbes {
 /// Weights, and the SH blended from them by hand, against `pk_sh`.
 fn check_blend(file: &probekit_runtime::format::ProbeFile) -> Vec<[f32; 4]> {
     let h = load(&file.to_bytes().unwrap());
-    let coeffs = file.coefficients.to_f32().unwrap();
+    let coeffs = file.probes().unwrap().coefficients.to_f32().unwrap();
     let ws = pk_walk_state_new();
     let mut all = Vec::new();
     for (p, _) in points() {
@@ -65,14 +65,14 @@ fn weights_reproduce_pk_sh_with_and_without_visibility() {
     // which "sees" a wall 0.5 m away in every direction.
     let mut hidden = plain.clone();
     let mut data = Vec::new();
-    for i in 0..hidden.positions.len() {
+    for i in 0..hidden.probes().unwrap().positions.len() {
         if i == 13 {
             data.extend([0x3800u16, 0x3400]); // 0.5, 0.25
         } else {
             data.extend([0x3C00u16, 0x3C00]); // 1.0, 1.0
         }
     }
-    hidden.visibility = Some(DistanceMoments {
+    hidden.as_cloud_mut().unwrap().blend.distance_moments = Some(DistanceMoments {
         resolution: 1,
         max_distance: 1.0,
         data,

@@ -22,11 +22,13 @@ fn load(bytes: &[u8], options: &PkLoadOptions) -> *mut PkProbes {
 
 /// `file` with its coefficients cut to L1.
 fn l1(mut file: ProbeFile) -> ProbeFile {
-    let all = file.coefficients.to_f32().unwrap();
+    let all = file.probes().unwrap().coefficients.to_f32().unwrap();
     let cut: Vec<Vec3> = all.chunks_exact(N).flat_map(|c| c[..4].to_vec()).collect();
-    file.coefficients = Coefficients::from_f32(2, &cut).unwrap();
-    file.gradients = None;
-    file.rigs.clear();
+    file.probes_mut().unwrap().coefficients = Coefficients::from_f32(2, &cut).unwrap();
+    if let Some(v) = file.as_volume_mut() {
+        v.gradients = None;
+    }
+    file.rigs_mut().clear();
     file
 }
 
@@ -138,7 +140,7 @@ fn bad_options_and_inputs_are_status_codes() {
     }
     // Tricubic without gradients: refused at load.
     let mut f = volume_file();
-    f.gradients = None;
+    f.as_volume_mut().unwrap().gradients = None;
     let b = f.to_bytes().unwrap();
     let tricubic = PkLoadOptions {
         interpolation: 2,

@@ -13,7 +13,7 @@ use common::*;
 
 fn file_bytes() -> Vec<u8> {
     let mut f = cloud_file();
-    f.rigs[0].transitions = (0..10)
+    f.rigs_mut()[0].transitions = (0..10)
         .map(|i| {
             let x = 1.1 * 1.5f32.powi(i);
             Transition {

@@ -125,13 +125,21 @@ fn bake_inspect_query_with_and_without_visibility() {
     let planes = probekit::blend::cell_planes::bake_cell_planes(
         &probekit::trace::Tracer::new(&probekit::scene::Scene::builtin_demo()),
         &mesh,
-        file.cell_visibility.as_ref().unwrap(),
+        file.as_cloud()
+            .unwrap()
+            .blend
+            .cell_visibility
+            .as_ref()
+            .unwrap(),
         probekit::blend::cell_planes::CELL_PLANE_SEED,
         &|_, _| {},
     )
     .unwrap();
     assert!(!planes.is_empty());
-    assert_eq!(file.cell_planes.as_ref(), Some(&planes));
+    assert_eq!(
+        file.as_cloud().unwrap().blend.cell_planes.as_ref(),
+        Some(&planes)
+    );
     assert_eq!(v["cell_visibility"]["planes"], planes.len());
     assert!(planes.len() as u64 <= stored);
     assert_eq!(v["recipe"]["blend"]["occluder_planes"], true, "{v}");
@@ -152,9 +160,15 @@ fn bake_inspect_query_with_and_without_visibility() {
         .concat(),
     );
     let np = probekit_runtime::ProbeFile::load(d.join("np.probes")).unwrap();
-    assert!(np.cell_planes.is_none());
-    assert_eq!(np.cell_visibility, file.cell_visibility);
-    assert_eq!(np.coefficients, file.coefficients);
+    assert!(np.as_cloud().unwrap().blend.cell_planes.is_none());
+    assert_eq!(
+        np.as_cloud().unwrap().blend.cell_visibility,
+        file.as_cloud().unwrap().blend.cell_visibility
+    );
+    assert_eq!(
+        np.probes().unwrap().coefficients,
+        file.probes().unwrap().coefficients
+    );
     for bad in ["9", "fine"] {
         fails_one_line(
             d,

@@ -2,7 +2,9 @@
 //! the test as the rig's lighting source.
 
 use glam::Vec3;
-use probekit_runtime::format::{ProbeFile, ProbeFileKind, VolumeGrid};
+use probekit_runtime::format::{
+    Coefficients, ProbeFile, ProbeSet, VolumeFile, VolumeGrid, VolumeStructure,
+};
 use std::process::Command;
 
 fn probekit() -> Command {
@@ -32,13 +34,14 @@ fn affine_volume() -> Vec<u8> {
             }
         }
     }
-    let mut f = ProbeFile::cloud(pos, 3, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.grid = Some(VolumeGrid {
-        min: lo,
-        max: hi,
-        resolution: [2, 2, 2],
-    });
+    let f = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(pos, Coefficients::from_f32(3, &coeffs).unwrap()),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: lo,
+            max: hi,
+            resolution: [2, 2, 2],
+        }),
+    ));
     f.to_bytes().unwrap()
 }
 

@@ -20,8 +20,9 @@ fn big_cloud() -> ProbeFile {
     let coeffs: Vec<Vec3> = (0..n * 9)
         .map(|i| Vec3::splat((i % 97) as f32 * 0.01))
         .collect();
-    let mut f = ProbeFile::cloud(positions, 3, &coeffs).unwrap();
-    f.validity = Some(
+    let mut file = ProbeFile::cloud(positions, 3, &coeffs).unwrap();
+    let f = file.as_cloud_mut().unwrap();
+    f.probes.validity = Some(
         (0..n)
             .map(|i| Validity {
                 value: (i % 3) as f32 * 0.5,
@@ -45,7 +46,7 @@ fn big_cloud() -> ProbeFile {
         barycentric: (0..t).map(|k| [[k as f32 * 1e-3; 4]; 3]).collect(),
     });
     f.metadata = r#"{"tool_version":"bench"}"#.into();
-    f
+    file
 }
 
 fn bench(c: &mut Criterion) {

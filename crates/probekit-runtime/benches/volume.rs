@@ -4,7 +4,8 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use probekit_runtime::format::{
-    layout::NONE, Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeFileKind, VolumeGrid,
+    layout::NONE, Coefficients, Gradients, Octree, OctreeNode, ProbeFile, ProbeSet, VolumeFile,
+    VolumeGrid, VolumeStructure,
 };
 use probekit_runtime::volume::{Interp, Volume};
 
@@ -16,7 +17,7 @@ fn field(p: Vec3, c: usize) -> Vec3 {
     )
 }
 
-fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) -> ProbeFile {
+fn file(positions: Vec<Vec3>, structure: VolumeStructure) -> ProbeFile {
     let n = 9;
     let coeffs: Vec<Vec3> = positions
         .iter()
@@ -26,19 +27,14 @@ fn file(positions: Vec<Vec3>, grid: Option<VolumeGrid>, octree: Option<Octree>) 
         .iter()
         .flat_map(|p| (0..3 * n).map(move |c| field(*p * 0.5, c) * 0.1))
         .collect();
-    ProbeFile {
-        positions,
-        octree,
-        grid,
+    let probes = ProbeSet::new(positions, Coefficients::from_f32(3, &coeffs).unwrap());
+    ProbeFile::Volume(VolumeFile {
         gradients: Some(Gradients {
             order: 3,
             data: grads,
         }),
-        ..ProbeFile::new(
-            ProbeFileKind::Volume,
-            Coefficients::from_f32(3, &coeffs).unwrap(),
-        )
-    }
+        ..VolumeFile::new(probes, structure)
+    })
 }
 
 fn uniform() -> Volume {
@@ -56,7 +52,7 @@ fn uniform() -> Volume {
         max: Vec3::splat(2.0),
         resolution: [17; 3],
     };
-    Volume::from_file(&file(pos, Some(g), None)).unwrap()
+    Volume::from_file(&file(pos, VolumeStructure::Uniform(g))).unwrap()
 }
 
 /// Root split once; child 0 split again (27 + extra lattice points).
@@ -124,7 +120,7 @@ fn octree() -> Volume {
         samples,
         roots: [1, 1, 1],
     };
-    Volume::from_file(&file(pos, None, Some(o))).unwrap()
+    Volume::from_file(&file(pos, VolumeStructure::Adaptive(o))).unwrap()
 }
 
 fn points(n: usize) -> Vec<Vec3> {

@@ -5,7 +5,9 @@
 mod field;
 
 use glam::Vec3;
-use probekit_runtime::format::{Coefficients, ProbeFile, ProbeFileKind, VolumeGrid};
+use probekit_runtime::format::{
+    Coefficients, ProbeFile, ProbeSet, VolumeFile, VolumeGrid, VolumeStructure,
+};
 use std::f32::consts::PI;
 
 fn main() {
@@ -35,13 +37,14 @@ fn main() {
         }
     }
     let coefficients = Coefficients::from_f32(2, &coeffs).expect("order-2 coefficients");
-    let mut file = ProbeFile::new(ProbeFileKind::Volume, coefficients);
-    file.positions = positions;
-    file.grid = Some(VolumeGrid {
-        min,
-        max,
-        resolution: field::RESOLUTION,
-    });
+    let file = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, coefficients),
+        VolumeStructure::Uniform(VolumeGrid {
+            min,
+            max,
+            resolution: field::RESOLUTION,
+        }),
+    ));
     let bytes = file.to_bytes().expect("a valid volume file");
     let out = std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("OUT_DIR"));
     std::fs::write(out.join("grid.probes"), bytes).expect("write grid.probes");

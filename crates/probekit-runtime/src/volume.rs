@@ -3,7 +3,7 @@
 //! 1998).
 //!
 //! A [`Volume`] is built once from a [`ProbeFile`] of kind
-//! [`ProbeFileKind::Volume`]; every query afterwards is allocation free.
+//! [`ProbeFile::Volume`]; every query afterwards is allocation free.
 //!
 //! # Interpolation
 //! Every sample `s` at position `c_s` contributes through a *kernel* of
@@ -40,7 +40,7 @@
 //! through the volume (tested on random lines). Points outside the box are
 //! clamped to it.
 //!
-//! An octree may be a **forest** (format 1.3, [`Volume::root_grid`]): the
+//! An octree may be a **forest** ([`Volume::root_grid`]): the
 //! box is first cut into a grid of near-cubic root cells, each the root of
 //! an octree, so leaves stay near-cubic in a long room instead of copying
 //! the box's aspect ratio. A query finds its root cell by position, then
@@ -52,7 +52,7 @@
 
 mod cells;
 
-use crate::format::{layout::NONE, FormatError, ProbeFile, ProbeFileKind};
+use crate::format::{layout::NONE, FormatError, ProbeFile, VolumeStructure};
 use crate::prelude::*;
 use crate::{collections::Set, math};
 use glam::Vec3;
@@ -175,16 +175,17 @@ impl Volume {
     /// coefficients to `f32`; for an octree, precomputes per leaf the kernels
     /// that overlap it).
     pub fn from_file(file: &ProbeFile) -> Result<Self, VolumeError> {
-        if file.kind != ProbeFileKind::Volume {
+        let Some(file) = file.as_volume() else {
             return Err(VolumeError::NotAVolume("file kind is not volume"));
-        }
-        let order = file.coefficients.order as usize;
+        };
+        let probes = &file.probes;
+        let order = probes.coefficients.order as usize;
         let n = order * order;
         if n == 0 || n > MAX_COEFFS {
             return Err(VolumeError::NotAVolume("SH order outside 1..=8"));
         }
-        let coeffs = file.coefficients.to_f32()?;
-        let count = file.positions.len();
+        let coeffs = probes.coefficients.to_f32()?;
+        let count = probes.positions.len();
         if coeffs.len() != count * n {
             return Err(VolumeError::NotAVolume("coefficient count mismatch"));
         }
@@ -202,27 +203,26 @@ impl Volume {
                 (Some(out), gn)
             }
         };
-        let layout = if let Some(o) = &file.octree {
-            build_tree(o, &file.positions)?
-        } else if let Some(g) = &file.grid {
-            let total = g.resolution.iter().map(|&r| r as usize).product::<usize>();
-            if total != count {
-                return Err(VolumeError::NotAVolume(
-                    "grid resolution does not match probe count",
-                ));
+        let layout = match &file.structure {
+            VolumeStructure::Adaptive(o) => build_tree(o, &probes.positions)?,
+            VolumeStructure::Uniform(g) => {
+                let total = g.resolution.iter().map(|&r| r as usize).product::<usize>();
+                if total != count {
+                    return Err(VolumeError::NotAVolume(
+                        "grid resolution does not match probe count",
+                    ));
+                }
+                Layout::Grid {
+                    min: g.min,
+                    max: g.max,
+                    res: g.resolution,
+                }
             }
-            Layout::Grid {
-                min: g.min,
-                max: g.max,
-                res: g.resolution,
-            }
-        } else {
-            return Err(VolumeError::NotAVolume("neither grid nor octree section"));
         };
         Ok(Self {
             order,
             n,
-            positions: file.positions.clone(),
+            positions: probes.positions.clone(),
             coeffs,
             grads,
             grad_n,
@@ -712,18 +712,18 @@ fn build_tree(o: &crate::format::Octree, positions: &[Vec3]) -> Result<Layout, V
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::format::VolumeGrid;
+    use crate::format::{Coefficients, ProbeSet, VolumeFile, VolumeGrid};
 
     fn grid_file(res: [u32; 3], probes: usize) -> ProbeFile {
-        let mut f =
-            ProbeFile::cloud(vec![Vec3::ZERO; probes], 1, &vec![Vec3::ONE; probes]).unwrap();
-        f.kind = ProbeFileKind::Volume;
-        f.grid = Some(VolumeGrid {
-            min: Vec3::ZERO,
-            max: Vec3::ONE,
-            resolution: res,
-        });
-        f
+        let c = Coefficients::from_f32(1, &vec![Vec3::ONE; probes]).unwrap();
+        ProbeFile::Volume(VolumeFile::new(
+            ProbeSet::new(vec![Vec3::ZERO; probes], c),
+            VolumeStructure::Uniform(VolumeGrid {
+                min: Vec3::ZERO,
+                max: Vec3::ONE,
+                resolution: res,
+            }),
+        ))
     }
 
     #[test]
@@ -737,9 +737,6 @@ mod tests {
             Volume::from_file(&grid_file([2, 2, 2], 7)),
             Err(VolumeError::NotAVolume(_))
         ));
-        let mut no_struct = grid_file([2, 2, 2], 8);
-        no_struct.grid = None;
-        assert!(Volume::from_file(&no_struct).is_err());
     }
 
     #[test]
@@ -747,10 +744,9 @@ mod tests {
         // 2 × 1 × 1 grid: x interpolates, y and z are degenerate; outside
         // points clamp to the box.
         let mut f = grid_file([2, 1, 1], 2);
-        f.positions = vec![Vec3::ZERO, Vec3::X];
-        f.coefficients =
-            crate::format::Coefficients::from_f32(1, &[Vec3::splat(1.0), Vec3::splat(3.0)])
-                .unwrap();
+        let p = f.probes_mut().unwrap();
+        p.positions = vec![Vec3::ZERO, Vec3::X];
+        p.coefficients = Coefficients::from_f32(1, &[Vec3::splat(1.0), Vec3::splat(3.0)]).unwrap();
         let v = Volume::from_file(&f).unwrap();
         let mut out = [Vec3::ZERO; 1];
         for (x, want) in [(0.25f32, 1.5f32), (-1.0, 1.0), (2.0, 3.0)] {

@@ -1,7 +1,8 @@
 //! The corpus of broken files in `tests/corpus/`: each file is named for
 //! what is wrong with it and must give its error variant (and never panic).
-//! `valid_full.probes` is a good file from format 1.0 that must keep loading;
-//! `valid_groups.probes` is a good 1.1 file with light groups (`LGRP`).
+//! `valid_full.probes` is a good format 2.0 file that must keep loading
+//! (and that the writer must keep writing byte for byte);
+//! `valid_groups.probes` is the same with light groups (`LGRP`).
 //!
 //! Regenerate after a deliberate format change with
 //! `PROBEKIT_REGEN_CORPUS=1 cargo test -p probekit-runtime --test corpus`.
@@ -71,7 +72,7 @@ fn generated_cases_match_expectations() {
             Ok(f) => assert!(
                 name == "valid_full" || name == "valid_groups",
                 "{name} loaded: {:?}",
-                f.kind
+                f.kind()
             ),
             Err(e) => assert!(expect(&e), "{name}: unexpected error {e:?}"),
         }
@@ -85,18 +86,18 @@ fn load_reports_missing_file_and_writer_refuses_invalid_contents() {
     assert!(err.to_string().contains("/nonexistent/dir/x.probes"));
 
     let mut f = full_file();
-    f.tetrahedra.as_mut().unwrap().vertices[0][0] = 99;
+    cm(&mut f).tetrahedra.as_mut().unwrap().vertices[0][0] = 99;
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::IndexOutOfRange { value: 99, .. })
     ));
 
     let mut f = full_file();
-    f.positions[0].x = f32::NAN;
+    pm(&mut f).positions[0].x = f32::NAN;
     assert!(matches!(f.to_bytes(), Err(FormatError::NonFinite { .. })));
 
     let mut f = full_file();
-    f.rigs[0].transitions.swap(0, 1);
+    f.rigs_mut()[0].transitions.swap(0, 1);
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::InvalidValue { .. })

@@ -22,15 +22,18 @@ fn seeds() -> Vec<Vec<u8>> {
         &[glam::Vec3::splat(0.5); 8],
     )
     .unwrap();
-    small.metadata = "{}".into();
-    let mut rig = full_file();
-    rig.kind = ProbeFileKind::Rig;
+    *small.metadata_mut() = "{}".into();
+    let rig = ProbeFile::Rigs(RigFile {
+        rigs: full_file().rigs().to_vec(),
+        metadata: "{}".into(),
+    });
     vec![
         full_file().to_bytes().unwrap(),
         small.to_bytes().unwrap(),
         rig.to_bytes().unwrap(),
         groups_file().to_bytes().unwrap(),
         compact_volume_file().to_bytes().unwrap(),
+        grid_volume_file().to_bytes().unwrap(),
         cvis_file().to_bytes().unwrap(),
         weights_file().to_bytes().unwrap(),
         planes_file().to_bytes().unwrap(),

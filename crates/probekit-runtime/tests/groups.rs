@@ -1,4 +1,4 @@
-//! Light groups (`LGRP`, format 1.1): round trip, version handling, and
+//! Light groups (`LGRP`): round trip, version handling, and
 //! relighting checked against a direct per-probe sum `Σ_g s_g·G_g`
 //! computed in f64 from the decoded groups.
 
@@ -10,10 +10,9 @@ use probekit_runtime::format::layout;
 use probekit_runtime::format::*;
 
 #[test]
-fn groups_round_trip_and_set_minor_1_only_when_present() {
+fn groups_round_trip_and_leave_no_trace_when_absent() {
     let g = groups_file();
     let bytes = g.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 1);
     let back = ProbeFile::from_bytes(&bytes).unwrap();
     assert_eq!(back, g);
     assert_eq!(back.group_names().collect::<Vec<_>>(), ["lamp", "sün"]);
@@ -23,21 +22,20 @@ fn groups_round_trip_and_set_minor_1_only_when_present() {
     assert_eq!(by.values().sum::<u64>(), bytes.len() as u64);
     assert_eq!(g.bytes_by_section().unwrap(), by);
 
-    // Without groups the writer still writes 1.0, byte for byte what it
-    // wrote before light groups existed (also pinned by the corpus).
+    // Without groups the writer writes the file without them, byte for
+    // byte (also pinned by the corpus).
     let f = full_file();
     let old = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&old), 0);
     let mut f2 = g.clone();
-    f2.groups.clear();
-    f2.coefficients = f.coefficients.clone();
+    pm(&mut f2).groups.clear();
+    pm(&mut f2).coefficients = p(&f).coefficients.clone();
     assert_eq!(f2.to_bytes().unwrap(), old);
 }
 
 #[test]
 fn a_reader_skips_sections_of_a_newer_minor_but_keeps_groups() {
-    // A 1.2 file with an unknown section next to LGRP loads, groups intact:
-    // how a 1.0 reader treats a 1.1 file with LGRP.
+    // A 2.1 file with an unknown section next to LGRP loads, groups
+    // intact: how this reader treats a file of a newer minor.
     let g = groups_file();
     let bytes = g.to_bytes().unwrap();
     let (_, sections) = read_sections(&bytes).unwrap();
@@ -46,7 +44,7 @@ fn a_reader_skips_sections_of_a_newer_minor_but_keeps_groups() {
     owned.insert(2, (SectionId::from_fourcc(*b"ZZZZ"), vec![7; 32]));
     let newer = assemble_file(0, layout::VERSION_MINOR + 1, 0, &owned);
     assert_eq!(ProbeFile::from_bytes(&newer).unwrap(), g);
-    // The same bytes at minor 1: the unknown section is refused.
+    // The same bytes at this reader's minor: the unknown section is refused.
     let same = assemble_file(0, layout::VERSION_MINOR, 0, &owned);
     assert!(matches!(
         ProbeFile::from_bytes(&same),
@@ -56,9 +54,9 @@ fn a_reader_skips_sections_of_a_newer_minor_but_keeps_groups() {
 
 /// `Σ_g s_g·G_g` per coefficient, in f64, from the decoded groups.
 fn direct_sum(f: &ProbeFile, scales: &[Vec3]) -> Vec<DVec3> {
-    let n = f.coefficients.len() * 9;
+    let n = p(f).coefficients.len() * 9;
     let mut out = vec![DVec3::ZERO; n];
-    for (g, s) in f.groups.iter().zip(scales) {
+    for (g, s) in p(f).groups.iter().zip(scales) {
         for (o, c) in out.iter_mut().zip(g.coefficients.to_f32().unwrap()) {
             *o += c.as_dvec3() * s.as_dvec3();
         }
@@ -71,12 +69,12 @@ fn relighting_equals_the_scaled_sum_of_groups() {
     let g = groups_file();
     // groups_file's total is lamp + sün exactly (f32 sum of the decoded values).
     let unit = direct_sum(&g, &[Vec3::ONE; 2]);
-    for (t, u) in g.coefficients.to_f32().unwrap().iter().zip(&unit) {
+    for (t, u) in p(&g).coefficients.to_f32().unwrap().iter().zip(&unit) {
         assert!((t.as_dvec3() - *u).abs().max_element() < 1e-6);
     }
     // Scale 1 everywhere gives the stored total bit for bit.
     let same = g.relit(&[]).unwrap();
-    assert_eq!(same.to_f32().unwrap(), g.coefficients.to_f32().unwrap());
+    assert_eq!(same.to_f32().unwrap(), p(&g).coefficients.to_f32().unwrap());
 
     let cases = [
         [Vec3::new(0.0, 0.0, 0.0), Vec3::ONE],
@@ -129,19 +127,19 @@ fn relighter_works_in_place_per_probe_and_checks_its_inputs() {
     assert!(r.relight_probe(0, &s, &mut one[..4]).is_err());
     // A file without groups relights to itself.
     let f = full_file();
-    assert_eq!(f.relit(&[]).unwrap(), f.coefficients);
+    assert_eq!(f.relit(&[]).unwrap(), p(&f).coefficients);
 }
 
 #[test]
 fn writer_refuses_inconsistent_groups() {
     let mut g = groups_file();
-    g.groups[1].name = "lamp".into();
+    pm(&mut g).groups[1].name = "lamp".into();
     assert!(matches!(
         g.to_bytes(),
         Err(FormatError::InvalidValue { element: 1, .. })
     ));
     let mut g = groups_file();
-    g.groups[0].coefficients = Coefficients::from_f32(3, &[Vec3::ONE; 4 * 9]).unwrap();
+    pm(&mut g).groups[0].coefficients = Coefficients::from_f32(3, &[Vec3::ONE; 4 * 9]).unwrap();
     assert!(matches!(
         g.to_bytes(),
         Err(FormatError::CountMismatch {
@@ -151,7 +149,7 @@ fn writer_refuses_inconsistent_groups() {
         })
     ));
     let mut g = groups_file();
-    g.groups[0].coefficients =
+    pm(&mut g).groups[0].coefficients =
         Coefficients::from_f32(3, &[Vec3::splat(f32::INFINITY); 45]).unwrap();
     assert!(matches!(
         g.to_bytes(),

@@ -5,13 +5,14 @@
 mod common;
 
 use common::clouds::{jittered_lattice, random_sh};
-use common::Rng;
+use common::{cm, Rng};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::record_from;
 use probekit_runtime::cloud::{CellPlanes, CellVisibility, HULL};
 use probekit_runtime::format::layout::NONE;
 use probekit_runtime::format::{
-    Coefficients, DistanceMoments, Gradients, ProbeFile, ProbeFileKind, TetSection, VolumeGrid,
+    Coefficients, DistanceMoments, Gradients, ProbeFile, ProbeSet, TetSection, VolumeFile,
+    VolumeGrid, VolumeStructure,
 };
 use probekit_runtime::{Interp, L1Mode, LoadOptions, ObjectState, Probes};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -62,7 +63,7 @@ fn cloud_bytes(order: u32) -> Vec<u8> {
         .collect();
     let mut f = ProbeFile::cloud(mesh.positions().to_vec(), order, &coeffs).unwrap();
     let (tets, faces) = (mesh.tets().len(), mesh.hull_face_count());
-    f.tetrahedra = Some(TetSection {
+    cm(&mut f).tetrahedra = Some(TetSection {
         vertices: mesh.tets().to_vec(),
         neighbours: mesh
             .neighbors()
@@ -84,16 +85,16 @@ fn cloud_bytes(order: u32) -> Vec<u8> {
     {
         bits.extend(record_from(vertices, k, |v, l| (c + v + l) % 5 != 0));
     }
-    f.cell_visibility = Some(CellVisibility::new(k, tets, faces, bits).unwrap());
+    cm(&mut f).blend.cell_visibility = Some(CellVisibility::new(k, tets, faces, bits).unwrap());
     let ids: Vec<u32> = (0..tets as u32).step_by(3).collect();
     let planes = ids.iter().map(|_| [0.0, 0.0, 1.0, 1.5]).collect();
-    f.cell_planes = Some(CellPlanes::new(tets, ids, planes).unwrap());
-    f.probe_weights = Some((0..probes).map(|i| 0.5 + 0.01 * i as f32).collect());
-    f.brightness_exponent = 1.0;
-    f.directional_exponent = 0.5;
+    cm(&mut f).blend.cell_planes = Some(CellPlanes::new(tets, ids, planes).unwrap());
+    cm(&mut f).blend.probe_weights = Some((0..probes).map(|i| 0.5 + 0.01 * i as f32).collect());
+    cm(&mut f).blend.brightness_exponent = 1.0;
+    cm(&mut f).blend.directional_exponent = 0.5;
     let res = 2;
     let half = |x: f32| half::f16::from_f32(x).to_bits();
-    f.visibility = Some(DistanceMoments {
+    cm(&mut f).blend.distance_moments = Some(DistanceMoments {
         resolution: res,
         max_distance: 4.0,
         data: (0..probes * (res * res) as usize)
@@ -103,30 +104,31 @@ fn cloud_bytes(order: u32) -> Vec<u8> {
             })
             .collect(),
     });
-    f.rigs = common::full_file().rigs;
+    *f.rigs_mut() = common::full_file().rigs().to_vec();
     f.to_bytes().unwrap()
 }
 
 fn volume_bytes() -> Vec<u8> {
     let mut rng = Rng(23);
     let n = 27 * 9;
-    let mut f = ProbeFile::new(
-        ProbeFileKind::Volume,
-        Coefficients::from_f32(3, &(0..n).map(|_| rng.vec3()).collect::<Vec<_>>()).unwrap(),
+    let coefficients =
+        Coefficients::from_f32(3, &(0..n).map(|_| rng.vec3()).collect::<Vec<_>>()).unwrap();
+    let positions = (0..27)
+        .map(|i| Vec3::new((i % 3) as f32, (i / 3 % 3) as f32, (i / 9) as f32))
+        .collect();
+    let mut f = VolumeFile::new(
+        ProbeSet::new(positions, coefficients),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::splat(2.0),
+            resolution: [3, 3, 3],
+        }),
     );
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::splat(2.0),
-        resolution: [3, 3, 3],
-    });
     f.gradients = Some(Gradients {
         order: 3,
         data: (0..3 * n).map(|_| rng.vec3()).collect(),
     });
-    f.positions = (0..27)
-        .map(|i| Vec3::new((i % 3) as f32, (i / 3 % 3) as f32, (i / 9) as f32))
-        .collect();
-    f.to_bytes().unwrap()
+    ProbeFile::Volume(f).to_bytes().unwrap()
 }
 
 fn batch(count: usize) -> (Vec<Vec3>, Vec<Vec3>) {

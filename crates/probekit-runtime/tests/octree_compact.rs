@@ -1,8 +1,7 @@
-//! The compact octree section `OCTC` (format 1.2): round trip of a regular
-//! octree, a section assembled byte by byte from `docs/file-format.md`
-//! decoded and compared with boxes and corners computed independently (by
-//! halving), the fallback to `OCTR` for irregular trees, and typed errors
-//! for hostile sections.
+//! The octree section `OCTC`: round trip of a regular octree, a section
+//! assembled byte by byte from `docs/file-format.md` decoded and compared
+//! with boxes and corners computed independently (by halving), the writer
+//! refusing irregular trees, and typed errors for hostile sections.
 
 mod common;
 
@@ -80,14 +79,14 @@ fn regular_volume() -> ProbeFile {
     let coeffs: Vec<Vec3> = (0..positions.len())
         .map(|i| Vec3::splat(i as f32))
         .collect();
-    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.octree = Some(Octree {
-        nodes,
-        samples,
-        roots: [1, 1, 1],
-    });
-    f
+    ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, Coefficients::from_f32(1, &coeffs).unwrap()),
+        VolumeStructure::Adaptive(Octree {
+            nodes,
+            samples,
+            roots: [1, 1, 1],
+        }),
+    ))
 }
 
 fn section_ids(bytes: &[u8]) -> Vec<SectionId> {
@@ -102,18 +101,17 @@ fn section_ids(bytes: &[u8]) -> Vec<SectionId> {
 #[test]
 fn regular_octree_round_trips_compactly() {
     let f = regular_volume();
-    assert_eq!(f.positions.len(), 47);
+    assert_eq!(p(&f).positions.len(), 47);
     let bytes = f.to_bytes().unwrap();
     let ids = section_ids(&bytes);
-    assert!(ids.contains(&SectionId::OCTREE_COMPACT));
-    assert!(!ids.contains(&SectionId::OCTREE));
-    assert_eq!(minor_of(&bytes), 2);
+    assert!(ids.contains(&SectionId::OCTREE));
+    assert_eq!(minor_of(&bytes), layout::VERSION_MINOR);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
     // 16 header + 32 box + 16 bits (17 nodes → 3 bytes, padded).
-    let (_, len) = find_section(&bytes, SectionId::OCTREE_COMPACT);
+    let (_, len) = find_section(&bytes, SectionId::OCTREE);
     assert_eq!(len, 64);
     assert_eq!(f.bytes_by_section().unwrap()["octree"], 64);
-    // The explicit encoding of the same tree: 17 × 40 + 120 × 4 bytes.
+    // An explicit node list of the same tree: 17 × 40 + 120 × 4 bytes.
     let explicit = 16 + 17 * 40 + 120 * 4;
     assert!(len * 10 < explicit);
 }
@@ -122,27 +120,27 @@ fn regular_octree_round_trips_compactly() {
 fn fuzz_seed_volume_is_written_compactly() {
     let f = compact_volume_file();
     let bytes = f.to_bytes().unwrap();
-    assert!(section_ids(&bytes).contains(&SectionId::OCTREE_COMPACT));
+    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
 }
 
 #[test]
-fn irregular_octree_falls_back_to_octr() {
-    // A leaf listing a 9th sample, or a corner moved off the lattice.
+fn irregular_octree_is_refused_by_the_writer() {
+    // A leaf listing a 9th sample, or a corner moved off the lattice: the
+    // compact encoding cannot hold either, and it is the only one.
     let mut f = regular_volume();
-    let o = f.octree.as_mut().unwrap();
+    let o = octree_mut(&mut f).unwrap();
+    o.samples.push(0);
     o.nodes[2].sample_count = 9;
-    let bytes = f.to_bytes().unwrap();
-    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
-    assert_eq!(minor_of(&bytes), 0);
-    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
+    assert!(f.validate().is_ok());
+    let e = f.to_bytes().unwrap_err();
+    assert!(matches!(e, FormatError::Unrepresentable(_)), "{e:?}");
 
     let mut g = regular_volume();
-    let moved = g.octree.as_ref().unwrap().samples[0] as usize;
-    g.positions[moved].x += 1e-3;
-    let bytes = g.to_bytes().unwrap();
-    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
-    assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), g);
+    let moved = octree(&g).unwrap().samples[0] as usize;
+    pm(&mut g).positions[moved].x += 1e-3;
+    let e = g.to_bytes().unwrap_err();
+    assert!(matches!(e, FormatError::Unrepresentable(_)), "{e:?}");
 }
 
 /// An `OCTC` section written from the documented layout, without the
@@ -151,8 +149,7 @@ fn octc_bytes(nodes: u32, depth: u32, min: Vec3, max: Vec3, bits: &[u8]) -> Vec<
     octc_forest_bytes([nodes, depth, 0, 0], min, max, bits)
 }
 
-/// [`octc_bytes`] with all four header words (`w2`, `w3`: the root grid,
-/// format 1.3).
+/// [`octc_bytes`] with all four header words (`w2`, `w3`: the root grid).
 fn octc_forest_bytes(words: [u32; 4], min: Vec3, max: Vec3, bits: &[u8]) -> Vec<u8> {
     let mut s = Vec::new();
     for w in words {
@@ -170,13 +167,15 @@ fn octc_forest_bytes(words: [u32; 4], min: Vec3, max: Vec3, bits: &[u8]) -> Vec<
 /// A volume file of the given positions whose octree section is `octc`.
 fn file_with(positions: Vec<Vec3>, extra: Vec<(SectionId, Vec<u8>)>) -> Vec<u8> {
     let coeffs: Vec<Vec3> = vec![Vec3::ONE; positions.len()];
-    let mut f = ProbeFile::cloud(positions, 1, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::ONE,
-        resolution: [f.positions.len() as u32, 1, 1],
-    });
+    let resolution = [positions.len() as u32, 1, 1];
+    let f = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, Coefficients::from_f32(1, &coeffs).unwrap()),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+            resolution,
+        }),
+    ));
     let bytes = f.to_bytes().unwrap();
     let (_, sections) = read_sections(&bytes).unwrap();
     let mut owned: Vec<(SectionId, Vec<u8>)> = sections
@@ -187,8 +186,7 @@ fn file_with(positions: Vec<Vec3>, extra: Vec<(SectionId, Vec<u8>)>) -> Vec<u8> 
     let meta = owned.pop().unwrap();
     owned.extend(extra);
     owned.push(meta);
-    let minor = layout::minor_for_sections(owned.iter().map(|(id, _)| *id));
-    assemble_file(ProbeFileKind::Volume.id(), minor, 0, &owned)
+    assemble_file(ProbeFileKind::Volume.id(), layout::VERSION_MINOR, 0, &owned)
 }
 
 /// The 27 points of a 3×3×3 lattice over [-1, 3] × [0, 1] × [2, 6], z-major.
@@ -212,13 +210,13 @@ fn documented_bytes_decode_to_root_and_eight_octants() {
     let bytes = file_with(
         positions.clone(),
         vec![(
-            SectionId::OCTREE_COMPACT,
+            SectionId::OCTREE,
             octc_bytes(9, 1, min, max, &[0b0000_0001, 0]),
         )],
     );
-    assert_eq!(&SectionId::OCTREE_COMPACT.fourcc(), b"OCTC");
+    assert_eq!(&SectionId::OCTREE.fourcc(), b"OCTC");
     let f = ProbeFile::from_bytes(&bytes).unwrap();
-    let o = f.octree.as_ref().unwrap();
+    let o = octree(&f).unwrap();
     assert_eq!(o.nodes.len(), 9);
     assert_eq!(o.nodes[0].first_child, 1);
     assert_eq!((o.nodes[0].min, o.nodes[0].max), (min, max));
@@ -253,11 +251,11 @@ fn hostile_compact_sections_give_typed_errors() {
     let ok = |bits: &[u8], n: u32, d: u32| {
         file_with(
             lattice27(),
-            vec![(SectionId::OCTREE_COMPACT, octc_bytes(n, d, min, max, bits))],
+            vec![(SectionId::OCTREE, octc_bytes(n, d, min, max, bits))],
         )
     };
     let err = |b: Vec<u8>| ProbeFile::from_bytes(&b).unwrap_err();
-    let compact = SectionId::OCTREE_COMPACT;
+    let compact = SectionId::OCTREE;
     // 10 nodes with one parent.
     let e = err(ok(&[1, 0], 10, 1));
     assert!(
@@ -303,33 +301,9 @@ fn hostile_compact_sections_give_typed_errors() {
     // A node count whose bit array the section does not hold.
     let e = err(ok(&[1, 0], u32::MAX, 1));
     assert!(matches!(e, FormatError::SectionSize { .. }), "{e:?}");
-    // Both encodings at once.
-    let f = regular_volume();
-    let mut g = f.clone();
-    g.octree.as_mut().unwrap().nodes[2].sample_count = 9;
-    let octr = read_sections(&g.to_bytes().unwrap())
-        .unwrap()
-        .1
-        .iter()
-        .find(|s| s.id == SectionId::OCTREE)
-        .map(|s| s.bytes.to_vec())
-        .unwrap();
-    let mut owned: Vec<(SectionId, Vec<u8>)> = read_sections(&f.to_bytes().unwrap())
-        .unwrap()
-        .1
-        .iter()
-        .map(|s| (s.id, s.bytes.to_vec()))
-        .collect();
-    owned.insert(2, (SectionId::OCTREE, octr));
-    let both = assemble_file(ProbeFileKind::Volume.id(), 2, 0, &owned);
-    let e = err(both);
-    assert!(
-        matches!(e, FormatError::InvalidValue { id, .. } if id == compact),
-        "{e:?}"
-    );
 }
 
-/// A forest written from the documented layout (format 1.3): root grid
+/// A forest written from the documented layout: root grid
 /// 3 × 1 × 1 over [0, 3] × [0, 1] × [0, 1] in `w2 = (rx − 1) | (ry − 1) << 16`,
 /// `w3 = rz − 1`, max depth 1, root 1 split. Boxes and corners are checked
 /// against unit cubes and halves computed here.
@@ -349,13 +323,13 @@ fn documented_bytes_decode_to_a_forest() {
         file_with(
             positions.clone(),
             vec![(
-                SectionId::OCTREE_COMPACT,
+                SectionId::OCTREE,
                 octc_forest_bytes([nodes, 1, w2, w3], min, max, &[0b0000_0010, 0]),
             )],
         )
     };
     let f = ProbeFile::from_bytes(&forest(2, 0, 11)).unwrap();
-    let o = f.octree.as_ref().unwrap();
+    let o = octree(&f).unwrap();
     assert_eq!(o.roots, [3, 1, 1]);
     assert_eq!(o.nodes.len(), 11);
     for i in 0..3usize {
@@ -380,12 +354,12 @@ fn documented_bytes_decode_to_a_forest() {
                 if c & 2 == 2 { n.max.y } else { n.min.y },
                 if c & 4 == 4 { n.max.z } else { n.min.z },
             );
-            assert_eq!(f.positions[s as usize], want);
+            assert_eq!(p(&f).positions[s as usize], want);
         }
     }
-    // Writing it again keeps the root grid and asks for minor 3.
+    // Writing it again keeps the root grid.
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), layout::MINOR_FOREST);
+    assert_eq!(minor_of(&bytes), layout::VERSION_MINOR);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
     // A root grid that does not match the node count, or out of range.
     for (w2, w3, nodes) in [
@@ -402,10 +376,10 @@ fn documented_bytes_decode_to_a_forest() {
     }
 }
 
-/// An explicit (`OCTR`) forest keeps its root grid too, and a root listed
-/// as somebody's child is refused.
+/// A forest of leaf roots keeps its root grid, and an octree whose root
+/// grid does not match its nodes is refused.
 #[test]
-fn explicit_forest_round_trips_and_roots_have_no_parent() {
+fn leaf_forest_round_trips_and_roots_must_match() {
     let f = ProbeFile::from_bytes(&{
         let (min, max) = (Vec3::ZERO, Vec3::new(2.0, 1.0, 1.0));
         let mut positions = Vec::new();
@@ -419,27 +393,20 @@ fn explicit_forest_round_trips_and_roots_have_no_parent() {
         file_with(
             positions,
             vec![(
-                SectionId::OCTREE_COMPACT,
+                SectionId::OCTREE,
                 octc_forest_bytes([2, 0, 1, 0], min, max, &[0]),
             )],
         )
     })
     .unwrap();
-    let mut g = f.clone();
-    // A 9th sample makes the tree irregular: written as OCTR.
-    let o = g.octree.as_mut().unwrap();
-    o.samples.push(0);
-    o.nodes[1].sample_count = 9;
-    let bytes = g.to_bytes().unwrap();
-    assert!(section_ids(&bytes).contains(&SectionId::OCTREE));
-    assert_eq!(minor_of(&bytes), layout::MINOR_FOREST);
+    let bytes = f.to_bytes().unwrap();
     let back = ProbeFile::from_bytes(&bytes).unwrap();
-    assert_eq!(back.octree.as_ref().unwrap().roots, [2, 1, 1]);
-    assert_eq!(back, g);
+    assert_eq!(octree(&back).unwrap().roots, [2, 1, 1]);
+    assert_eq!(back, f);
     let mut h = f.clone();
-    h.octree.as_mut().unwrap().roots = [3, 1, 1];
+    octree_mut(&mut h).unwrap().roots = [3, 1, 1];
     assert!(h.validate().is_err(), "3 roots, 2 nodes");
     let mut h = f;
-    h.octree.as_mut().unwrap().roots = [1, 1, 1];
+    octree_mut(&mut h).unwrap().roots = [1, 1, 1];
     assert!(h.validate().is_err(), "node 1 unreachable");
 }

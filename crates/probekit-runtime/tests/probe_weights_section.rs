@@ -1,4 +1,4 @@
-//! Fitted probe weights: `PWGT` (format 1.6; its brightness exponent, 1.8; its directional one, 1.9) round trips at minor 6 with the
+//! Fitted probe weights: `PWGT` (with its brightness and directional exponents) round trips with the
 //! bytes of the documented layout, reaches [`ProbeCloud`], and hostile
 //! sections (out-of-range or non-finite weights, wrong counts, a non-cloud
 //! file, truncation, byte mutations) are refused with typed errors, never a
@@ -11,11 +11,10 @@ use probekit_runtime::cloud::ProbeCloud;
 use probekit_runtime::format::*;
 
 #[test]
-fn probe_weights_round_trip_at_minor_6_with_the_documented_bytes() {
+fn probe_weights_round_trip_with_the_documented_bytes() {
     let f = weights_file();
-    let w = f.probe_weights.clone().unwrap();
+    let w = c(&f).blend.probe_weights.clone().unwrap();
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 6);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
     let (off, len) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
     // Header [count, 0, 0, 0], then one little-endian f32 per probe, padded to 16.
@@ -33,11 +32,10 @@ fn probe_weights_round_trip_at_minor_6_with_the_documented_bytes() {
         file_bytes_by_section(&bytes).unwrap()["probe_weights"],
         len as u64
     );
-    // Without the section the file is what it was before 1.6.
+    // Without the section the file is the one without weights.
     let mut old = f.clone();
-    old.probe_weights = None;
+    cm(&mut old).blend.probe_weights = None;
     assert_eq!(old.to_bytes().unwrap(), cvis_file().to_bytes().unwrap());
-    assert_eq!(minor_of(&old.to_bytes().unwrap()), 5);
 }
 
 #[test]
@@ -45,10 +43,10 @@ fn a_loaded_cloud_blends_with_the_files_weights() {
     // `full_file`'s tetrahedra with weights (`cvis_file`'s bits are a
     // format fixture, not the mesh's hull).
     let mut f = full_file();
-    f.probe_weights = weights_file().probe_weights;
+    cm(&mut f).blend.probe_weights = c(&weights_file()).blend.probe_weights.clone();
     let cloud =
         ProbeCloud::from_file(&ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap()).unwrap();
-    assert_eq!(cloud.probe_weights(), f.probe_weights.as_deref());
+    assert_eq!(cloud.probe_weights(), c(&f).blend.probe_weights.as_deref());
     assert!(cloud.probe_weighting_enabled());
 }
 
@@ -75,24 +73,14 @@ fn bad_probe_weights_are_typed_errors() {
     }
     // The writer refuses them too.
     let mut f = weights_file();
-    f.probe_weights.as_mut().unwrap()[2] = f32::NAN;
+    cm(&mut f).blend.probe_weights.as_mut().unwrap()[2] = f32::NAN;
     assert!(f.to_bytes().is_err());
     // One weight fewer than probes.
     let mut f = weights_file();
-    f.probe_weights.as_mut().unwrap().pop();
+    cm(&mut f).blend.probe_weights.as_mut().unwrap().pop();
     assert!(f.validate().is_err());
     let r = load_patched(&good, |b| put_u32(b, off, 4));
     assert!(r.is_err(), "{r:?}");
-    // Only clouds have probe weights.
-    let mut f = weights_file();
-    f.kind = ProbeFileKind::Rig;
-    assert!(matches!(
-        f.validate(),
-        Err(FormatError::InvalidValue {
-            id: SectionId::PROBE_WEIGHTS,
-            ..
-        })
-    ));
 }
 
 #[test]
@@ -101,32 +89,30 @@ fn hostile_probe_weight_sections_never_panic() {
     hostile_section_variants(&good, SectionId::PROBE_WEIGHTS, 400, 0x9e37);
 }
 
-/// The brightness exponent the weights were fitted with (format 1.8) rides
-/// in `PWGT`'s header word `w1`: written as `f32` bits at minor 8, read back
-/// and applied by [`ProbeCloud::from_file`]; zero leaves the 1.6 bytes.
+/// The brightness exponent the weights were fitted with rides in `PWGT`'s
+/// header word `w1`: written as `f32` bits, read back and applied by
+/// [`ProbeCloud::from_file`]; zero leaves the word zero.
 #[test]
-fn the_brightness_exponent_rides_in_pwgt_w1_at_minor_8() {
+fn the_brightness_exponent_rides_in_pwgt_w1() {
     let mut f = weights_file();
-    f.brightness_exponent = 0.5;
+    cm(&mut f).blend.brightness_exponent = 0.5;
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 8);
     let (off, _) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
     let w1 = u32::from_le_bytes(bytes[off + 4..off + 8].try_into().unwrap());
     assert_eq!(f32::from_bits(w1), 0.5);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
-    // -0.0 is 0.0: the 1.6 bytes, minor 6.
+    // -0.0 is 0.0: the bytes without an exponent.
     let mut zero = weights_file();
-    zero.brightness_exponent = -0.0;
+    cm(&mut zero).blend.brightness_exponent = -0.0;
     assert_eq!(zero.to_bytes().unwrap(), weights_file().to_bytes().unwrap());
-    assert_eq!(minor_of(&zero.to_bytes().unwrap()), 6);
     // The loaded cloud blends with it.
     let mut g = full_file();
-    g.probe_weights = weights_file().probe_weights;
-    g.brightness_exponent = 1.0;
+    cm(&mut g).blend.probe_weights = c(&weights_file()).blend.probe_weights.clone();
+    cm(&mut g).blend.brightness_exponent = 1.0;
     let cloud =
         ProbeCloud::from_file(&ProbeFile::from_bytes(&g.to_bytes().unwrap()).unwrap()).unwrap();
     assert_eq!(cloud.brightness_weighting(), 1.0);
-    g.brightness_exponent = 0.0;
+    cm(&mut g).blend.brightness_exponent = 0.0;
     let plain = ProbeCloud::from_file(&g).unwrap();
     assert_eq!(plain.brightness_weighting(), 0.0);
 }
@@ -140,8 +126,8 @@ fn bad_brightness_exponents_are_typed_errors() {
     let (off, _) = find_section(&good, SectionId::PROBE_WEIGHTS);
     type Field = fn(&mut ProbeFile) -> &mut f32;
     let fields: [(usize, Field); 2] = [
-        (1, |f| &mut f.brightness_exponent),
-        (2, |f| &mut f.directional_exponent),
+        (1, |f| &mut cm(f).blend.brightness_exponent),
+        (2, |f| &mut cm(f).blend.directional_exponent),
     ];
     for (word, field) in fields {
         for bad in [f32::NAN, -0.5, 4.5, f32::INFINITY, f32::NEG_INFINITY] {
@@ -167,18 +153,16 @@ fn bad_brightness_exponents_are_typed_errors() {
     }
 }
 
-/// The directional brightness exponent (format 1.9) rides in `PWGT`'s
-/// header word `w2`: written as `f32` bits at minor 9 (with or without the
-/// brightness exponent beside it in `w1`), read back and applied by
-/// [`ProbeCloud::from_file`]; zero leaves the older bytes. A 1.8 reader's
-/// view (the word zeroed, as a file written before 1.9) blends without it.
+/// The directional brightness exponent rides in `PWGT`'s header word `w2`:
+/// written as `f32` bits (with or without the brightness exponent beside
+/// it in `w1`), read back and applied by [`ProbeCloud::from_file`]; zero
+/// leaves the word zero, and a file with the word zeroed blends without it.
 #[test]
-fn the_directional_exponent_rides_in_pwgt_w2_at_minor_9() {
+fn the_directional_exponent_rides_in_pwgt_w2() {
     let mut f = weights_file();
-    f.brightness_exponent = 0.5;
-    f.directional_exponent = 0.25;
+    cm(&mut f).blend.brightness_exponent = 0.5;
+    cm(&mut f).blend.directional_exponent = 0.25;
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 9);
     let (off, _) = find_section(&bytes, SectionId::PROBE_WEIGHTS);
     let word =
         |i: usize| u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap());
@@ -187,19 +171,17 @@ fn the_directional_exponent_rides_in_pwgt_w2_at_minor_9() {
     assert_eq!(word(3), 0);
     assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), f);
     let mut only = weights_file();
-    only.directional_exponent = 1.0;
-    assert_eq!(minor_of(&only.to_bytes().unwrap()), 9);
-    // -0.0 is 0.0: the 1.8 bytes.
+    cm(&mut only).blend.directional_exponent = 1.0;
+    // -0.0 is 0.0: the bytes without it.
     let mut zero = f.clone();
-    zero.directional_exponent = -0.0;
+    cm(&mut zero).blend.directional_exponent = -0.0;
     let mut eight = f.clone();
-    eight.directional_exponent = 0.0;
+    cm(&mut eight).blend.directional_exponent = 0.0;
     assert_eq!(zero.to_bytes().unwrap(), eight.to_bytes().unwrap());
-    assert_eq!(minor_of(&eight.to_bytes().unwrap()), 8);
     // The loaded cloud blends with it; with the word zeroed, without.
     let mut g = full_file();
-    g.probe_weights = weights_file().probe_weights;
-    g.directional_exponent = 0.25;
+    cm(&mut g).blend.probe_weights = c(&weights_file()).blend.probe_weights.clone();
+    cm(&mut g).blend.directional_exponent = 0.25;
     let gb = g.to_bytes().unwrap();
     let cloud = ProbeCloud::from_file(&ProbeFile::from_bytes(&gb).unwrap()).unwrap();
     assert_eq!(cloud.directional_brightness(), 0.25);

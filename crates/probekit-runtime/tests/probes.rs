@@ -18,10 +18,13 @@
 
 mod common;
 
-use common::Rng;
+use common::{cm, p, pm, vm, Rng};
 use glam::Vec3;
 use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh};
-use probekit_runtime::format::{Coefficients, Gradients, Rig, RigModel, TetSection, VolumeGrid};
+use probekit_runtime::format::{
+    Coefficients, Gradients, ProbeSet, Rig, RigFile, RigModel, TetSection, VolumeFile, VolumeGrid,
+    VolumeStructure,
+};
 use probekit_runtime::{
     Interp, L1Mode, LoadError, LoadOptions, ObjectState, ProbeFile, ProbeFileKind, Probes,
     QueryError,
@@ -101,12 +104,12 @@ fn cloud_file(order: u32) -> ProbeFile {
         })
         .collect();
     let mut f = ProbeFile::cloud(pos.clone(), order, &coeffs(&pos, order)).unwrap();
-    f.tetrahedra = Some(TetSection {
+    cm(&mut f).tetrahedra = Some(TetSection {
         vertices: tets,
         neighbours,
         barycentric,
     });
-    f.rigs = vec![rig()];
+    *f.rigs_mut() = vec![rig()];
     f.validate().unwrap();
     f
 }
@@ -115,15 +118,15 @@ fn cloud_file(order: u32) -> ProbeFile {
 fn volume_file(order: u32) -> ProbeFile {
     let pos = lattice();
     let n = (order * order) as usize;
-    let mut f = ProbeFile::new(
-        ProbeFileKind::Volume,
-        Coefficients::from_f32(order, &coeffs(&pos, order)).unwrap(),
+    let c = Coefficients::from_f32(order, &coeffs(&pos, order)).unwrap();
+    let mut f = VolumeFile::new(
+        ProbeSet::new(pos.clone(), c),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::splat(2.0),
+            resolution: [3, 3, 3],
+        }),
     );
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::splat(2.0),
-        resolution: [3, 3, 3],
-    });
     f.gradients = Some(Gradients {
         order,
         data: (0..pos.len())
@@ -132,15 +135,16 @@ fn volume_file(order: u32) -> ProbeFile {
             })
             .collect(),
     });
-    f.positions = pos;
+    let f = ProbeFile::Volume(f);
     f.validate().unwrap();
     f
 }
 
 fn rigs_only_file() -> ProbeFile {
-    let mut f = ProbeFile::new(ProbeFileKind::Rig, Coefficients::empty(2));
-    f.rigs = vec![rig()];
-    f
+    ProbeFile::Rigs(RigFile {
+        rigs: vec![rig()],
+        metadata: String::new(),
+    })
 }
 
 fn load(f: &ProbeFile, options: LoadOptions) -> Probes {
@@ -287,7 +291,7 @@ fn volume_every_interpolation_reproduces_the_field() {
 #[test]
 fn interpolation_needing_gradients_is_refused_at_load_without_them() {
     let mut f = volume_file(3);
-    f.gradients = None;
+    vm(&mut f).gradients = None;
     let mut options = LoadOptions::default();
     options.interpolation = Interp::Tricubic;
     let err = Probes::from_bytes(&f.to_bytes().unwrap(), options).unwrap_err();
@@ -524,15 +528,16 @@ fn blend_overrides_take_effect_at_load() {
 #[test]
 fn files_built_in_memory_are_checked_at_load() {
     let mut f = cloud_file(3);
-    let n = f.positions.len();
-    f.coefficients = Coefficients::from_f32(9, &vec![Vec3::ONE; n * 81]).unwrap_or(Coefficients {
-        codec: probekit_runtime::format::Codec::F32,
-        order: 9,
-        data: vec![0; n * 81 * 12],
-    });
+    let n = p(&f).positions.len();
+    pm(&mut f).coefficients =
+        Coefficients::from_f32(9, &vec![Vec3::ONE; n * 81]).unwrap_or(Coefficients {
+            codec: probekit_runtime::format::Codec::F32,
+            order: 9,
+            data: vec![0; n * 81 * 12],
+        });
     assert!(Probes::from_file(&f, LoadOptions::default()).is_err());
     let mut f = cloud_file(3);
-    f.tetrahedra.as_mut().unwrap().vertices[0][0] = 1000;
+    cm(&mut f).tetrahedra.as_mut().unwrap().vertices[0][0] = 1000;
     assert!(Probes::from_file(&f, LoadOptions::default()).is_err());
     assert!(Probes::from_file(&cloud_file(3), LoadOptions::default()).is_ok());
 }
@@ -603,10 +608,10 @@ fn walled_cloud_file() -> ProbeFile {
     let mut f = cloud_file(3);
     let (max, mu) = (4.0f32, 0.6f32);
     let h = |x: f32| half::f16::from_f32(x).to_bits();
-    let data = (0..f.positions.len())
+    let data = (0..f.probe_count())
         .flat_map(|_| [h(mu / max), h(mu * mu / (max * max))])
         .collect();
-    f.visibility = Some(DistanceMoments {
+    cm(&mut f).blend.distance_moments = Some(DistanceMoments {
         resolution: 1,
         max_distance: max,
         data,
@@ -654,14 +659,14 @@ fn visibility_sharpness_override_takes_effect_at_load() {
 fn relight_keeps_the_blend_of_the_baked_light() {
     use probekit_runtime::format::{LightGroup, Relighter};
     let mut f = cloud_file(3);
-    let total = coeffs(&f.positions, 3);
+    let total = coeffs(&p(&f).positions, 3);
     let a: Vec<Vec3> = (total.iter().enumerate())
         .map(|(i, c)| *c * (0.2 + 0.6 * ((i / 9) % 3) as f32 / 2.0))
         .collect();
     let b: Vec<Vec3> = total.iter().zip(&a).map(|(t, x)| *t - *x).collect();
     let total: Vec<Vec3> = a.iter().zip(&b).map(|(x, y)| *x + *y).collect();
-    f.coefficients = Coefficients::from_f32(3, &total).unwrap();
-    f.groups = [("a", &a), ("b", &b)]
+    pm(&mut f).coefficients = Coefficients::from_f32(3, &total).unwrap();
+    pm(&mut f).groups = [("a", &a), ("b", &b)]
         .map(|(name, c)| LightGroup {
             name: name.into(),
             coefficients: Coefficients::from_f32(3, c).unwrap(),
@@ -692,7 +697,7 @@ fn relight_keeps_the_blend_of_the_baked_light() {
     // A cloud loaded from the relit coefficients blends by the relit
     // light instead: not the same (the check above can fail).
     let mut rebuilt = f.clone();
-    rebuilt.coefficients = f.relit(&[("a", scales[0])]).unwrap();
+    pm(&mut rebuilt).coefficients = f.relit(&[("a", scales[0])]).unwrap();
     let rebuilt = load(&rebuilt, options);
     let sh = |probes: &Probes, p| probes.sh_at(&mut ObjectState::new(), p).unwrap();
     let moved = (points(&mut rng, 40).iter())

@@ -16,16 +16,20 @@ fn every_section_round_trips_exactly() {
     let back = ProbeFile::from_bytes(&bytes).unwrap();
     assert_eq!(back, f);
     // Field by field, so a failure names the section.
-    assert_eq!(back.positions, f.positions);
-    assert_eq!(back.coefficients, f.coefficients);
-    assert_eq!(back.validity, f.validity);
-    assert_eq!(back.tetrahedra, f.tetrahedra);
-    assert_eq!(back.outer, f.outer);
-    assert_eq!(back.octree, f.octree);
-    assert_eq!(back.grid, f.grid);
-    assert_eq!(back.gradients, f.gradients);
-    assert_eq!(back.rigs, f.rigs);
-    assert_eq!(back.metadata, f.metadata);
+    assert_eq!(p(&back).positions, p(&f).positions);
+    assert_eq!(p(&back).coefficients, p(&f).coefficients);
+    assert_eq!(p(&back).validity, p(&f).validity);
+    assert_eq!(c(&back).tetrahedra, c(&f).tetrahedra);
+    assert_eq!(c(&back).outer, c(&f).outer);
+    assert_eq!(back.rigs(), f.rigs());
+    assert_eq!(back.metadata(), f.metadata());
+    // A uniform volume: grid and gradients.
+    let g = grid_volume_file();
+    let back = ProbeFile::from_bytes(&g.to_bytes().unwrap()).unwrap();
+    assert_eq!(back, g);
+    assert_eq!(grid(&back), grid(&g));
+    assert_eq!(v(&back).gradients, v(&g).gradients);
+    assert_eq!(back.rigs(), g.rigs());
 }
 
 #[test]
@@ -38,7 +42,7 @@ fn writing_is_deterministic_and_sections_are_aligned() {
     assert_eq!(a, c);
     assert_eq!(&a[..8], &MAGIC);
     let (_, sections) = read_sections(&a).unwrap();
-    assert_eq!(sections.len(), 10);
+    assert_eq!(sections.len(), 7);
     let mut end = HEADER_LEN + 32 * sections.len();
     for s in &sections {
         assert_eq!(s.offset % 16, 0, "{} misaligned", s.id);
@@ -68,7 +72,7 @@ fn positions_are_readable_in_place_when_mapped_aligned() {
         .find(|s| s.id == SectionId::POSITIONS)
         .unwrap();
     let floats: &[[f32; 3]] = bytemuck::cast_slice(&pos.bytes[16..16 + 5 * 12]);
-    for (p, q) in floats.iter().zip(&f.positions) {
+    for (p, q) in floats.iter().zip(&p(&f).positions) {
         assert_eq!(Vec3::from_array(*p), *q);
     }
     // The reader takes unaligned buffers too (copies instead of casting).
@@ -103,18 +107,18 @@ fn f32_is_exact_and_f16_within_half_precision_for_every_order() {
         let f = ProbeFile::cloud(positions.clone(), order, &coeffs).unwrap();
         let back = ProbeFile::from_bytes(&f.to_bytes().unwrap()).unwrap();
         assert_eq!(
-            back.coefficients.to_f32().unwrap(),
+            p(&back).coefficients.to_f32().unwrap(),
             coeffs,
             "f32 order {order}"
         );
 
         let mut g = f.clone();
-        g.coefficients = f16_coefficients(order, &coeffs);
+        pm(&mut g).coefficients = f16_coefficients(order, &coeffs);
         let bytes = g.to_bytes().unwrap();
         let back = ProbeFile::from_bytes(&bytes).unwrap();
-        assert_eq!(back.coefficients.codec, Codec::F16);
-        assert_eq!(back.coefficients.stride(), 6 * (order * order) as usize);
-        let decoded = back.coefficients.to_f32().unwrap();
+        assert_eq!(p(&back).coefficients.codec, Codec::F16);
+        assert_eq!(p(&back).coefficients.stride(), 6 * (order * order) as usize);
+        let decoded = p(&back).coefficients.to_f32().unwrap();
         for (d, c) in decoded.iter().zip(&coeffs) {
             for k in 0..3 {
                 // Round to nearest: relative error ≤ 2⁻¹¹ for normal halves.
@@ -129,7 +133,7 @@ fn f32_is_exact_and_f16_within_half_precision_for_every_order() {
         }
         // Single-probe decoding without allocation agrees with the bulk form.
         let mut one = [Vec3::ZERO; 64];
-        back.coefficients.decode_probe(n - 1, &mut one).unwrap();
+        p(&back).coefficients.decode_probe(n - 1, &mut one).unwrap();
         let m = (order * order) as usize;
         assert_eq!(&one[..m], &decoded[(n - 1) * m..n * m]);
     }
@@ -141,29 +145,32 @@ fn volume_and_rig_kinds_round_trip() {
     // Uniform volume: 3×2×2 grid.
     let positions: Vec<Vec3> = (0..12).map(|_| rng.vec3()).collect();
     let coeffs: Vec<Vec3> = (0..12 * 4).map(|_| rng.vec3()).collect();
-    let mut v = ProbeFile::cloud(positions, 2, &coeffs).unwrap();
-    v.kind = ProbeFileKind::Volume;
-    v.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::new(2.0, 1.0, 1.0),
-        resolution: [3, 2, 2],
-    });
+    let v = ProbeFile::Volume(VolumeFile::new(
+        ProbeSet::new(positions, Coefficients::from_f32(2, &coeffs).unwrap()),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::new(2.0, 1.0, 1.0),
+            resolution: [3, 2, 2],
+        }),
+    ));
     assert_eq!(ProbeFile::from_bytes(&v.to_bytes().unwrap()).unwrap(), v);
 
-    // Rig-only file: no probes.
-    let mut r = full_file();
-    r.kind = ProbeFileKind::Rig;
-    r.positions.clear();
-    r.coefficients = Coefficients::empty(3);
-    r.validity = None;
-    r.tetrahedra = None;
-    r.outer = None;
-    r.octree = None;
-    r.grid = None;
-    r.gradients = None;
+    // Rig-only file: no probes, and only RIGS and META.
+    let r = ProbeFile::Rigs(RigFile {
+        rigs: full_file().rigs().to_vec(),
+        metadata: full_file().metadata().into(),
+    });
+    let bytes = r.to_bytes().unwrap();
+    let ids: Vec<SectionId> = read_sections(&bytes)
+        .unwrap()
+        .1
+        .iter()
+        .map(|s| s.id)
+        .collect();
+    assert_eq!(ids, [SectionId::RIGS, SectionId::METADATA]);
     let back = ProbeFile::from_bytes(&r.to_bytes().unwrap()).unwrap();
     assert_eq!(back, r);
-    assert_eq!(back.rigs[0].model.parameter_count(), Some(6));
+    assert_eq!(back.rigs()[0].model.parameter_count(), Some(6));
 }
 
 #[test]
@@ -174,16 +181,62 @@ fn newer_minor_version_skips_unknown_sections() {
     let mut owned: Vec<(SectionId, Vec<u8>)> =
         sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect();
     owned.insert(2, (SectionId::from_fourcc(*b"FUTR"), vec![0xAB; 32]));
-    let newer = assemble_file(f.kind.id(), layout::VERSION_MINOR + 1, 0x8000_0000, &owned);
+    let newer = assemble_file(
+        f.kind().id(),
+        layout::VERSION_MINOR + 1,
+        0x8000_0000,
+        &owned,
+    );
     assert_eq!(ProbeFile::from_bytes(&newer).unwrap(), f);
     let sizes = file_bytes_by_section(&newer).unwrap();
     assert_eq!(sizes["'FUTR'"], 32);
     // The same unknown section in a file of our own minor is refused.
-    let same = assemble_file(f.kind.id(), layout::VERSION_MINOR, 0, &owned);
+    let same = assemble_file(f.kind().id(), layout::VERSION_MINOR, 0, &owned);
     assert!(matches!(
         ProbeFile::from_bytes(&same),
         Err(FormatError::UnknownSection(id)) if id == SectionId::from_fourcc(*b"FUTR")
     ));
+}
+
+/// Every 1.x file (and every layout of one: the sections inside are never
+/// looked at) is refused with [`FormatError::OlderVersion`], whose message
+/// tells the user to bake again; a newer major is `UnsupportedVersion`.
+#[test]
+fn files_of_format_1_are_refused_as_written_by_an_older_probekit() {
+    let bytes = full_file().to_bytes().unwrap();
+    assert_eq!(
+        u16::from_le_bytes([bytes[8], bytes[9]]),
+        layout::VERSION_MAJOR
+    );
+    assert_eq!(layout::VERSION_MAJOR, 2);
+    assert_eq!(minor_of(&bytes), 0);
+    for minor in [0u16, 1, 7, 11, 200] {
+        let e = load_patched(&bytes, |b| {
+            b[layout::header::MAJOR..][..2].copy_from_slice(&1u16.to_le_bytes());
+            b[layout::header::MINOR..][..2].copy_from_slice(&minor.to_le_bytes());
+        })
+        .unwrap_err();
+        assert!(
+            matches!(e, FormatError::OlderVersion { major: 1, minor: m, supported: 2 } if m == minor),
+            "{e:?}"
+        );
+        let msg = e.to_string();
+        assert!(msg.contains("older probekit"), "{msg}");
+        assert!(msg.contains("baked again"), "{msg}");
+        assert!(msg.contains(&format!("1.{minor}")), "{msg}");
+    }
+    // Too short to hold sections, a 1.x header alone is still "older".
+    let mut head = bytes[..HEADER_LEN].to_vec();
+    head[8..10].copy_from_slice(&1u16.to_le_bytes());
+    assert!(matches!(
+        ProbeFile::from_bytes(&head),
+        Err(FormatError::OlderVersion { .. })
+    ));
+    let e = load_patched(&bytes, |b| b[8..10].copy_from_slice(&3u16.to_le_bytes())).unwrap_err();
+    assert!(
+        matches!(e, FormatError::UnsupportedVersion { major: 3, .. }),
+        "{e:?}"
+    );
 }
 
 use probekit_runtime::format::layout;
@@ -212,20 +265,29 @@ prop_compose! {
         -> ProbeFile
     {
         let mut f = ProbeFile::cloud(positions, order, &coeffs).unwrap();
-        f.validity = validity.map(|v| v.into_iter().map(|(value, flags)| Validity { value, flags }).collect());
-        if with_grad {
+        pm(&mut f).validity = validity.map(|v| v.into_iter().map(|(value, flags)| Validity { value, flags }).collect());
+        if with_grad && n > 0 {
+            // A uniform volume of n × 1 × 1 samples with gradients.
             let per = 3 * (grad_order * grad_order) as usize;
-            f.gradients = Some(Gradients { order: grad_order, data: grads[..n * per].to_vec() });
-        }
-        if n >= 5 {
-            f.tetrahedra = Some(TetSection {
+            let mut v = VolumeFile::new(
+                p(&f).clone(),
+                VolumeStructure::Uniform(VolumeGrid {
+                    min: Vec3::ZERO,
+                    max: Vec3::ONE,
+                    resolution: [n as u32, 1, 1],
+                }),
+            );
+            v.gradients = Some(Gradients { order: grad_order, data: grads[..n * per].to_vec() });
+            f = ProbeFile::Volume(v);
+        } else if n >= 5 {
+            cm(&mut f).tetrahedra = Some(TetSection {
                 vertices: vec![[0, 1, 2, 3], [4, 1, 2, 3]],
                 neighbours: vec![[1, u32::MAX, u32::MAX, u32::MAX], [0, u32::MAX, u32::MAX, u32::MAX]],
                 barycentric: vec![[[0.5; 4]; 3], [[-0.25; 4]; 3]],
             });
         }
         let params = lattice * 2;
-        f.rigs = vec![Rig {
+        *f.rigs_mut() = vec![Rig {
             name: meta.clone(),
             model: RigModel::Tensor([AxisModel::Lattice(lattice), AxisModel::Constant, AxisModel::Gradient]),
             order: 2,
@@ -236,7 +298,7 @@ prop_compose! {
             samples: rig_samples,
             transitions: vec![Transition { distance: 1.0, error: 2.0 }],
         }];
-        f.metadata = meta;
+        *f.metadata_mut() = meta;
         f
     }
 }

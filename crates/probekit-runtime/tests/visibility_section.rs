@@ -1,4 +1,4 @@
-//! Distance moments (`VISM`, format 1.3): round trip, minor version, the
+//! Distance moments (`VISM`): round trip, the
 //! decoded values against the `half` crate, and hostile sections (truncated,
 //! corrupt counts, non-finite and out-of-range values) refused with typed
 //! errors, never a panic.
@@ -12,8 +12,8 @@ use probekit_runtime::format::*;
 /// `full_file()` with a 3×3 map per probe of values `k/(n+1)` (in [0, 1)).
 fn vis_file() -> ProbeFile {
     let mut f = full_file();
-    let n = f.positions.len() * 9 * 2;
-    f.visibility = Some(DistanceMoments {
+    let n = p(&f).positions.len() * 9 * 2;
+    cm(&mut f).blend.distance_moments = Some(DistanceMoments {
         resolution: 3,
         max_distance: 7.5,
         data: (0..n)
@@ -24,29 +24,27 @@ fn vis_file() -> ProbeFile {
 }
 
 #[test]
-fn moments_round_trip_at_minor_3_and_decode_like_half() {
+fn moments_round_trip_and_decode_like_half() {
     let f = vis_file();
     let bytes = f.to_bytes().unwrap();
-    assert_eq!(minor_of(&bytes), 3);
     let back = ProbeFile::from_bytes(&bytes).unwrap();
     assert_eq!(back, f);
     let by = file_bytes_by_section(&bytes).unwrap();
     // 16-byte header + pad16(probes · 9 texels · 2 values · 2 bytes).
-    let want = 16 + (f.positions.len() * 36).div_ceil(16) * 16;
+    let want = 16 + (p(&f).positions.len() * 36).div_ceil(16) * 16;
     assert_eq!(by["visibility"], want as u64);
     assert_eq!(by.values().sum::<u64>(), bytes.len() as u64);
-    let v = back.visibility.as_ref().unwrap();
-    assert_eq!(v.probe_count(), f.positions.len());
+    let v = c(&back).blend.distance_moments.as_ref().unwrap();
+    assert_eq!(v.probe_count(), p(&f).positions.len());
     for (k, m) in v.decode().iter().enumerate() {
         let h = |i: usize| half::f16::from_bits(v.data[2 * k + i]).to_f32();
         assert_eq!(m[0], h(0) * 7.5);
         assert_eq!(m[1], h(1) * 7.5 * 7.5);
     }
-    // Without the section the file is what it was before 1.3.
+    // Without the section the file is the one without moments.
     let mut old = f.clone();
-    old.visibility = None;
+    cm(&mut old).blend.distance_moments = None;
     assert_eq!(old.to_bytes().unwrap(), full_file().to_bytes().unwrap());
-    assert!(minor_of(&old.to_bytes().unwrap()) < 3);
 }
 
 #[test]
@@ -66,17 +64,18 @@ fn the_writer_refuses_bad_moments() {
     ];
     for (what, edit) in cases {
         let mut f = vis_file();
-        edit(f.visibility.as_mut().unwrap());
+        edit(cm(&mut f).blend.distance_moments.as_mut().unwrap());
         assert!(f.to_bytes().is_err(), "{what}");
     }
     let mut f = vis_file();
-    f.visibility.as_mut().unwrap().data[3] = 0x7C00; // +inf
+    cm(&mut f).blend.distance_moments.as_mut().unwrap().data[3] = 0x7C00; // +inf
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::NonFinite { id, .. }) if id == SectionId::VISIBILITY
     ));
     let mut f = vis_file();
-    f.visibility.as_mut().unwrap().data[3] = half::f16::from_f32(1.5).to_bits();
+    cm(&mut f).blend.distance_moments.as_mut().unwrap().data[3] =
+        half::f16::from_f32(1.5).to_bits();
     assert!(matches!(
         f.to_bytes(),
         Err(FormatError::InvalidValue { id, .. }) if id == SectionId::VISIBILITY
@@ -138,8 +137,8 @@ fn truncated_or_corrupt_sections_are_typed_errors() {
 }
 
 #[test]
-fn an_older_reader_skips_the_section() {
-    // What a 1.2 reader does with a 1.3 file, simulated here: a section id
+fn a_reader_skips_unknown_sections_of_a_newer_minor() {
+    // What this reader does with a 2.1 file, simulated here: a section id
     // this reader does not know, in a file of a newer minor, is skipped.
     let f = vis_file();
     let bytes = f.to_bytes().unwrap();
@@ -157,6 +156,6 @@ fn an_older_reader_skips_the_section() {
         .collect();
     let newer = assemble_file(0, layout::VERSION_MINOR + 1, 0, &owned);
     let back = ProbeFile::from_bytes(&newer).unwrap();
-    assert!(back.visibility.is_none());
-    assert_eq!(back.positions, f.positions);
+    assert!(c(&back).blend.distance_moments.is_none());
+    assert_eq!(p(&back).positions, p(&f).positions);
 }

@@ -14,7 +14,8 @@ use probekit_runtime::cloud::{
     face_neighbors, lattice_tets, CellPlanes, CellVisibility, TetMesh, VisibilityMaps,
 };
 use probekit_runtime::format::{
-    AxisModel, Coefficients, Gradients, ProbeFileKind, Rig, RigModel, Transition, VolumeGrid,
+    AxisModel, Coefficients, Gradients, Octree, OctreeNode, ProbeSet, Rig, RigModel, Transition,
+    VolumeFile, VolumeGrid, VolumeStructure,
 };
 use probekit_runtime::rig::{Light, SphereTable, SplitRig};
 use probekit_runtime::sh::basis::eval_l2;
@@ -317,22 +318,25 @@ fn volume_grid_layout() {
     let res = [3u32, 2, 2];
     let count = 12;
     let coeffs: Vec<Vec3> = (0..count * 9).map(|i| Vec3::splat(i as f32)).collect();
-    let mut file = ProbeFile::new(
-        ProbeFileKind::Volume,
+    let probes = ProbeSet::new(
+        vec![Vec3::ZERO; count],
         Coefficients::from_f32(3, &coeffs).unwrap(),
     );
-    file.positions = vec![Vec3::ZERO; count];
-    file.grid = Some(VolumeGrid {
-        min: Vec3::new(-1.0, 0.0, 1.0),
-        max: Vec3::new(1.0, 2.0, 3.0),
-        resolution: res,
-    });
+    let mut file = VolumeFile::new(
+        probes,
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::new(-1.0, 0.0, 1.0),
+            max: Vec3::new(1.0, 2.0, 3.0),
+            resolution: res,
+        }),
+    );
     file.gradients = Some(Gradients {
         order: 2,
         data: (0..count * 3 * 4)
             .map(|i| Vec3::splat(-(i as f32)))
             .collect(),
     });
+    let file = ProbeFile::Volume(file);
     let v = pack_volume_grid(&file).unwrap();
     let word = |i: usize| u32::from_le_bytes(v.grid[i..i + 4].try_into().unwrap());
     assert_eq!(f32::from_bits(word(0)), -1.0);
@@ -360,8 +364,20 @@ fn volume_grid_layout() {
         pack_volume_grid(&cloud),
         Err(LayoutError::Volume(_))
     ));
+    // An adaptive volume has no grid to pack.
     let mut no_grid = file.clone();
-    no_grid.grid = None;
+    no_grid.as_volume_mut().unwrap().structure = VolumeStructure::Adaptive(Octree {
+        nodes: vec![OctreeNode {
+            min: Vec3::new(-1.0, 0.0, 1.0),
+            max: Vec3::new(1.0, 2.0, 3.0),
+            first_child: probekit_runtime::format::layout::NONE,
+            depth: 0,
+            sample_offset: 0,
+            sample_count: 8,
+        }],
+        samples: (0..8).collect(),
+        roots: [1, 1, 1],
+    });
     assert!(pack_volume_grid(&no_grid).is_err());
 }
 

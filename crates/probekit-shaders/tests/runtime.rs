@@ -74,19 +74,22 @@ fn bake_demo_volume(scene: &Scene, layout: VolumeLayout) -> ProbeFile {
 /// `file` with its coefficients stored in the 13-byte L1 codec (bands ≤ 1
 /// of each probe) and its gradients, if any, cut to bands ≤ 1.
 fn as_l1(file: &ProbeFile) -> ProbeFile {
-    let n = (file.coefficients.order * file.coefficients.order) as usize;
-    let c = file.coefficients.to_f32().unwrap();
+    let coefficients = &file.probes().unwrap().coefficients;
+    let n = (coefficients.order * coefficients.order) as usize;
+    let c = coefficients.to_f32().unwrap();
     let mut data = Vec::new();
     for p in c.chunks_exact(n) {
         data.extend_from_slice(&encode_l1(&[p[0], p[1], p[2], p[3]]));
     }
     let mut out = file.clone();
-    out.coefficients = Coefficients {
+    out.probes_mut().unwrap().coefficients = Coefficients {
         codec: Codec::L1Q13,
         order: 2,
         data,
     };
-    out.gradients = file.gradients.as_ref().map(|g| cut_gradients(g, 2));
+    if let Some(v) = out.as_volume_mut() {
+        v.gradients = v.gradients.as_ref().map(|g| cut_gradients(g, 2));
+    }
     out
 }
 
@@ -309,18 +312,18 @@ fn cloud_blend_matches_runtime() {
     let scene = Scene::builtin_demo();
     let file = bake_cloud(&scene);
     assert!(
-        file.visibility.is_some()
-            && file.cell_visibility.is_some()
-            && file.cell_planes.is_some()
-            && file.probe_weights.is_some()
-            && file.directional_exponent > 0.0,
+        file.as_cloud().unwrap().blend.distance_moments.is_some()
+            && file.as_cloud().unwrap().blend.cell_visibility.is_some()
+            && file.as_cloud().unwrap().blend.cell_planes.is_some()
+            && file.as_cloud().unwrap().blend.probe_weights.is_some()
+            && file.as_cloud().unwrap().blend.directional_exponent > 0.0,
         "the default bake stores every kind of blend data"
     );
     println!(
         "cloud: {} probes, α = {}, γ = {}",
         file.probe_count(),
-        file.brightness_exponent,
-        file.directional_exponent
+        file.as_cloud().unwrap().blend.brightness_exponent,
+        file.as_cloud().unwrap().blend.directional_exponent
     );
     let mut rep = Report::default();
     let baked = ProbeCloud::from_file(&file).unwrap();
@@ -409,6 +412,8 @@ fn compare_volume(gpu: &Gpu, name: &str, file: &ProbeFile, rep: &mut Report) {
     let n = vol.coeffs_per_sample().min(9);
     let unit = 1e-3
         * file
+            .probes()
+            .unwrap()
             .coefficients
             .to_f32()
             .unwrap()
@@ -473,11 +478,24 @@ fn uniform_volume_matches_runtime() {
             resolution: Some([6, 3, 4]),
         },
     );
-    assert!(file.grid.is_some() && file.gradients.as_ref().is_some_and(|g| g.order == 3));
+    assert!(
+        file.as_volume().and_then(|v| v.grid()).is_some()
+            && file
+                .as_volume()
+                .unwrap()
+                .gradients
+                .as_ref()
+                .is_some_and(|g| g.order == 3)
+    );
     let mut rep = Report::default();
     compare_volume(&gpu, "L2, L2 gradients", &file, &mut rep);
     let mut cut = file.clone();
-    cut.gradients = file.gradients.as_ref().map(|g| cut_gradients(g, 2));
+    cut.as_volume_mut().unwrap().gradients = file
+        .as_volume()
+        .unwrap()
+        .gradients
+        .as_ref()
+        .map(|g| cut_gradients(g, 2));
     compare_volume(&gpu, "L2, L1 gradients", &cut, &mut rep);
     compare_volume(&gpu, "L1 codec", &as_l1(&file), &mut rep);
     rep.finish("uniform volume");
@@ -660,6 +678,8 @@ fn octree_bricks_match_runtime() {
     let n = vol.coeffs_per_sample().min(9);
     let unit = 1e-3
         * file
+            .probes()
+            .unwrap()
             .coefficients
             .to_f32()
             .unwrap()

@@ -331,7 +331,7 @@ fn bounds(points: impl Iterator<Item = Vec3>) -> serde_json::Value {
 
 fn summary(d: &ViewData) -> serde_json::Value {
     let f = &d.file;
-    let states: Vec<u8> = (0..f.positions.len()).map(|i| probe_state(f, i)).collect();
+    let states: Vec<u8> = (0..f.probe_count()).map(|i| probe_state(f, i)).collect();
     let cells = d.probes.cells();
     let scene = d.scene.as_ref().map(|s| {
         let regions: Vec<serde_json::Value> = s
@@ -358,14 +358,14 @@ fn summary(d: &ViewData) -> serde_json::Value {
         .and_then(|s| serde_json::to_value(s).ok());
     serde_json::json!({
         "file": d.file_name,
-        "kind": if f.tetrahedra.is_some() { "cloud" } else { "volume" },
+        "kind": if f.as_cloud().is_some_and(|c| c.tetrahedra.is_some()) { "cloud" } else { "volume" },
         "order": d.probes.order(),
-        "probes": f.positions.len(),
+        "probes": f.probe_count(),
         "tetrahedra": cells.as_ref().map_or(0, |c| c.0.len()),
         "hull_faces": cells.as_ref().map_or(0, |c| c.1.len()),
         "invalid": states.iter().filter(|&&s| s == 1).count(),
         "moved": states.iter().filter(|&&s| s == 2).count(),
-        "bounds": bounds(f.positions.iter().copied()),
+        "bounds": bounds(f.positions().iter().copied()),
         "mean_irradiance": d.mean_irradiance,
         "recorded_scene": d.recorded_scene,
         "recorded_scene_hash": d.recorded_hash,
@@ -382,11 +382,14 @@ fn summary(d: &ViewData) -> serde_json::Value {
 
 fn probes(d: &ViewData) -> serde_json::Value {
     let f = &d.file;
-    let order = f.coefficients.order as usize;
+    let (order, coeffs) = f.probes().map_or((1, Vec::new()), |p| {
+        let c = &p.coefficients;
+        (c.order as usize, c.to_f32().unwrap_or_default())
+    });
     let per = order * order;
-    let coeffs = f.coefficients.to_f32().unwrap_or_default();
+    let validity = f.probes().and_then(|p| p.validity.as_ref());
     let list: Vec<serde_json::Value> = f
-        .positions
+        .positions()
         .iter()
         .enumerate()
         .map(|(i, p)| {
@@ -397,7 +400,7 @@ fn probes(d: &ViewData) -> serde_json::Value {
                 .map(|c| c.to_array())
                 .collect();
             let state = ["valid", "invalid", "moved"][probe_state(f, i) as usize];
-            let validity = f.validity.as_ref().and_then(|v| v.get(i)).map(|v| v.value);
+            let validity = validity.and_then(|v| v.get(i)).map(|v| v.value);
             serde_json::json!({
                 "index": i, "position": p.to_array(), "sh": sh,
                 "state": state, "validity": validity,
@@ -411,14 +414,15 @@ fn tetrahedra(d: &ViewData) -> serde_json::Value {
     let (tets, hull) = d.probes.cells().unwrap_or_default();
     // A volume's cells: a uniform grid's, or an octree's leaves.
     let mut cells: Vec<[[f32; 3]; 2]> = Vec::new();
-    if let Some(o) = &d.file.octree {
+    let volume = d.file.as_volume();
+    if let Some(o) = volume.and_then(|v| v.octree()) {
         cells.extend(
             o.nodes
                 .iter()
                 .filter(|n| n.first_child == probekit_runtime::format::layout::NONE)
                 .map(|n| [n.min.to_array(), n.max.to_array()]),
         );
-    } else if let Some(g) = &d.file.grid {
+    } else if let Some(g) = volume.and_then(|v| v.grid()) {
         let r = g.resolution.map(|r| r.max(2) - 1);
         let step = (g.max - g.min) / Vec3::new(r[0] as f32, r[1] as f32, r[2] as f32);
         if (r[0] as u64) * (r[1] as u64) * (r[2] as u64) <= 100_000 {

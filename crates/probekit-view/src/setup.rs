@@ -48,7 +48,8 @@ pub(crate) struct ViewData {
 /// The probe state the page marks: 0 valid, 1 invalid, 2 moved by the
 /// virtual offset (an invalid probe counts as invalid even if moved).
 pub(crate) fn probe_state(file: &ProbeFile, i: usize) -> u8 {
-    match file.validity.as_ref().and_then(|v| v.get(i)) {
+    let validity = file.probes().and_then(|p| p.validity.as_ref());
+    match validity.and_then(|v| v.get(i)) {
         Some(v) if v.flags & VALIDITY_INVALID != 0 => 1,
         Some(v) if v.flags & VALIDITY_VIRTUAL_OFFSET != 0 => 2,
         _ => 0,
@@ -100,11 +101,11 @@ pub fn open(config: &ViewConfig) -> Result<Viewer, ViewError> {
     };
     let file = ProbeFile::load(&config.probes).map_err(|e| probes_err(e.to_string()))?;
     let probes = Probes::from_file(&file).map_err(|e| probes_err(e.to_string()))?;
-    if file.positions.is_empty() {
+    if file.positions().is_empty() {
         return Err(probes_err("the file holds no probes".into()));
     }
-    let recorded_scene = metadata_key(&file.metadata, "scene");
-    let recorded_hash = metadata_key(&file.metadata, "scene_hash");
+    let recorded_scene = metadata_key(file.metadata(), "scene");
+    let recorded_hash = metadata_key(file.metadata(), "scene_hash");
     let mut warnings = Vec::new();
     let mut banner = None;
     let (scene, scene_name) = match (&config.scene, &recorded_scene) {
@@ -194,11 +195,14 @@ pub fn open(config: &ViewConfig) -> Result<Viewer, ViewError> {
 /// `π·Y₀₀·c₀` (only band 0 survives: `∫Y_lm dn = 0` for `l > 0`, and
 /// `Â₀ = π`), so it reads the DC coefficient alone.
 fn mean_irradiance(file: &ProbeFile) -> f32 {
-    let Ok(coeffs) = file.coefficients.to_f32() else {
+    let Some(c) = file.probes().map(|p| &p.coefficients) else {
         return 0.0;
     };
-    let per = (file.coefficients.order * file.coefficients.order) as usize;
-    let n = file.positions.len().max(1);
+    let Ok(coeffs) = c.to_f32() else {
+        return 0.0;
+    };
+    let per = (c.order * c.order) as usize;
+    let n = file.probe_count().max(1);
     let sum: f64 = coeffs
         .chunks_exact(per.max(1))
         .map(|c| probekit_sh::LUMINANCE.dot(c[0]) as f64)

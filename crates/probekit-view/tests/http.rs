@@ -173,12 +173,21 @@ fn summary_describes_the_file_and_scene() {
     let s = get(a, "/api/summary").json();
     let f = file();
     assert_eq!(s["kind"], "cloud");
-    assert_eq!(s["probes"].as_u64().unwrap() as usize, f.positions.len());
+    assert_eq!(
+        s["probes"].as_u64().unwrap() as usize,
+        f.probes().unwrap().positions.len()
+    );
     assert_eq!(
         s["tetrahedra"].as_u64().unwrap() as usize,
-        f.tetrahedra.as_ref().unwrap().vertices.len()
+        f.as_cloud()
+            .unwrap()
+            .tetrahedra
+            .as_ref()
+            .unwrap()
+            .vertices
+            .len()
     );
-    assert_eq!(s["order"], f.coefficients.order);
+    assert_eq!(s["order"], f.probes().unwrap().coefficients.order);
     let scene = probekit::scene::Scene::load(DEMO).unwrap();
     assert_eq!(s["scene"]["name"], DEMO);
     assert_eq!(s["scene"]["hash"], scene.lighting_hash_hex());
@@ -192,8 +201,9 @@ fn summary_describes_the_file_and_scene() {
     // The mean irradiance: the average over probes of E(n) averaged over
     // the sphere, here by quadrature over a Fibonacci sphere of normals
     // with the SH library's irradiance (not the DC shortcut the server uses).
-    let coeffs = f.coefficients.to_f32().unwrap();
-    let per = (f.coefficients.order * f.coefficients.order) as usize;
+    let coeffs = f.probes().unwrap().coefficients.to_f32().unwrap();
+    let per =
+        (f.probes().unwrap().coefficients.order * f.probes().unwrap().coefficients.order) as usize;
     let dirs = 2000;
     let mut total = 0.0f64;
     for c in coeffs.chunks_exact(per) {
@@ -205,7 +215,7 @@ fn summary_describes_the_file_and_scene() {
             total += probekit_sh::LUMINANCE.dot(probekit_sh::irradiance(c, n)) as f64;
         }
     }
-    let expected = total / (dirs * f.positions.len()) as f64;
+    let expected = total / (dirs * f.probes().unwrap().positions.len()) as f64;
     let got = s["mean_irradiance"].as_f64().unwrap();
     assert!(
         (got - expected).abs() <= 1e-3 * expected,
@@ -219,19 +229,27 @@ fn probes_and_tetrahedra_are_the_files() {
     let f = file();
     let p = get(a, "/api/probes").json();
     let list = p["probes"].as_array().unwrap();
-    assert_eq!(list.len(), f.positions.len());
-    let coeffs = f.coefficients.to_f32().unwrap();
-    let per = (f.coefficients.order * f.coefficients.order) as usize;
+    assert_eq!(list.len(), f.probes().unwrap().positions.len());
+    let coeffs = f.probes().unwrap().coefficients.to_f32().unwrap();
+    let per =
+        (f.probes().unwrap().coefficients.order * f.probes().unwrap().coefficients.order) as usize;
     for (i, probe) in list.iter().enumerate() {
         let pos: Vec<f32> = serde_json::from_value(probe["position"].clone()).unwrap();
-        assert_eq!(pos, f.positions[i].to_array().to_vec());
+        assert_eq!(pos, f.probes().unwrap().positions[i].to_array().to_vec());
         let sh: Vec<[f32; 3]> = serde_json::from_value(probe["sh"].clone()).unwrap();
         assert_eq!(sh.len(), per);
         assert_eq!(sh[per - 1], coeffs[i * per + per - 1].to_array());
     }
     let t = get(a, "/api/tetrahedra").json();
     let tets: Vec<[u32; 4]> = serde_json::from_value(t["tetrahedra"].clone()).unwrap();
-    let mut file_tets = f.tetrahedra.as_ref().unwrap().vertices.clone();
+    let mut file_tets = f
+        .as_cloud()
+        .unwrap()
+        .tetrahedra
+        .as_ref()
+        .unwrap()
+        .vertices
+        .clone();
     let mut got = tets.clone();
     for v in file_tets.iter_mut().chain(got.iter_mut()) {
         v.sort_unstable();
@@ -561,9 +579,9 @@ fn without_a_scene_the_probes_are_served_alone() {
     // A copy of the bake whose recorded scene does not exist.
     let dir = tempfile::tempdir().unwrap();
     let mut f = file();
-    let mut meta: serde_json::Value = serde_json::from_str(&f.metadata).unwrap();
+    let mut meta: serde_json::Value = serde_json::from_str(f.metadata()).unwrap();
     meta["scene"] = "gone/away.gltf".into();
-    f.metadata = meta.to_string();
+    *f.metadata_mut() = meta.to_string();
     let path = dir.path().join("lonely.probes");
     probekit::format::write_probe_file(&path, &f).unwrap();
     let v = open(&ViewConfig::new(&path)).unwrap();

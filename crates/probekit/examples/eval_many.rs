@@ -99,7 +99,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         };
         println!(
             "{f}: probes={} bytes={} rel_rmse={:.3} p95={:.2} leaks={}{}",
-            file.positions.len(),
+            file.probe_count(),
             std::fs::metadata(f)?.len(),
             m.rel_rmse,
             m.p95_rel_error,

@@ -107,7 +107,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         let b = barycentric.query(&mut state, p.position)?;
         let bary = &b.weights[..4];
         let verts: Vec<usize> = q.probes[..4].iter().map(|&k| k as usize).collect();
-        let vpos: Vec<Vec3> = verts.iter().map(|&k| file.positions[k]).collect();
+        let vpos: Vec<Vec3> = verts.iter().map(|&k| file.positions()[k]).collect();
         let caps = baker.capture_many(&vpos, 9_100_000 + 4 * i, &s, &|_, _| {})?;
         let mut d = ShRgb::zeros(order);
         for k in 0..4 {

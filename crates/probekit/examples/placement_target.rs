@@ -427,7 +427,7 @@ impl<'a> Evaluation<'a> {
     /// `--leaks-in` and `--dump` ask for).
     fn report(&self, name: &str, file: &ProbeFile) -> Result<(), Box<dyn Error>> {
         let o = self.options;
-        let pos = &file.positions;
+        let pos = file.positions();
         if o.leaks_in.is_some() {
             let orphans = orphan_points(self.baker.tracer(), pos, PROBE_CLEARANCE)?;
             println!("{name}: {} orphan points", orphans.len());
@@ -436,7 +436,8 @@ impl<'a> Evaluation<'a> {
             }
         }
         if o.visibility && o.weights && o.brightness.is_none() {
-            println!("{name}: brightness exponent {}", file.brightness_exponent);
+            let alpha = file.as_cloud().map_or(0.0, |c| c.blend.brightness_exponent);
+            println!("{name}: brightness exponent {alpha}");
         }
         let probes = Probes::from_file(file, o.load_options())?;
         let pred = self.predict(&probes)?;
@@ -583,7 +584,7 @@ impl<'a> Evaluation<'a> {
             );
         }
         std::fs::create_dir_all(dir)?;
-        let path = format!("{dir}/{name}_{}_s{}.csv", file.positions.len(), self.seed);
+        let path = format!("{dir}/{name}_{}_s{}.csv", file.probe_count(), self.seed);
         std::fs::write(&path, csv)?;
         Ok(())
     }

@@ -115,7 +115,9 @@ fn main() {
     for (name, f) in rows {
         let with: u64 = f.bytes_by_section().unwrap().values().sum();
         let mut nog = f.clone();
-        nog.gradients = None;
+        if let Some(v) = nog.as_volume_mut() {
+            v.gradients = None;
+        }
         let without: u64 = nog.bytes_by_section().unwrap().values().sum();
         let mut errs = Vec::new();
         for interp in [Interp::Trilinear, Interp::Taylor, Interp::Tricubic] {
@@ -139,7 +141,7 @@ fn main() {
         series[base + 1].1.push((with as f64, errs[2]));
         println!(
             "| {name} | {} | {without} | {with} | {:.4} | {:.4} | {:.4} |",
-            f.positions.len(),
+            f.probe_count(),
             errs[0],
             errs[1],
             errs[2]

@@ -68,14 +68,17 @@ pub struct FileSummary {
 pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
     let by = file.bytes_by_section()?;
     let bytes = by.values().sum();
-    let meta = BakeRecord::from_json(&file.metadata);
+    let meta = BakeRecord::from_json(file.metadata());
     let part = meta.as_ref().and_then(|m| m.part);
-    let invalid = file.validity.as_ref().map_or(0, |v| {
-        v.iter().filter(|x| x.flags & VALIDITY_INVALID != 0).count()
-    });
-    let kind = match (file.kind, &part) {
+    let invalid = file
+        .probes()
+        .and_then(|p| p.validity.as_ref())
+        .map_or(0, |v| {
+            v.iter().filter(|x| x.flags & VALIDITY_INVALID != 0).count()
+        });
+    let kind = match (file.kind(), &part) {
         (ProbeFileKind::Volume, _) => "volume",
-        (ProbeFileKind::Rig, _) if file.positions.is_empty() => "rigs",
+        (ProbeFileKind::Rig, _) => "rigs",
         (_, Some(_)) => "cloud-part",
         _ => "cloud",
     };
@@ -90,22 +93,26 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
     } else {
         None
     };
+    let cloud = file.as_cloud();
+    let tets = cloud.and_then(|c| c.tetrahedra.as_ref());
+    let blend = cloud.map(|c| &c.blend);
+    // A rigs file has no probes: the basis of its (first) rig, as f32.
+    let (order, codec) = match file.probes() {
+        Some(p) => (p.coefficients.order, p.coefficients.codec.name()),
+        None => (file.rigs().first().map_or(1, |r| r.order), "f32"),
+    };
     Ok(FileSummary {
         kind,
-        probes: file.positions.len(),
-        tetrahedra: file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
-        hull_slivers: file.tetrahedra.as_ref().map_or(0, |t| {
-            crate::delaunay::hull_slivers(&file.positions, &t.vertices, &t.neighbours)
+        probes: file.positions().len(),
+        tetrahedra: tets.map_or(0, |t| t.vertices.len()),
+        hull_slivers: tets.map_or(0, |t| {
+            crate::delaunay::hull_slivers(file.positions(), &t.vertices, &t.neighbours)
         }),
-        unused_probes: file.tetrahedra.as_ref().map_or(0, |t| {
-            crate::delaunay::unused_probes(file.positions.len(), &t.vertices).len()
+        unused_probes: tets.map_or(0, |t| {
+            crate::delaunay::unused_probes(file.positions().len(), &t.vertices).len()
         }),
-        basis: format!(
-            "sh{}/{}",
-            file.coefficients.order,
-            file.coefficients.codec.name()
-        ),
-        l1_evaluation: (file.coefficients.order == 2).then_some(match file.l1_mode {
+        basis: format!("sh{order}/{codec}"),
+        l1_evaluation: (order == 2).then_some(match file.l1_mode() {
             L1Mode::Linear => "linear",
             L1Mode::Zh3Hallucinated => "zh3-hallucinated",
         }),
@@ -113,22 +120,21 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
         bytes,
         bytes_by_section: by.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
         groups: file.group_names().map(str::to_string).collect(),
-        visibility: file.visibility.as_ref().map(
+        visibility: blend.and_then(|b| b.distance_moments.as_ref()).map(
             |v| serde_json::json!({ "resolution": v.resolution, "max_distance": v.max_distance }),
         ),
-        cell_visibility: file.cell_visibility.as_ref().map(|c| {
+        cell_visibility: blend.and_then(|b| b.cell_visibility.as_ref()).map(|c| {
             serde_json::json!({
                 "subdivision": c.subdivision(),
                 "cells": c.tet_count() + c.hull_face_count(),
                 "stored_cells": c.record_count(),
-                "planes": file.cell_planes.as_ref().map_or(0, |p| p.len()),
+                "planes": blend.and_then(|b| b.cell_planes.as_ref()).map_or(0, |p| p.len()),
             })
         }),
-        probe_weights: file
-            .probe_weights
-            .as_ref()
-            .filter(|w| !w.is_empty())
-            .map(|w| {
+        probe_weights: blend
+            .and_then(|b| b.probe_weights.as_ref().map(|w| (b, w)))
+            .filter(|(_, w)| !w.is_empty())
+            .map(|(b, w)| {
                 let mut s = w.clone();
                 s.sort_by(f32::total_cmp);
                 serde_json::json!({
@@ -137,8 +143,8 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
                     "max": s[s.len() - 1],
                     "below_half": s.iter().filter(|&&x| x < 0.5).count(),
                     "above_two": s.iter().filter(|&&x| x > 2.0).count(),
-                    "brightness_exponent": file.brightness_exponent,
-                    "directional_exponent": file.directional_exponent,
+                    "brightness_exponent": b.brightness_exponent,
+                    "directional_exponent": b.directional_exponent,
                 })
             }),
         recipe: meta.as_ref().map(|m| m.recipe.clone()),
@@ -152,7 +158,7 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
             .map(|m| m.scene_hash.clone())
             .filter(|s| !s.is_empty()),
         part,
-        rigs: file.rigs.len(),
+        rigs: file.rigs().len(),
         volume,
     })
 }

@@ -6,8 +6,8 @@
 use glam::Vec3;
 use probekit_runtime::cloud::{face_neighbors, lattice_tets, TetMesh};
 use probekit_runtime::format::{
-    AxisModel, Coefficients, Gradients, ProbeFile, ProbeFileKind, Rig, RigModel, TetSection,
-    VolumeGrid,
+    AxisModel, Coefficients, Gradients, ProbeFile, ProbeSet, Rig, RigModel, TetSection, VolumeFile,
+    VolumeGrid, VolumeStructure,
 };
 
 pub const ORDER: u32 = 3;
@@ -66,7 +66,8 @@ pub fn cloud_file() -> ProbeFile {
             b.rows.map(|r| [r.x, r.y, r.z, -r.dot(b.origin)])
         })
         .collect();
-    let mut f = ProbeFile::cloud(pos.clone(), ORDER, &coeffs(&pos)).unwrap();
+    let mut file = ProbeFile::cloud(pos.clone(), ORDER, &coeffs(&pos)).unwrap();
+    let f = file.as_cloud_mut().unwrap();
     f.tetrahedra = Some(TetSection {
         vertices: tets,
         neighbours,
@@ -92,30 +93,33 @@ pub fn cloud_file() -> ProbeFile {
         samples,
         transitions: Vec::new(),
     }];
-    f.validate().unwrap();
-    f
+    file.validate().unwrap();
+    file
 }
 
 /// The volume file: the same 27 probes as a uniform grid, with the field's
 /// exact gradients.
 pub fn volume_file() -> ProbeFile {
     let pos = grid_positions();
-    let mut f = ProbeFile::new(
-        ProbeFileKind::Volume,
+    let probes = ProbeSet::new(
+        pos.clone(),
         Coefficients::from_f32(ORDER, &coeffs(&pos)).unwrap(),
     );
-    f.grid = Some(VolumeGrid {
-        min: Vec3::ZERO,
-        max: Vec3::splat(2.0),
-        resolution: [3, 3, 3],
-    });
+    let mut f = VolumeFile::new(
+        probes,
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::ZERO,
+            max: Vec3::splat(2.0),
+            resolution: [3, 3, 3],
+        }),
+    );
     f.gradients = Some(Gradients {
         order: ORDER,
         data: (0..pos.len())
             .flat_map(|_| (0..3).flat_map(|a| (0..N).map(move |k| field_gradient(a, k))))
             .collect(),
     });
-    f.positions = pos;
+    let f = ProbeFile::Volume(f);
     f.validate().unwrap();
     f
 }

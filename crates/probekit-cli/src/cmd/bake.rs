@@ -227,12 +227,12 @@ pub fn run(a: &BakeArgs) -> Result<()> {
 /// tetrahedralization merged them ([`probekit::delaunay::unused_probes`]), so
 /// they are stored but no query reaches them.
 fn warn_unused_probes(outname: &str, file: &ProbeFile) {
-    let Some(t) = &file.tetrahedra else {
+    let Some(t) = file.as_cloud().and_then(|c| c.tetrahedra.as_ref()) else {
         return;
     };
-    let unused = probekit::delaunay::unused_probes(file.positions.len(), &t.vertices);
+    let unused = probekit::delaunay::unused_probes(file.positions().len(), &t.vertices);
     if let Some(&first) = unused.first() {
-        let p = file.positions[first as usize];
+        let p = file.positions()[first as usize];
         eprintln!(
             "warning: {outname}: {} probe(s) share a position with another and take no part in \
              the tetrahedra (first: probe {first} at {}, {}, {})",
@@ -253,7 +253,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
         parts.push((p.display().to_string(), load_probes(p)?));
     }
     let head = &parts[0];
-    let record = probekit::recipe::BakeRecord::from_json(&head.1.metadata)
+    let record = probekit::recipe::BakeRecord::from_json(head.1.metadata())
         .ok_or_else(|| anyhow!("{}: not a shard part (no bake record)", head.0))?;
     let kinds = (record.recipe).visibility_bake(&record.recipe.recorded_box(), true);
     let needs_scene = kinds.cell_subdivision.is_some() || kinds.probe_weights.is_some();
@@ -281,7 +281,7 @@ pub fn merge(a: &MergeArgs) -> Result<()> {
     write_probe_file(&a.output, &file).with_context(|| out.clone())?;
     println!(
         "{out}: {} probes from {} parts",
-        file.positions.len(),
+        file.positions().len(),
         parts.len()
     );
     Ok(())

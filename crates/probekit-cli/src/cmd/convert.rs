@@ -5,7 +5,7 @@
 //! convolution of the radiance SH before and after.
 
 use super::util::load_probes;
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use probekit::format::{encode_coefficients, write_probe_file, Codec};
 use std::path::PathBuf;
@@ -33,11 +33,15 @@ pub fn run(a: &ConvertArgs) -> Result<()> {
         .ok_or_else(|| anyhow!("--codec {}: expected f32, f16, l1, zh3 or l2", a.codec))?;
     let mut file = load_probes(&a.probes)?;
     let before_bytes: u64 = file.bytes_by_section()?.values().sum();
-    let order = file.coefficients.order;
-    let before = file.coefficients.to_f32().with_context(|| name.clone())?;
+    let Some(probes) = file.probes() else {
+        bail!("{name}: a rigs file holds no probe coefficients to convert");
+    };
+    let order = probes.coefficients.order;
+    let n0 = probes.coefficients.coeffs_per_probe();
+    let before = probes.coefficients.to_f32().with_context(|| name.clone())?;
     let enc = encode_coefficients(codec, order, &before).with_context(|| name.clone())?;
     let after = enc.to_f32().with_context(|| name.clone())?;
-    let (n0, n1) = (file.coefficients.coeffs_per_probe(), enc.coeffs_per_probe());
+    let n1 = enc.coeffs_per_probe();
     let (mut err, mut norm) = (0.0f64, 0.0f64);
     for (b, c) in before.chunks(n0).zip(after.chunks(n1)) {
         for i in 0..64 {
@@ -49,7 +53,9 @@ pub fn run(a: &ConvertArgs) -> Result<()> {
         }
     }
     let rel = if norm > 0.0 { (err / norm).sqrt() } else { 0.0 };
-    file.coefficients = enc;
+    if let Some(p) = file.probes_mut() {
+        p.coefficients = enc;
+    }
     let out = a.output.display().to_string();
     let after_bytes: u64 = file
         .bytes_by_section()

@@ -173,7 +173,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     let mut out = serde_json::to_value(report)?;
     // The recipe the file was baked with (the defaults for a file that
     // records none), with `--samples` for the bakes below.
-    let mut recipe = BakeRecord::from_json(&file.metadata)
+    let mut recipe = BakeRecord::from_json(file.metadata())
         .map(|r| r.recipe)
         .unwrap_or_default();
     if let Some(n) = a.samples {
@@ -184,7 +184,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         // The same recipe, placed on a grid of the file's probe count:
         // the grid gets the blend data the evaluated file has.
         recipe.placement = Placement::Grid {
-            budget: Some(file.positions.len().max(8)),
+            budget: Some(file.positions().len().max(8)),
             cell: None,
         };
         let ctx = || format!("{scene_name}: --compare grid");

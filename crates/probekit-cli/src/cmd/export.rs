@@ -49,7 +49,8 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let file = ProbeFile::load(&a.volume).with_context(|| name.clone())?;
     // Each option belongs to one output: given with another, an error
     // rather than ignored.
-    let kind = if file.tetrahedra.is_some() {
+    let is_cloud = file.as_cloud().is_some_and(|c| c.tetrahedra.is_some());
+    let kind = if is_cloud {
         "a probe cloud's json/csv"
     } else {
         a.format.as_str()
@@ -63,7 +64,7 @@ pub fn run(a: &ExportArgs) -> Result<()> {
             bail!("{name}: {flag} applies to a volume's --format {applies}, not to {kind} export");
         }
     }
-    if file.tetrahedra.is_some() {
+    if is_cloud {
         return export_cloud(a, &file);
     }
     let v = Volume::from_file(&file).with_context(|| name.clone())?;
@@ -128,12 +129,17 @@ const OUTER_RULE: &str = "a point outside the convex hull of the probes takes th
 /// `x,y,z,c0_r,c0_g,c0_b,...` and one row per probe (radiance SH).
 fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
     let name = a.volume.display().to_string();
-    let coeffs = file.coefficients.to_f32().with_context(|| name.clone())?;
-    let n = file.coefficients.coeffs_per_probe();
+    let Some(cloud_file) = file.as_cloud() else {
+        bail!("{name}: not a probe cloud");
+    };
+    let c = &cloud_file.probes.coefficients;
+    let coeffs = c.to_f32().with_context(|| name.clone())?;
+    let n = c.coeffs_per_probe();
     let out = a.output.display().to_string();
     let text = match a.format.as_str() {
         "json" => {
-            let probes: Vec<serde_json::Value> = file
+            let probes: Vec<serde_json::Value> = cloud_file
+                .probes
                 .positions
                 .iter()
                 .zip(coeffs.chunks(n))
@@ -142,7 +148,7 @@ fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
                     serde_json::json!({ "position": p.to_array(), "sh": sh })
                 })
                 .collect();
-            let tets = file.tetrahedra.as_ref().map(|t| t.vertices.clone());
+            let tets = cloud_file.tetrahedra.as_ref().map(|t| t.vertices.clone());
             let cloud = probekit_runtime::cloud::ProbeCloud::from_file(file)
                 .with_context(|| name.clone())?;
             let mesh = cloud.mesh();
@@ -162,7 +168,7 @@ fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
                 s += &format!(",c{k}_r,c{k}_g,c{k}_b");
             }
             s.push('\n');
-            for (p, c) in file.positions.iter().zip(coeffs.chunks(n)) {
+            for (p, c) in cloud_file.probes.positions.iter().zip(coeffs.chunks(n)) {
                 s += &format!("{},{},{}", p.x, p.y, p.z);
                 for v in c {
                     s += &format!(",{},{},{}", v.x, v.y, v.z);
@@ -174,6 +180,6 @@ fn export_cloud(a: &ExportArgs, file: &ProbeFile) -> Result<()> {
         o => bail!("{name}: --format {o}: a probe cloud exports as json or csv"),
     };
     write_atomic(&a.output, text.as_bytes()).with_context(|| out.clone())?;
-    println!("{out}: {} probes", file.positions.len());
+    println!("{out}: {} probes", file.positions().len());
     Ok(())
 }

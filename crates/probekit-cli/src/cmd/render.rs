@@ -129,7 +129,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     blend.brightness_exponent = exponent("--brightness-weight", a.brightness_weight)?;
     blend.directional_exponent = exponent("--directional-brightness", a.directional_brightness)?;
     let file = load_probes(&a.probes)?;
-    if file.kind == ProbeFileKind::Volume {
+    if file.kind() == ProbeFileKind::Volume {
         let flag = (a.brightness_weight.map(|_| "--brightness-weight"))
             .or(a.directional_brightness.map(|_| "--directional-brightness"));
         if let Some(flag) = flag {

@@ -103,7 +103,8 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
             let l = load_lights(s)?;
             if let (Some(p), Some(file), Some(hash)) = (&a.probes, &file, &l.lighting_hash) {
                 let name = p.display().to_string();
-                if let Err(e) = probekit::format::check_scene_hash(&file.metadata, &name, hash, s) {
+                if let Err(e) = probekit::format::check_scene_hash(file.metadata(), &name, hash, s)
+                {
                     if !a.allow_other_scene {
                         return Err(e.into());
                     }
@@ -122,7 +123,7 @@ pub fn run(a: RigArgs) -> anyhow::Result<()> {
         (Some(p), Some(file)) => {
             let options = QueryOptions::parse(a.interp.as_deref(), &[], &[])?;
             let options = options
-                .load_options(file.kind)
+                .load_options(file.kind())
                 .with_context(|| p.display().to_string())?;
             let source = ProbeSource::from_file(file, options);
             Some(source.map_err(|e| anyhow!("{}: {e}", p.display()))?)

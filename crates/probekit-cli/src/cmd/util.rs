@@ -93,7 +93,7 @@ pub fn scene_for_file(
     let file_name = file_path.display().to_string();
     let name = match given {
         Some(g) => g.to_string(),
-        None => probekit::format::recorded_scene(&file.metadata).ok_or_else(|| {
+        None => probekit::format::recorded_scene(file.metadata()).ok_or_else(|| {
             anyhow!("{file_name}: the file records no scene it was baked from; give --scene")
         })?,
     };
@@ -104,7 +104,7 @@ pub fn scene_for_file(
     for w in &scene.warnings {
         eprintln!("warning: {name}: {w}");
     }
-    if let Err(e) = probekit::format::check_scene(&file.metadata, &file_name, &scene, &name) {
+    if let Err(e) = probekit::format::check_scene(file.metadata(), &file_name, &scene, &name) {
         if !allow_other {
             return Err(e.into());
         }

@@ -125,14 +125,15 @@ pub fn default_bake(plain: bool) -> ProbeFile {
             probe_sh(p, level, &mut rng)
         })
         .collect();
-    let mut f = ProbeFile::cloud(positions.clone(), 3, &coeffs).unwrap();
+    let mut file = ProbeFile::cloud(positions.clone(), 3, &coeffs).unwrap();
+    let f = file.as_cloud_mut().unwrap();
     f.tetrahedra = Some(TetSection {
         vertices: tets.clone(),
         neighbours,
         barycentric,
     });
     if plain {
-        return f;
+        return file;
     }
     // Distance moments: each texel's distance to the probe's room walls.
     let res = MOMENTS;
@@ -148,7 +149,7 @@ pub fn default_bake(plain: bool) -> ProbeFile {
             data.push(half((mu * mu * 1.02).min(1.0)));
         }
     }
-    f.visibility = Some(DistanceMoments {
+    f.blend.distance_moments = Some(DistanceMoments {
         resolution: res,
         max_distance: MAX_DISTANCE,
         data,
@@ -189,15 +190,16 @@ pub fn default_bake(plain: bool) -> ProbeFile {
         cell(&mesh.hull_face_probes(h).unwrap(), &lat3, &mut bits);
     }
     let cells = CellVisibility::new(k, tets.len(), mesh.hull_face_count(), bits).unwrap();
-    f.cell_visibility = Some(cells);
-    f.cell_planes = Some(CellPlanes::new(tets.len(), planes.0, planes.1).unwrap());
+    let b = &mut f.blend;
+    b.cell_visibility = Some(cells);
+    b.cell_planes = Some(CellPlanes::new(tets.len(), planes.0, planes.1).unwrap());
     // Fitted probe weights, and the exponents they were fitted with.
-    f.probe_weights = Some(
+    b.probe_weights = Some(
         (0..positions.len())
             .map(|_| 0.5 + 1.5 * rng.next_f32())
             .collect(),
     );
-    f.brightness_exponent = 1.0;
-    f.directional_exponent = 0.5;
-    f
+    b.brightness_exponent = 1.0;
+    b.directional_exponent = 0.5;
+    file
 }

@@ -45,7 +45,7 @@
 //!
 //! A cell whose every bit is 1 (*clear*: each corner sees the whole cell)
 //! is not stored: [`CellVisibility`] keeps a mask of the cells with a
-//! record and those records only (the file's `CVSP` section, format 1.5;
+//! record and those records only (the file's `CVSP` section;
 //! `docs/file-format.md`).
 
 mod lattice;

@@ -162,8 +162,13 @@ impl ProbeCloud {
     /// for (`PWGT`).
     pub fn from_file(file: &ProbeFile) -> Result<Self, ProbeCloudError> {
         let mesh = Self::mesh_from_file(file)?;
-        let mut cloud = Self::new(mesh, file.coefficients.order, file.coefficients.to_f32()?)?;
-        if let Some(m) = &file.visibility {
+        let Some(file) = file.as_cloud() else {
+            return Err(ProbeCloudError::NoTetrahedra);
+        };
+        let c = &file.probes.coefficients;
+        let mut cloud = Self::new(mesh, c.order, c.to_f32()?)?;
+        let b = &file.blend;
+        if let Some(m) = &b.distance_moments {
             let maps = VisibilityMaps::from_moments(m).ok_or(FormatError::InvalidValue {
                 id: crate::format::SectionId::VISIBILITY,
                 element: 0,
@@ -171,16 +176,16 @@ impl ProbeCloud {
             })?;
             cloud.set_visibility_maps(Some(maps))?;
         }
-        if let Some(c) = &file.cell_visibility {
+        if let Some(c) = &b.cell_visibility {
             cloud.set_cell_visibility_bits(Some(c.clone()))?;
         }
-        if let Some(p) = &file.cell_planes {
+        if let Some(p) = &b.cell_planes {
             cloud.set_cell_planes(Some(p.clone()))?;
         }
-        if let Some(w) = &file.probe_weights {
+        if let Some(w) = &b.probe_weights {
             cloud.set_probe_weights(Some(w.clone()))?;
-            cloud.set_brightness_weighting(file.brightness_exponent)?;
-            cloud.set_directional_brightness(file.directional_exponent)?;
+            cloud.set_brightness_weighting(b.brightness_exponent)?;
+            cloud.set_directional_brightness(b.directional_exponent)?;
         }
         Ok(cloud)
     }
@@ -188,12 +193,15 @@ impl ProbeCloud {
     /// The tetrahedral mesh a cloud file stores: its positions and its `TETS`
     /// vertices and neighbours, validated by [`TetMesh::new`].
     pub fn mesh_from_file(file: &ProbeFile) -> Result<TetMesh, ProbeCloudError> {
+        let Some(file) = file.as_cloud() else {
+            return Err(ProbeCloudError::NoTetrahedra);
+        };
         let tets = file
             .tetrahedra
             .as_ref()
             .ok_or(ProbeCloudError::NoTetrahedra)?;
         Ok(TetMesh::new(
-            file.positions.clone(),
+            file.probes.positions.clone(),
             tets.vertices.clone(),
             tets.neighbours.clone(),
         )?)

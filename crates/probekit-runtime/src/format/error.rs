@@ -23,6 +23,20 @@ pub enum FormatError {
     /// The first 8 bytes are not `PROBEKIT`.
     #[error("not a .probes file (bad magic bytes)")]
     BadMagic,
+    /// A file of an older major version (every 1.x file): written by an
+    /// older probekit, whose files this reader does not read. Bake the
+    /// scene again to get a file of the current format.
+    #[error(
+        "format version {major}.{minor}: the file was written by an older probekit and must be baked again (this reader reads {supported}.x)"
+    )]
+    OlderVersion {
+        /// The file's major version.
+        major: u16,
+        /// The file's minor version.
+        minor: u16,
+        /// The major version this reader reads.
+        supported: u16,
+    },
     /// A major version this reader does not know (newer, or 0).
     #[error("unsupported format version {major}.{minor} (this reader reads {supported}.x)")]
     UnsupportedVersion {
@@ -94,6 +108,15 @@ pub enum FormatError {
     /// version or older (unknown ids are skipped only in newer-minor files).
     #[error("unknown section {0}")]
     UnknownSection(SectionId),
+    /// A section of the format in a file of a kind that does not hold it
+    /// (a grid in a cloud, tetrahedra in a volume, probes in a rigs file).
+    #[error("section {id} does not belong in a {kind} file")]
+    MisplacedSection {
+        /// The section.
+        id: SectionId,
+        /// The file's kind (`"cloud"`, `"volume"` or `"rig"`).
+        kind: &'static str,
+    },
     /// A section the file's kind needs is absent.
     #[error("required section {0} is missing")]
     MissingSection(SectionId),

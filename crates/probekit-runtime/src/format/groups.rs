@@ -1,4 +1,4 @@
-//! Light groups (`LGRP`, format 1.1) and run-time relighting.
+//! Light groups (`LGRP`) and run-time relighting.
 //!
 //! A bake with `--groups` stores, besides the total radiance SH `T` of every
 //! probe (`COEF`), one radiance SH `G_g` per light group `g` (a `group` key on
@@ -35,12 +35,17 @@ pub struct LightGroup {
 impl ProbeFile {
     /// The light group named `name`, if the file holds one.
     pub fn group(&self, name: &str) -> Option<&LightGroup> {
-        self.groups.iter().find(|g| g.name == name)
+        self.groups().iter().find(|g| g.name == name)
+    }
+
+    /// The stored light groups, in file order (empty for rigs).
+    pub fn groups(&self) -> &[LightGroup] {
+        self.probes().map_or(&[], |p| &p.groups)
     }
 
     /// The names of the stored light groups, in file order.
     pub fn group_names(&self) -> impl Iterator<Item = &str> {
-        self.groups.iter().map(|g| g.name.as_str())
+        self.groups().iter().map(|g| g.name.as_str())
     }
 
     /// The file's coefficients relit: each `(name, rgb)` scales light group
@@ -53,7 +58,7 @@ impl ProbeFile {
     pub fn relit(&self, scales: &[(&str, Vec3)]) -> Result<Coefficients, FormatError> {
         let r = Relighter::new(self)?;
         let s = r.scales_for(scales)?;
-        let mut out = vec![Vec3::ZERO; self.coefficients.len() * r.coeffs_per_probe()];
+        let mut out = vec![Vec3::ZERO; self.probe_count() * r.coeffs_per_probe()];
         r.relight_into(&s, &mut out)?;
         Coefficients::from_f32(r.order, &out)
     }
@@ -72,7 +77,12 @@ pub struct Relighter {
 
 impl Relighter {
     /// Decodes the file's coefficients and light groups (to `f32`).
+    /// Rigs have no probes to relight: [`FormatError::MissingSection`]
+    /// naming `COEF`.
     pub fn new(file: &ProbeFile) -> Result<Self, FormatError> {
+        let file = file
+            .probes()
+            .ok_or(FormatError::MissingSection(SectionId::COEFFICIENTS))?;
         let order = file.coefficients.order;
         let total = file.coefficients.to_f32()?;
         let mut names = Vec::with_capacity(file.groups.len());

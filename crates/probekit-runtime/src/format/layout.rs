@@ -7,45 +7,16 @@ use core::fmt;
 
 /// The first 8 bytes of every `.probes` file.
 pub const MAGIC: [u8; 8] = *b"PROBEKIT";
-/// Major version written and read. A file with a larger major is refused.
-pub const VERSION_MAJOR: u16 = 1;
-/// Newest minor version this reader knows (1.1 added `LGRP`, light
-/// groups; 1.2 added `OCTC`, the compact octree; 1.3 added `VISM`, per-probe
-/// distance moments for visibility-aware blending; 1.4 added `CVIS`, per-cell
-/// lattice visibility; 1.5 added `CVSP`, the same bits stored sparse; 1.6
-/// added `PWGT`, fitted per-probe blend weights; 1.7 added `CPLN`, occluder
-/// planes of cells; 1.8 stores the brightness exponent the weights were
-/// fitted with in `PWGT`'s header word `w1`, [`MINOR_BRIGHTNESS`]; 1.9 the
-/// directional brightness exponent in `w2`, [`MINOR_DIRECTIONAL`]; 1.10
-/// the intended evaluation of L1 coefficients in the header's flags,
-/// [`MINOR_L1_MODE`]; 1.11 a rig's bounding radius in its record header,
-/// [`MINOR_RIG_RADIUS`]). Files with a larger minor load; their unknown
-/// sections are skipped. The writer writes the lowest minor that holds the file's
-/// sections ([`minor_for_sections`]): 0 without `LGRP`, so a 1.0 reader
-/// reads every file that does not use 1.1 additions, byte for byte as before.
-pub const VERSION_MINOR: u16 = 11;
-
-/// Minor version that stores a rig's bounding radius
-/// ([`crate::format::Rig::bounding_radius`]) in the record header's first
-/// reserved word (a reader of 1.10 or older ignores it and measures light
-/// distances from the box's circumscribed sphere).
-pub const MINOR_RIG_RADIUS: u16 = 11;
-
-/// Minor version that stores a non-zero brightness exponent in `PWGT`'s
-/// header word `w1` (a reader of 1.6 or 1.7 ignores the word and blends
-/// without it).
-pub const MINOR_BRIGHTNESS: u16 = 8;
-
-/// Minor version that stores a non-zero directional brightness exponent in
-/// `PWGT`'s header word `w2` (a reader of 1.6 to 1.8 ignores the word and
-/// blends without it).
-pub const MINOR_DIRECTIONAL: u16 = 9;
-
-/// Minor version that stores a non-linear intended evaluation of L1
-/// coefficients ([`crate::L1Mode`]) in the header's flags,
-/// [`FLAGS_L1_MODE`] (a reader of 1.0 to 1.9 ignores the flags and
-/// evaluates the L1 coefficients linearly).
-pub const MINOR_L1_MODE: u16 = 10;
+/// Major version written and read. A file with another major is refused:
+/// an older one ([`FormatError::OlderVersion`](super::FormatError::OlderVersion),
+/// every 1.x file: bake it again) or a newer one
+/// ([`FormatError::UnsupportedVersion`](super::FormatError::UnsupportedVersion)).
+pub const VERSION_MAJOR: u16 = 2;
+/// Minor version written. A reader of 2.0 loads files of a larger minor of
+/// the same major and skips their unknown sections; everything this
+/// version defines is in every 2.0 file's vocabulary (no feature needs a
+/// minor of its own).
+pub const VERSION_MINOR: u16 = 0;
 
 /// Bits of the header's flags word holding the intended evaluation of L1
 /// (order-2) coefficients: 0 linear, 1 hallucinated ZH3; 2 and 3 are
@@ -54,13 +25,9 @@ pub const MINOR_L1_MODE: u16 = 10;
 /// (written 0, ignored).
 pub const FLAGS_L1_MODE: u32 = 0b11;
 
-/// Minor version that introduced octree forests (root grids other than
-/// 1 × 1 × 1 in the `OCTR`/`OCTC` header words `w2`, `w3`).
-pub const MINOR_FOREST: u16 = 3;
-
-/// Octree root grid `[rx, ry, rz]` as the `OCTR`/`OCTC` header words
-/// `w2 = (rx − 1) | (ry − 1) << 16`, `w3 = rz − 1` (so the zeros of files
-/// before 1.3 read as one root). `None` if an axis is outside `1..=65536`.
+/// Octree root grid `[rx, ry, rz]` as the `OCTC` header words
+/// `w2 = (rx − 1) | (ry − 1) << 16`, `w3 = rz − 1` (so zeros read as one
+/// root). `None` if an axis is outside `1..=65536`.
 pub fn pack_roots(r: [u32; 3]) -> Option<[u32; 2]> {
     if r.iter().any(|&v| v == 0 || v > 65536) {
         return None;
@@ -71,30 +38,6 @@ pub fn pack_roots(r: [u32; 3]) -> Option<[u32; 2]> {
 /// Inverse of [`pack_roots`]; `None` if `w3 ≥ 65536`.
 pub fn unpack_roots(w2: u32, w3: u32) -> Option<[u32; 3]> {
     (w3 < 65536).then(|| [(w2 & 0xffff) + 1, (w2 >> 16) + 1, w3 + 1])
-}
-
-/// The lowest minor version whose section set includes every id in `ids`:
-/// 7 if `CPLN` ([`SectionId::CELL_PLANES`]) is present, else
-/// 6 if `PWGT` ([`SectionId::PROBE_WEIGHTS`]) is present, else
-/// 5 if `CVSP` ([`SectionId::CELL_VISIBILITY_SPARSE`]) is present, else
-/// 4 if `CVIS` ([`SectionId::CELL_VISIBILITY`]) is present, else
-/// 3 if `VISM` ([`SectionId::VISIBILITY`]) is present, else 2 if `OCTC`
-/// ([`SectionId::OCTREE_COMPACT`]) is, else 1 if `LGRP`
-/// ([`SectionId::LIGHT_GROUPS`]) is, else 0.
-pub fn minor_for_sections(ids: impl IntoIterator<Item = SectionId>) -> u16 {
-    ids.into_iter()
-        .map(|id| match id {
-            SectionId::CELL_PLANES => 7,
-            SectionId::PROBE_WEIGHTS => 6,
-            SectionId::CELL_VISIBILITY_SPARSE => 5,
-            SectionId::CELL_VISIBILITY => 4,
-            SectionId::VISIBILITY => 3,
-            SectionId::OCTREE_COMPACT => 2,
-            SectionId::LIGHT_GROUPS => 1,
-            _ => 0,
-        })
-        .max()
-        .unwrap_or(0)
 }
 /// Bytes in the fixed file header.
 pub const HEADER_LEN: usize = 48;
@@ -107,11 +50,9 @@ pub const ENTRY_LEN: usize = 32;
 pub const ALIGN: usize = 16;
 /// Bytes in the fixed header that starts every section.
 pub const SECTION_HEADER_LEN: usize = 16;
-/// Bytes in one octree node record.
-pub const OCTREE_NODE_LEN: usize = 40;
 /// Bytes in one rig record header.
 pub const RIG_HEADER_LEN: usize = 80;
-/// Bytes in one light-group record header (`LGRP`, format 1.1).
+/// Bytes in one light-group record header (`LGRP`).
 pub const GROUP_HEADER_LEN: usize = 16;
 /// "No element": hull neighbour, leaf node's children, face without a tetrahedron.
 pub const NONE: u32 = u32::MAX;
@@ -145,11 +86,9 @@ impl SectionId {
     pub const TETRAHEDRA: Self = Self::from_fourcc(*b"TETS");
     /// Outer cells: the hull-face table.
     pub const OUTER: Self = Self::from_fourcc(*b"OUTR");
-    /// Octree nodes and their sample lists (adaptive volumes).
-    pub const OCTREE: Self = Self::from_fourcc(*b"OCTR");
-    /// The same octree compactly: one child bit per node, corners found by
-    /// position (format 1.2; the writer's choice for regular octrees).
-    pub const OCTREE_COMPACT: Self = Self::from_fourcc(*b"OCTC");
+    /// The octree of an adaptive volume, compactly: one child bit per node,
+    /// leaf corners found by position among the probes.
+    pub const OCTREE: Self = Self::from_fourcc(*b"OCTC");
     /// Uniform volume grid: box and resolution.
     pub const GRID: Self = Self::from_fourcc(*b"GRID");
     /// Per-probe SH gradients.
@@ -158,47 +97,43 @@ impl SectionId {
     pub const RIGS: Self = Self::from_fourcc(*b"RIGS");
     /// Bake metadata (UTF-8 JSON).
     pub const METADATA: Self = Self::from_fourcc(*b"META");
-    /// Per-light-group radiance SH, for run-time relighting (format 1.1).
+    /// Per-light-group radiance SH, for run-time relighting.
     pub const LIGHT_GROUPS: Self = Self::from_fourcc(*b"LGRP");
     /// Per-probe distance moments on an octahedral map, for
-    /// visibility-aware blending of a probe cloud (format 1.3).
+    /// visibility-aware blending of a probe cloud.
     pub const VISIBILITY: Self = Self::from_fourcc(*b"VISM");
-    /// Per-cell lattice visibility bits of a probe cloud (format 1.4;
-    /// [`crate::cloud::cell_visibility`]).
-    pub const CELL_VISIBILITY: Self = Self::from_fourcc(*b"CVIS");
-    /// The same bits stored sparse: a mask of the cells with a record, then
-    /// their records; clear cells (every probe sees every lattice point)
-    /// have none (format 1.5; [`crate::cloud::CellVisibility`]). The writer
-    /// writes this form; a file holds at most one of `CVIS` and `CVSP`.
-    pub const CELL_VISIBILITY_SPARSE: Self = Self::from_fourcc(*b"CVSP");
+    /// Per-cell lattice visibility bits of a probe cloud, stored sparse: a
+    /// mask of the cells with a record, then their records; clear cells
+    /// (every probe sees every lattice point) have none
+    /// ([`crate::cloud::CellVisibility`]).
+    pub const CELL_VISIBILITY: Self = Self::from_fourcc(*b"CVSP");
     /// Fitted per-probe blend weights of a cloud, one `f32` per probe
-    /// (format 1.6; [`crate::cloud::ProbeCloud::probe_weights`]).
+    /// ([`crate::cloud::ProbeCloud::probe_weights`]), with the brightness
+    /// exponents the cloud blends with in the section header.
     pub const PROBE_WEIGHTS: Self = Self::from_fourcc(*b"PWGT");
     /// Occluder planes of some tetrahedra of a cloud, refining its cell
     /// visibility where one flat wall cuts the cell: the mesh's tetrahedron
     /// count, the increasing indices of the tetrahedra with a plane, then
-    /// one plane `[n_x, n_y, n_z, d]` each (format 1.7;
-    /// [`crate::cloud::CellPlanes`]). Only with `CVSP`/`CVIS`.
+    /// one plane `[n_x, n_y, n_z, d]` each
+    /// ([`crate::cloud::CellPlanes`]). Only with `CVSP`.
     pub const CELL_PLANES: Self = Self::from_fourcc(*b"CPLN");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 17] = [
+    pub const KNOWN: [Self; 15] = [
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
         Self::TETRAHEDRA,
         Self::OUTER,
         Self::OCTREE,
-        Self::OCTREE_COMPACT,
         Self::GRID,
         Self::GRADIENTS,
         Self::RIGS,
         Self::LIGHT_GROUPS,
         Self::VISIBILITY,
         Self::CELL_VISIBILITY,
-        Self::CELL_VISIBILITY_SPARSE,
         Self::PROBE_WEIGHTS,
         Self::CELL_PLANES,
         Self::METADATA,
@@ -224,7 +159,6 @@ impl SectionId {
             Self::TETRAHEDRA => "tetrahedra",
             Self::OUTER => "outer_cells",
             Self::OCTREE => "octree",
-            Self::OCTREE_COMPACT => "octree",
             Self::GRID => "grid",
             Self::GRADIENTS => "gradients",
             Self::RIGS => "rigs",
@@ -232,7 +166,6 @@ impl SectionId {
             Self::LIGHT_GROUPS => "light_groups",
             Self::VISIBILITY => "visibility",
             Self::CELL_VISIBILITY => "cell_visibility",
-            Self::CELL_VISIBILITY_SPARSE => "cell_visibility",
             Self::PROBE_WEIGHTS => "probe_weights",
             Self::CELL_PLANES => "cell_planes",
             Self::HEADER => "header",
@@ -274,7 +207,7 @@ pub mod header {
     /// `u32` file kind (0 cloud, 1 volume, 2 rig).
     pub const KIND: usize = 12;
     /// `u32` flags: bits 0–1 the intended evaluation of L1 coefficients
-    /// ([`super::FLAGS_L1_MODE`], format 1.10); the other bits are not
+    /// ([`super::FLAGS_L1_MODE`]); the other bits are not
     /// defined (written 0, ignored).
     pub const FLAGS: usize = 16;
     /// `u32` number of section-table entries.

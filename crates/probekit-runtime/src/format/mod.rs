@@ -18,6 +18,7 @@
 //! adds codec encoding and atomic file writing.
 
 mod codec;
+mod contents;
 mod crc;
 mod error;
 mod groups;
@@ -33,6 +34,9 @@ mod visibility;
 mod write;
 
 pub use codec::{Codec, Coefficients};
+pub use contents::{
+    CloudBlend, CloudFile, ProbeFile, ProbeSet, RigFile, VolumeFile, VolumeStructure,
+};
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
@@ -53,21 +57,20 @@ pub use read::{file_bytes_by_section, read_sections, FileHeader, RawSection};
 #[cfg(feature = "write")]
 pub use write::{assemble_file, SectionBuilder};
 
-use crate::cloud::{CellPlanes, CellVisibility};
 use crate::prelude::*;
 use glam::Vec3;
 #[cfg(feature = "std")]
 use std::path::Path;
 
-/// What a file holds; decides which sections are required.
+/// What a file holds; decides which sections it must and may hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum ProbeFileKind {
     /// A probe cloud (positions, coefficients, usually tetrahedra). Id 0.
     Cloud,
-    /// An irradiance volume: uniform (`GRID`) or adaptive (`OCTR`). Id 1.
+    /// An irradiance volume: uniform (`GRID`) or adaptive (`OCTC`). Id 1.
     Volume,
-    /// Irradiance rigs (`RIGS`), possibly without probes. Id 2.
+    /// Irradiance rigs (`RIGS`) without probes. Id 2.
     Rig,
 }
 
@@ -103,8 +106,7 @@ impl ProbeFileKind {
 
 /// How the coefficients of an L1 file (SH order 2: the 13-byte `l1` codec,
 /// or `f32`/`f16` at order 2) are turned into irradiance. The file states
-/// its intent (the header's flags, format 1.10; older files read
-/// [`L1Mode::Linear`]), and [`crate::LoadOptions::l1_mode`] can override it.
+/// its intent (the header's flags), and [`crate::LoadOptions::l1_mode`] can override it.
 /// Files of any other order ignore it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum L1Mode {
@@ -211,7 +213,7 @@ pub struct OctreeNode {
 /// tree (an 8 × 3 × 4 m room gives cells 2.7× longer in x than in y); a
 /// grid of near-cubic roots keeps cells near-cubic at every depth, which is
 /// what interpolation error and Tatarchuk's cell-size heuristics assume
-/// (format 1.3; see `docs/file-format.md`).
+/// (see `docs/file-format.md`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Octree {
     /// Nodes; nodes `0..roots[0]·roots[1]·roots[2]` are the roots (depth 0),
@@ -221,7 +223,7 @@ pub struct Octree {
     /// Concatenated per-node sample lists: probe indices.
     pub samples: Vec<u32>,
     /// Root cells per axis (x, y, z), each ≥ 1; `[1, 1, 1]` is a single
-    /// octree (every file before format 1.3).
+    /// octree.
     pub roots: [u32; 3],
 }
 
@@ -243,7 +245,7 @@ impl Octree {
             .fold(1usize, |a, &r| a.saturating_mul(r as usize))
     }
 
-    /// Whether this is a forest (more than one root), which needs format 1.3.
+    /// Whether this is a forest (more than one root).
     pub fn is_forest(&self) -> bool {
         self.roots != [1, 1, 1]
     }
@@ -349,7 +351,7 @@ pub struct Rig {
     /// Radius of the sphere, centred on the box centre, that holds every
     /// vertex of the mesh (metres): the sphere the rig's transition table
     /// measures light distances from (`probekit::rig::split`). 0 when
-    /// unknown (files before format 1.11): readers then use the box's
+    /// unknown: readers then use the box's
     /// circumscribed sphere, half its diagonal.
     pub bounding_radius: f32,
     /// Sample points on the mesh surface (mesh coordinates).
@@ -361,113 +363,7 @@ pub struct Rig {
     pub transitions: Vec<Transition>,
 }
 
-/// Everything a `.probes` file holds, decoded and validated.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ProbeFile {
-    /// Cloud, volume or rig.
-    pub kind: ProbeFileKind,
-    /// Probe (or volume sample) positions, metres, world space.
-    pub positions: Vec<Vec3>,
-    /// Radiance SH per probe, one per position.
-    pub coefficients: Coefficients,
-    /// Capture validity per probe.
-    pub validity: Option<Vec<Validity>>,
-    /// Tetrahedralization of a cloud.
-    pub tetrahedra: Option<TetSection>,
-    /// Outer cells (hull faces) of a cloud.
-    pub outer: Option<OuterCells>,
-    /// Octree of an adaptive volume.
-    pub octree: Option<Octree>,
-    /// Grid of a uniform volume.
-    pub grid: Option<VolumeGrid>,
-    /// SH gradients per probe.
-    pub gradients: Option<Gradients>,
-    /// Irradiance rigs (empty: no `RIGS` section).
-    pub rigs: Vec<Rig>,
-    /// Radiance SH per light group, for run-time relighting (empty: no
-    /// `LGRP` section; format 1.1). Each holds one entry per probe, in the
-    /// order of `positions`, at the order of `coefficients`; names unique.
-    /// See [`ProbeFile::relit`] and [`Relighter`].
-    pub groups: Vec<LightGroup>,
-    /// Per-probe distance moments for visibility-aware blending (`VISM`,
-    /// format 1.3; `None`: no section, clouds blend without visibility).
-    pub visibility: Option<DistanceMoments>,
-    /// Per-cell lattice visibility bits of a cloud's tetrahedra and hull
-    /// faces (`CVIS`, format 1.4; `None`: no section).
-    pub cell_visibility: Option<CellVisibility>,
-    /// Fitted per-probe blend weights of a cloud (`PWGT`, format 1.6; one
-    /// per probe, each in [`crate::cloud::PROBE_WEIGHT_RANGE`]; `None`: no
-    /// section, every probe weighs 1). See
-    /// [`crate::cloud::ProbeCloud::probe_weights`].
-    pub probe_weights: Option<Vec<f32>>,
-    /// Brightness exponent `α` the probe weights were fitted with and the
-    /// cloud blends with ([`crate::cloud::ProbeCloud::brightness_weighting`]),
-    /// stored in `PWGT`'s header word `w1` as `f32` bits (format 1.8; a
-    /// 1.6/1.7 file's zero reads as 0, the plain blend). In
-    /// `0..=`[`crate::cloud::MAX_BRIGHTNESS_EXPONENT`]; non-zero only with
-    /// `probe_weights`.
-    pub brightness_exponent: f32,
-    /// Directional brightness exponent `γ` the cloud blends with on top of
-    /// the probe weights
-    /// ([`crate::cloud::ProbeCloud::directional_brightness`]), stored in
-    /// `PWGT`'s header word `w2` as `f32` bits (format 1.9,
-    /// [`layout::MINOR_DIRECTIONAL`]; older files read 0, no directional
-    /// blend). Same range and rule as `brightness_exponent`.
-    pub directional_exponent: f32,
-    /// Occluder planes of a cloud's tetrahedra (`CPLN`, format 1.7), a
-    /// refinement of `cell_visibility` for cells one flat wall cuts; only
-    /// with `cell_visibility`. See [`crate::cloud::CellPlanes`].
-    pub cell_planes: Option<CellPlanes>,
-    /// How the coefficients are meant to be evaluated when they are L1
-    /// (order 2): stored in the header's flags (format 1.10,
-    /// [`layout::MINOR_L1_MODE`]; older files read [`L1Mode::Linear`]).
-    /// Anything but `Linear` needs order-2 coefficients.
-    pub l1_mode: L1Mode,
-    /// Bake metadata, UTF-8 (JSON by convention: scene hash, settings,
-    /// placement, tool version; never a wall-clock time).
-    pub metadata: String,
-}
-
 impl ProbeFile {
-    /// A cloud of `positions` with lossless `f32` coefficients and nothing else.
-    pub fn cloud(positions: Vec<Vec3>, order: u32, coeffs: &[Vec3]) -> Result<Self, FormatError> {
-        Ok(Self {
-            positions,
-            ..Self::new(ProbeFileKind::Cloud, Coefficients::from_f32(order, coeffs)?)
-        })
-    }
-
-    /// A file of `kind` holding `coefficients` and nothing else: no positions,
-    /// no optional sections, empty metadata. Fill the fields that apply.
-    pub fn new(kind: ProbeFileKind, coefficients: Coefficients) -> Self {
-        Self {
-            kind,
-            positions: Vec::new(),
-            coefficients,
-            validity: None,
-            tetrahedra: None,
-            outer: None,
-            octree: None,
-            grid: None,
-            gradients: None,
-            rigs: Vec::new(),
-            groups: Vec::new(),
-            visibility: None,
-            cell_visibility: None,
-            probe_weights: None,
-            brightness_exponent: 0.0,
-            directional_exponent: 0.0,
-            cell_planes: None,
-            l1_mode: L1Mode::Linear,
-            metadata: String::new(),
-        }
-    }
-
-    /// Number of probes (volume samples).
-    pub fn probe_count(&self) -> usize {
-        self.positions.len()
-    }
-
     /// Parses and validates a whole file. Never panics; every problem is a
     /// [`FormatError`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FormatError> {

@@ -1,22 +1,22 @@
-//! The compact octree section `OCTC` (format 1.2; forests 1.3): an adaptive
+//! The octree section `OCTC`: an adaptive
 //! volume's octree as one bit per node, its corners found by position.
 //!
-//! The explicit `OCTR` section spends 40 bytes per node plus 8 `u32` corner
+//! An explicit node list would spend 40 bytes per node plus 8 `u32` corner
 //! indices per leaf (~72 bytes per leaf, a third of an adaptive volume file).
-//! The octrees the builder writes are regular: breadth-first node order with
+//! The octrees the builder makes are regular: breadth-first node order with
 //! the 8 children of a node consecutive, every node box an octant of its
 //! parent on a lattice of `roots·2^max_depth` cells per axis over the box,
 //! leaves listing exactly their 8 corner samples, and each corner sample at
 //! the lattice position `min + q·step` ([`lattice_pos`], [`lattice_step`]:
-//! computed in `f32` exactly as the builder does, by calling them). Such a tree is fully described by the
-//! root box, `max_depth` and one "has children" bit per node; the reader
-//! rebuilds the boxes and finds each leaf corner by its position's bits among
-//! the probe positions. The writer uses `OCTC` only when decoding its
-//! encoding gives back the very same [`Octree`] (else it writes `OCTR`), so
-//! the choice never changes what a reader sees.
+//! computed in `f32` exactly as the builder does, by calling them). Such a
+//! tree is fully described by the root box, `max_depth` and one "has
+//! children" bit per node; the reader rebuilds the boxes and finds each leaf
+//! corner by its position's bits among the probe positions. The writer
+//! refuses an octree whose encoding does not decode to the very same
+//! [`Octree`], so what a reader sees is always what was written.
 //!
 //! Layout (`docs/file-format.md`, *`OCTC`*): header `w0` node count `N`,
-//! `w1` max depth `D ≤ 20`, `w2`/`w3` the root grid (format 1.3,
+//! `w1` max depth `D ≤ 20`, `w2`/`w3` the root grid (
 //! [`super::layout::pack_roots`]); arrays: `f32[6]` box min and max;
 //! `ceil(N/8)` bytes of child bits, bit `i % 8` of byte `i / 8` set when
 //! node `i` has children.
@@ -55,7 +55,7 @@ pub(crate) struct Compact {
 
 fn invalid(element: usize, reason: &'static str) -> FormatError {
     FormatError::InvalidValue {
-        id: SectionId::OCTREE_COMPACT,
+        id: SectionId::OCTREE,
         element: element as u64,
         reason,
     }
@@ -63,7 +63,7 @@ fn invalid(element: usize, reason: &'static str) -> FormatError {
 
 fn topology(element: usize, reason: &'static str) -> FormatError {
     FormatError::InvalidTopology {
-        id: SectionId::OCTREE_COMPACT,
+        id: SectionId::OCTREE,
         element: element as u64,
         reason,
     }

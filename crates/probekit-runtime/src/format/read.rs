@@ -14,18 +14,18 @@ use super::layout::{
     self, entry, header, pad16, SectionId, ALIGN, ENTRY_LEN, HEADER_LEN, SECTION_HEADER_LEN,
     VERSION_MAJOR, VERSION_MINOR,
 };
-use super::{Coefficients, ProbeFile, ProbeFileKind};
+use super::{ProbeFile, ProbeFileKind};
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use bytemuck::Pod;
 use cloud::{
-    build_cell_planes, parse_cell_planes, parse_cell_visibility, parse_cell_visibility_sparse,
-    parse_outer, parse_probe_weights, parse_tetrahedra, parse_visibility,
+    build_cell_planes, parse_cell_planes, parse_cell_visibility, parse_outer, parse_probe_weights,
+    parse_tetrahedra, parse_visibility,
 };
 use glam::Vec3;
 use probes::{parse_coefficients, parse_groups, parse_metadata, parse_positions, parse_validity};
 use rig::parse_rigs;
-use volume::{parse_gradients, parse_grid, parse_octree, parse_octree_compact};
+use volume::{parse_gradients, parse_grid, parse_octree};
 
 /// The decoded fixed header of a `.probes` file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,7 +36,7 @@ pub struct FileHeader {
     pub minor: u16,
     /// Raw kind id (see [`ProbeFileKind::from_id`]).
     pub kind: u32,
-    /// Header flags (none defined in 1.0).
+    /// Header flags (bits 0–1: [`layout::FLAGS_L1_MODE`]).
     pub flags: u32,
 }
 
@@ -96,6 +96,13 @@ pub fn read_sections(bytes: &[u8]) -> Result<(FileHeader, Vec<RawSection<'_>>), 
     }
     let major = u16_at(bytes, header::MAJOR).ok_or(truncated(HEADER_LEN, len))?;
     let minor = u16_at(bytes, header::MINOR).ok_or(truncated(HEADER_LEN, len))?;
+    if (1..VERSION_MAJOR).contains(&major) {
+        return Err(FormatError::OlderVersion {
+            major,
+            minor,
+            supported: VERSION_MAJOR,
+        });
+    }
     if major != VERSION_MAJOR {
         return Err(FormatError::UnsupportedVersion {
             major,
@@ -320,16 +327,44 @@ fn vec3s(bytes: &[u8]) -> Vec<Vec3> {
         .collect()
 }
 
+/// Whether a file of `kind` may hold section `id` (a known id).
+fn belongs(kind: ProbeFileKind, id: SectionId) -> bool {
+    match id {
+        SectionId::RIGS | SectionId::METADATA => true,
+        SectionId::POSITIONS
+        | SectionId::COEFFICIENTS
+        | SectionId::VALIDITY
+        | SectionId::LIGHT_GROUPS => kind != ProbeFileKind::Rig,
+        SectionId::OCTREE | SectionId::GRID | SectionId::GRADIENTS => kind == ProbeFileKind::Volume,
+        _ => kind == ProbeFileKind::Cloud,
+    }
+}
+
+/// Every known section of a file, decoded, before they are put together.
+#[derive(Default)]
+struct Decoded {
+    positions: Option<Vec<Vec3>>,
+    coefficients: Option<super::Coefficients>,
+    validity: Option<Vec<super::Validity>>,
+    groups: Vec<super::LightGroup>,
+    tetrahedra: Option<super::TetSection>,
+    outer: Option<super::OuterCells>,
+    compact: Option<super::octree_compact::Compact>,
+    grid: Option<super::VolumeGrid>,
+    gradients: Option<super::Gradients>,
+    moments: Option<super::DistanceMoments>,
+    cells: Option<crate::cloud::CellVisibility>,
+    planes: Option<cloud::RawCellPlanes>,
+    weights: Option<(Vec<f32>, f32, f32)>,
+    rigs: Vec<super::Rig>,
+    metadata: String,
+}
+
 /// Parses and validates a whole file (see [`ProbeFile::from_bytes`]).
 pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
     let (head, sections) = read_sections(bytes)?;
     let kind = ProbeFileKind::from_id(head.kind)?;
-    let mut positions = None;
-    let mut coefficients = None;
-    let mut compact = None;
-    let mut planes = None;
-    let mut file = ProbeFile::new(kind, Coefficients::empty(1));
-    file.l1_mode = match super::L1Mode::from_flags(head.flags) {
+    let l1_mode = match super::L1Mode::from_flags(head.flags) {
         Some(mode) => mode,
         // A newer minor may define more modes: evaluate linearly.
         None if head.minor > VERSION_MINOR => super::L1Mode::Linear,
@@ -341,46 +376,34 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             })
         }
     };
+    let mut d = Decoded::default();
     for raw in &sections {
         let s = Sec {
             id: raw.id,
             bytes: raw.bytes,
         };
+        if SectionId::KNOWN.contains(&raw.id) && !belongs(kind, raw.id) {
+            return Err(FormatError::MisplacedSection {
+                id: raw.id,
+                kind: kind.name(),
+            });
+        }
         match raw.id {
-            SectionId::POSITIONS => positions = Some(parse_positions(&s)?),
-            SectionId::COEFFICIENTS => coefficients = Some(parse_coefficients(&s)?),
-            SectionId::VALIDITY => file.validity = Some(parse_validity(&s)?),
-            SectionId::TETRAHEDRA => file.tetrahedra = Some(parse_tetrahedra(&s)?),
-            SectionId::OUTER => file.outer = Some(parse_outer(&s)?),
-            SectionId::OCTREE => file.octree = Some(parse_octree(&s)?),
-            SectionId::OCTREE_COMPACT => compact = Some(parse_octree_compact(&s)?),
-            SectionId::GRID => file.grid = Some(parse_grid(&s)?),
-            SectionId::GRADIENTS => file.gradients = Some(parse_gradients(&s)?),
-            SectionId::RIGS => file.rigs = parse_rigs(&s)?,
-            SectionId::LIGHT_GROUPS => file.groups = parse_groups(&s)?,
-            SectionId::VISIBILITY => file.visibility = Some(parse_visibility(&s)?),
-            SectionId::CELL_VISIBILITY | SectionId::CELL_VISIBILITY_SPARSE => {
-                if file.cell_visibility.is_some() {
-                    return Err(FormatError::InvalidValue {
-                        id: s.id,
-                        element: 0,
-                        reason: "both CVIS and CVSP: at most one cell visibility section",
-                    });
-                }
-                file.cell_visibility = Some(if raw.id == SectionId::CELL_VISIBILITY {
-                    parse_cell_visibility(&s)?
-                } else {
-                    parse_cell_visibility_sparse(&s)?
-                });
-            }
-            SectionId::PROBE_WEIGHTS => {
-                let (w, alpha, beta) = parse_probe_weights(&s)?;
-                file.probe_weights = Some(w);
-                file.brightness_exponent = alpha;
-                file.directional_exponent = beta;
-            }
-            SectionId::CELL_PLANES => planes = Some(parse_cell_planes(&s)?),
-            SectionId::METADATA => file.metadata = parse_metadata(&s)?,
+            SectionId::POSITIONS => d.positions = Some(parse_positions(&s)?),
+            SectionId::COEFFICIENTS => d.coefficients = Some(parse_coefficients(&s)?),
+            SectionId::VALIDITY => d.validity = Some(parse_validity(&s)?),
+            SectionId::TETRAHEDRA => d.tetrahedra = Some(parse_tetrahedra(&s)?),
+            SectionId::OUTER => d.outer = Some(parse_outer(&s)?),
+            SectionId::OCTREE => d.compact = Some(parse_octree(&s)?),
+            SectionId::GRID => d.grid = Some(parse_grid(&s)?),
+            SectionId::GRADIENTS => d.gradients = Some(parse_gradients(&s)?),
+            SectionId::RIGS => d.rigs = parse_rigs(&s)?,
+            SectionId::LIGHT_GROUPS => d.groups = parse_groups(&s)?,
+            SectionId::VISIBILITY => d.moments = Some(parse_visibility(&s)?),
+            SectionId::CELL_VISIBILITY => d.cells = Some(parse_cell_visibility(&s)?),
+            SectionId::PROBE_WEIGHTS => d.weights = Some(parse_probe_weights(&s)?),
+            SectionId::CELL_PLANES => d.planes = Some(parse_cell_planes(&s)?),
+            SectionId::METADATA => d.metadata = parse_metadata(&s)?,
             id if head.minor > VERSION_MINOR => {
                 // A newer minor version may add sections; skip them.
                 let _ = id;
@@ -388,21 +411,78 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             id => return Err(FormatError::UnknownSection(id)),
         }
     }
-    file.positions = positions.ok_or(FormatError::MissingSection(SectionId::POSITIONS))?;
-    file.coefficients = coefficients.ok_or(FormatError::MissingSection(SectionId::COEFFICIENTS))?;
-    if let Some(c) = compact {
-        if file.octree.is_some() {
-            return Err(FormatError::InvalidValue {
-                id: SectionId::OCTREE_COMPACT,
-                element: 0,
-                reason: "a file holds OCTR or OCTC, not both",
-            });
-        }
-        file.octree = Some(c.expand(&file.positions)?);
-    }
-    if let Some(raw) = planes {
-        file.cell_planes = Some(build_cell_planes(&file, raw)?);
-    }
+    let file = assemble(kind, l1_mode, d)?;
     file.validate()?;
     Ok(file)
+}
+
+/// The file of `kind` from its decoded sections: required ones present,
+/// the octree expanded against the positions, the occluder planes checked
+/// against the cloud they refine.
+fn assemble(
+    kind: ProbeFileKind,
+    l1_mode: super::L1Mode,
+    d: Decoded,
+) -> Result<ProbeFile, FormatError> {
+    if kind == ProbeFileKind::Rig {
+        return Ok(ProbeFile::Rigs(super::RigFile {
+            rigs: d.rigs,
+            metadata: d.metadata,
+        }));
+    }
+    let probes = super::ProbeSet {
+        positions: d
+            .positions
+            .ok_or(FormatError::MissingSection(SectionId::POSITIONS))?,
+        coefficients: d
+            .coefficients
+            .ok_or(FormatError::MissingSection(SectionId::COEFFICIENTS))?,
+        l1_mode,
+        validity: d.validity,
+        groups: d.groups,
+    };
+    if kind == ProbeFileKind::Volume {
+        let structure = match (d.grid, d.compact) {
+            (Some(g), None) => super::VolumeStructure::Uniform(g),
+            (None, Some(c)) => super::VolumeStructure::Adaptive(c.expand(&probes.positions)?),
+            (None, None) => return Err(FormatError::MissingSection(SectionId::GRID)),
+            (Some(_), Some(_)) => {
+                return Err(FormatError::InvalidValue {
+                    id: SectionId::GRID,
+                    element: 0,
+                    reason: "a volume holds GRID or OCTC, not both",
+                })
+            }
+        };
+        return Ok(ProbeFile::Volume(super::VolumeFile {
+            probes,
+            structure,
+            gradients: d.gradients,
+            rigs: d.rigs,
+            metadata: d.metadata,
+        }));
+    }
+    let (probe_weights, brightness_exponent, directional_exponent) = match d.weights {
+        Some((w, a, b)) => (Some(w), a, b),
+        None => (None, 0.0, 0.0),
+    };
+    let mut cloud = super::CloudFile {
+        probes,
+        tetrahedra: d.tetrahedra,
+        outer: d.outer,
+        blend: super::CloudBlend {
+            distance_moments: d.moments,
+            cell_visibility: d.cells,
+            cell_planes: None,
+            probe_weights,
+            brightness_exponent,
+            directional_exponent,
+        },
+        rigs: d.rigs,
+        metadata: d.metadata,
+    };
+    if let Some(raw) = d.planes {
+        cloud.blend.cell_planes = Some(build_cell_planes(&cloud, raw)?);
+    }
+    Ok(ProbeFile::Cloud(cloud))
 }

@@ -7,7 +7,7 @@
 use super::codec::check_finite;
 use super::error::FormatError;
 use super::layout::{SectionId, NONE};
-use super::{ProbeFile, ProbeFileKind};
+use super::{CloudBlend, CloudFile, ProbeFile, ProbeSet, Rig, VolumeFile};
 use crate::prelude::*;
 use glam::Vec3;
 
@@ -62,18 +62,40 @@ fn distinct<const N: usize>(v: &[u32; N]) -> bool {
 }
 
 pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
-    let probes = f.positions.len();
+    match f {
+        ProbeFile::Cloud(c) => {
+            validate_probes(&c.probes)?;
+            validate_cloud(c)?;
+            validate_rigs(&c.rigs)
+        }
+        ProbeFile::Volume(v) => {
+            validate_probes(&v.probes)?;
+            validate_volume(v)?;
+            validate_rigs(&v.rigs)
+        }
+        ProbeFile::Rigs(r) => {
+            if r.rigs.is_empty() {
+                return Err(FormatError::MissingSection(SectionId::RIGS));
+            }
+            validate_rigs(&r.rigs)
+        }
+    }
+}
+
+/// Positions, coefficients, validity and light groups.
+fn validate_probes(p: &ProbeSet) -> Result<(), FormatError> {
+    let probes = p.positions.len();
     if u32::try_from(probes).is_err() {
         return Err(FormatError::Unrepresentable("more than u32::MAX probes"));
     }
-    for (i, p) in f.positions.iter().enumerate() {
+    for (i, p) in p.positions.iter().enumerate() {
         if !p.is_finite() {
             return Err(non_finite(SectionId::POSITIONS, i));
         }
     }
 
     // Coefficients.
-    let c = &f.coefficients;
+    let c = &p.coefficients;
     let stride = c
         .codec
         .stride(c.order)
@@ -93,7 +115,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         return Err(count_mismatch(SectionId::COEFFICIENTS, probes, c.len()));
     }
     check_finite(c)?;
-    if f.l1_mode != super::L1Mode::Linear && c.order != 2 {
+    if p.l1_mode != super::L1Mode::Linear && c.order != 2 {
         return Err(FormatError::InvalidValue {
             id: SectionId::COEFFICIENTS,
             element: 0,
@@ -101,7 +123,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         });
     }
 
-    if let Some(v) = &f.validity {
+    if let Some(v) = &p.validity {
         if v.len() != probes {
             return Err(count_mismatch(SectionId::VALIDITY, probes, v.len()));
         }
@@ -110,9 +132,55 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
+    // Light groups: one SH per probe each, at the coefficients' order.
+    for (k, g) in p.groups.iter().enumerate() {
+        let id = SectionId::LIGHT_GROUPS;
+        let bad = |reason| FormatError::InvalidValue {
+            id,
+            element: k as u64,
+            reason,
+        };
+        if g.name.is_empty() {
+            return Err(bad("light group without a name"));
+        }
+        if u32::try_from(g.name.len()).is_err() {
+            return Err(FormatError::Unrepresentable(
+                "light group name longer than u32::MAX bytes",
+            ));
+        }
+        if p.groups[..k].iter().any(|h| h.name == g.name) {
+            return Err(bad("two light groups share a name"));
+        }
+        let gc = &g.coefficients;
+        let stride = gc
+            .codec
+            .stride(gc.order)
+            .ok_or(FormatError::CodecOrderMismatch {
+                codec: gc.codec.name(),
+                order: gc.order,
+                stride: 0,
+            })?;
+        if gc.order != c.order {
+            return Err(bad("light group SH order differs from the coefficients'"));
+        }
+        if gc.data.len() % stride != 0 || gc.len() != probes {
+            return Err(count_mismatch(id, probes, gc.data.len() / stride));
+        }
+        check_finite(gc).map_err(|e| match e {
+            FormatError::NonFinite { .. } => non_finite(id, k),
+            e => e,
+        })?;
+    }
+
+    Ok(())
+}
+
+/// Tetrahedra, outer cells and blend data.
+fn validate_cloud(c: &CloudFile) -> Result<(), FormatError> {
+    let probes = c.probes.positions.len();
     // Tetrahedra.
-    let tets = f.tetrahedra.as_ref().map_or(0, |t| t.vertices.len());
-    if let Some(t) = &f.tetrahedra {
+    let tets = c.tetrahedra.as_ref().map_or(0, |t| t.vertices.len());
+    if let Some(t) = &c.tetrahedra {
         let id = SectionId::TETRAHEDRA;
         if t.neighbours.len() != tets || t.barycentric.len() != tets {
             return Err(count_mismatch(
@@ -153,7 +221,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
     }
 
     // Outer cells.
-    if let Some(o) = &f.outer {
+    if let Some(o) = &c.outer {
         let id = SectionId::OUTER;
         let faces = o.vertices.len();
         if o.adjacent.len() != faces || o.planes.len() != faces || o.tetrahedra.len() != faces {
@@ -189,8 +257,97 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
+    validate_blend(c, &c.blend, probes)
+}
+
+/// Distance moments, cell visibility, probe weights and occluder planes.
+fn validate_blend(c: &CloudFile, b: &CloudBlend, probes: usize) -> Result<(), FormatError> {
+    // Distance moments: one octahedral map per probe.
+    if let Some(v) = &b.distance_moments {
+        v.validate(probes)?;
+    }
+
+    // Cell visibility: one cell per tetrahedron (hull faces are
+    // counted against the mesh when a `ProbeCloud` is built).
+    if let Some(cells) = &b.cell_visibility {
+        let id = SectionId::CELL_VISIBILITY;
+        let tets = c
+            .tetrahedra
+            .as_ref()
+            .ok_or(FormatError::MissingSection(SectionId::TETRAHEDRA))?;
+        if cells.tet_count() != tets.vertices.len() {
+            return Err(count_mismatch(id, tets.vertices.len(), cells.tet_count()));
+        }
+        if let Some(k) = cells.first_noncanonical() {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: k as u64,
+                reason: "cell visibility: a record with padding bits set, a stored record that is clear, or mask padding bits set",
+            });
+        }
+    }
+
+    // Fitted probe weights: one per probe of a cloud, each in range.
+    if let Some(w) = &b.probe_weights {
+        let id = SectionId::PROBE_WEIGHTS;
+        if w.len() != probes {
+            return Err(count_mismatch(id, probes, w.len()));
+        }
+        if let Some(k) = w
+            .iter()
+            .position(|x| !crate::cloud::PROBE_WEIGHT_RANGE.contains(x))
+        {
+            return Err(FormatError::InvalidValue {
+                id,
+                element: k as u64,
+                reason: "probe weight outside 1e-6..=1e6 or not a number",
+            });
+        }
+    }
+    // Brightness exponent: in range, and only beside probe weights
+    // (it is stored in their header).
+    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&b.brightness_exponent) {
+        return Err(FormatError::InvalidValue {
+            id: SectionId::PROBE_WEIGHTS,
+            element: 0,
+            reason: "brightness exponent (header word w1) outside 0..=4 or not a number",
+        });
+    }
+    if b.brightness_exponent != 0.0 && b.probe_weights.is_none() {
+        return Err(FormatError::Unrepresentable(
+            "a brightness exponent is stored with probe weights (PWGT) only",
+        ));
+    }
+    // Directional brightness exponent: the same rules, header word w2.
+    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&b.directional_exponent) {
+        return Err(FormatError::InvalidValue {
+            id: SectionId::PROBE_WEIGHTS,
+            element: 0,
+            reason:
+                "directional brightness exponent (header word w2) outside 0..=4 or not a number",
+        });
+    }
+    if b.directional_exponent != 0.0 && b.probe_weights.is_none() {
+        return Err(FormatError::Unrepresentable(
+            "a directional brightness exponent is stored with probe weights (PWGT) only",
+        ));
+    }
+
+    // Occluder planes: a cloud's, refining its cell visibility, one
+    // lookup entry per tetrahedron (the planes themselves are checked by
+    // `CellPlanes::new`).
+    if let Some(planes) = &b.cell_planes {
+        check_cell_planes_context(c, planes.tet_count())?;
+    }
+
+    Ok(())
+}
+
+/// Octree or grid, and gradients.
+fn validate_volume(v: &VolumeFile) -> Result<(), FormatError> {
+    let probes = v.probes.positions.len();
     // Octree.
-    if let Some(o) = &f.octree {
+    if let Some(o) = v.octree() {
         let id = SectionId::OCTREE;
         let n = o.nodes.len();
         if n == 0 {
@@ -258,7 +415,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
     }
 
     // Grid.
-    if let Some(g) = &f.grid {
+    if let Some(g) = v.grid() {
         let id = SectionId::GRID;
         check_box(id, 0, g.min, g.max)?;
         if g.resolution.contains(&0) {
@@ -272,7 +429,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
             .resolution
             .iter()
             .try_fold(1u64, |a, &r| a.checked_mul(r as u64));
-        if f.octree.is_none() && total != Some(probes as u64) {
+        if total != Some(probes as u64) {
             return Err(FormatError::CountMismatch {
                 id,
                 expected: probes as u64,
@@ -281,7 +438,7 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
-    if let Some(g) = &f.gradients {
+    if let Some(g) = &v.gradients {
         let id = SectionId::GRADIENTS;
         if g.order == 0 || g.order as usize > probekit_sh::MAX_ORDER {
             return Err(FormatError::InvalidValue {
@@ -299,7 +456,12 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
-    for (r, rig) in f.rigs.iter().enumerate() {
+    Ok(())
+}
+
+/// Every rig's model, counts and values.
+fn validate_rigs(rigs: &[Rig]) -> Result<(), FormatError> {
+    for (r, rig) in rigs.iter().enumerate() {
         let id = SectionId::RIGS;
         let bad = |reason| FormatError::InvalidValue {
             id,
@@ -353,168 +515,25 @@ pub(super) fn validate(f: &ProbeFile) -> Result<(), FormatError> {
         }
     }
 
-    // Light groups (1.1): one SH per probe each, at the coefficients' order.
-    for (k, g) in f.groups.iter().enumerate() {
-        let id = SectionId::LIGHT_GROUPS;
-        let bad = |reason| FormatError::InvalidValue {
-            id,
-            element: k as u64,
-            reason,
-        };
-        if g.name.is_empty() {
-            return Err(bad("light group without a name"));
-        }
-        if u32::try_from(g.name.len()).is_err() {
-            return Err(FormatError::Unrepresentable(
-                "light group name longer than u32::MAX bytes",
-            ));
-        }
-        if f.groups[..k].iter().any(|h| h.name == g.name) {
-            return Err(bad("two light groups share a name"));
-        }
-        let gc = &g.coefficients;
-        let stride = gc
-            .codec
-            .stride(gc.order)
-            .ok_or(FormatError::CodecOrderMismatch {
-                codec: gc.codec.name(),
-                order: gc.order,
-                stride: 0,
-            })?;
-        if gc.order != c.order {
-            return Err(bad("light group SH order differs from the coefficients'"));
-        }
-        if gc.data.len() % stride != 0 || gc.len() != probes {
-            return Err(count_mismatch(id, probes, gc.data.len() / stride));
-        }
-        check_finite(gc).map_err(|e| match e {
-            FormatError::NonFinite { .. } => non_finite(id, k),
-            e => e,
-        })?;
-    }
-
-    // Distance moments (1.3): one octahedral map per probe.
-    if let Some(v) = &f.visibility {
-        v.validate(probes)?;
-    }
-
-    // Cell visibility (1.4, sparse 1.5): one cell per tetrahedron (hull faces are
-    // counted against the mesh when a `ProbeCloud` is built).
-    if let Some(c) = &f.cell_visibility {
-        let id = SectionId::CELL_VISIBILITY_SPARSE;
-        let tets = f
-            .tetrahedra
-            .as_ref()
-            .ok_or(FormatError::MissingSection(SectionId::TETRAHEDRA))?;
-        if c.tet_count() != tets.vertices.len() {
-            return Err(count_mismatch(id, tets.vertices.len(), c.tet_count()));
-        }
-        if let Some(k) = c.first_noncanonical() {
-            return Err(FormatError::InvalidValue {
-                id,
-                element: k as u64,
-                reason: "cell visibility: a record with padding bits set, a stored record that is clear, or mask padding bits set",
-            });
-        }
-    }
-
-    // Fitted probe weights (1.6): one per probe of a cloud, each in range.
-    if let Some(w) = &f.probe_weights {
-        let id = SectionId::PROBE_WEIGHTS;
-        if f.kind != ProbeFileKind::Cloud {
-            return Err(FormatError::InvalidValue {
-                id,
-                element: 0,
-                reason: "probe weights belong to a probe cloud",
-            });
-        }
-        if w.len() != probes {
-            return Err(count_mismatch(id, probes, w.len()));
-        }
-        if let Some(k) = w
-            .iter()
-            .position(|x| !crate::cloud::PROBE_WEIGHT_RANGE.contains(x))
-        {
-            return Err(FormatError::InvalidValue {
-                id,
-                element: k as u64,
-                reason: "probe weight outside 1e-6..=1e6 or not a number",
-            });
-        }
-    }
-    // Brightness exponent (1.8): in range, and only beside probe weights
-    // (it is stored in their header).
-    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.brightness_exponent) {
-        return Err(FormatError::InvalidValue {
-            id: SectionId::PROBE_WEIGHTS,
-            element: 0,
-            reason: "brightness exponent (header word w1) outside 0..=4 or not a number",
-        });
-    }
-    if f.brightness_exponent != 0.0 && f.probe_weights.is_none() {
-        return Err(FormatError::Unrepresentable(
-            "a brightness exponent is stored with probe weights (PWGT) only",
-        ));
-    }
-    // Directional brightness exponent (1.9): the same rules, header word w2.
-    if !(0.0..=crate::cloud::MAX_BRIGHTNESS_EXPONENT).contains(&f.directional_exponent) {
-        return Err(FormatError::InvalidValue {
-            id: SectionId::PROBE_WEIGHTS,
-            element: 0,
-            reason:
-                "directional brightness exponent (header word w2) outside 0..=4 or not a number",
-        });
-    }
-    if f.directional_exponent != 0.0 && f.probe_weights.is_none() {
-        return Err(FormatError::Unrepresentable(
-            "a directional brightness exponent is stored with probe weights (PWGT) only",
-        ));
-    }
-
-    // Occluder planes (1.7): a cloud's, refining its cell visibility, one
-    // lookup entry per tetrahedron (the planes themselves are checked by
-    // `CellPlanes::new`).
-    if let Some(p) = &f.cell_planes {
-        check_cell_planes_context(f, p.tet_count())?;
-    }
-
-    match f.kind {
-        ProbeFileKind::Volume if f.grid.is_none() && f.octree.is_none() => {
-            Err(FormatError::MissingSection(SectionId::GRID))
-        }
-        ProbeFileKind::Rig if f.rigs.is_empty() => {
-            Err(FormatError::MissingSection(SectionId::RIGS))
-        }
-        _ => Ok(()),
-    }
+    Ok(())
 }
 
-/// Whether occluder planes (`CPLN`, format 1.7) for a mesh of `tet_count`
-/// tetrahedra may stand in `f`: it is a cloud (`InvalidValue` otherwise),
-/// it has cell visibility, which the planes refine (`MissingSection`
+/// Whether occluder planes (`CPLN`) for a mesh of `tet_count`
+/// tetrahedra may stand in cloud `c`: it has cell visibility, which the planes refine (`MissingSection`
 /// naming `CVSP` otherwise), and `tet_count` equals the number of
 /// tetrahedra in `TETS` (`MissingSection`, `CountMismatch`). Shared by
 /// [`validate`] and the reader, which checks it before building a
 /// [`crate::cloud::CellPlanes`] (its lookup table has `tet_count` entries,
 /// so an unchecked count would allocate at an attacker's word).
 pub(super) fn check_cell_planes_context(
-    f: &ProbeFile,
+    c: &CloudFile,
     tet_count: usize,
 ) -> Result<(), FormatError> {
     let id = SectionId::CELL_PLANES;
-    if f.kind != ProbeFileKind::Cloud {
-        return Err(FormatError::InvalidValue {
-            id,
-            element: 0,
-            reason: "cell planes belong to a probe cloud",
-        });
+    if c.blend.cell_visibility.is_none() {
+        return Err(FormatError::MissingSection(SectionId::CELL_VISIBILITY));
     }
-    if f.cell_visibility.is_none() {
-        return Err(FormatError::MissingSection(
-            SectionId::CELL_VISIBILITY_SPARSE,
-        ));
-    }
-    let tets = f
+    let tets = c
         .tetrahedra
         .as_ref()
         .ok_or(FormatError::MissingSection(SectionId::TETRAHEDRA))?;

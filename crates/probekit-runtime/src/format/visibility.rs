@@ -1,4 +1,4 @@
-//! `VISM` (format 1.3): per-probe distance moments on an octahedral map, for
+//! `VISM`: per-probe distance moments on an octahedral map, for
 //! visibility-aware blending of a probe cloud (DDGI: Majercik et al. 2019,
 //! "Dynamic Diffuse Global Illumination with Ray-Traced Irradiance Fields",
 //! JCGT 8(2)). The run-time weighting is in [`crate::cloud::visibility`].

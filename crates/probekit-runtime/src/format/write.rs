@@ -12,7 +12,10 @@ use super::layout::{
     self, entry, header, pad16, SectionId, ENTRY_LEN, HEADER_LEN, SECTION_HEADER_LEN,
     VERSION_MAJOR, VERSION_MINOR,
 };
-use super::{crc32, AxisModel, ProbeFile, RigModel};
+use super::{
+    crc32, AxisModel, CloudBlend, CloudFile, ProbeFile, ProbeSet, Rig, RigModel, VolumeFile,
+    VolumeStructure,
+};
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
 use glam::Vec3;
@@ -130,13 +133,46 @@ fn axis_words(a: AxisModel) -> (u32, u32) {
 /// Encodes every present section of `f`, in the writer's fixed order.
 pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>, FormatError> {
     let mut out = Vec::new();
-    let probes = count(f.positions.len(), "more than u32::MAX probes")?;
+    let (cloud, volume) = (f.as_cloud(), f.as_volume());
+    if let Some(p) = f.probes() {
+        encode_probes(p, &mut out)?;
+    }
+    if let Some(c) = cloud {
+        encode_mesh(c, &mut out)?;
+    }
+    if let Some(v) = volume {
+        encode_volume(v, &mut out)?;
+    }
+    if !f.rigs().is_empty() {
+        out.push((SectionId::RIGS, encode_rigs(f.rigs())?));
+    }
+    if let Some(p) = f.probes().filter(|p| !p.groups.is_empty()) {
+        out.push((SectionId::LIGHT_GROUPS, encode_groups(p)?));
+    }
+    if let Some(c) = cloud {
+        encode_blend(&c.blend, &mut out)?;
+    }
+    let metadata = f.metadata();
+    let mut s = SectionBuilder::new([count(metadata.len(), "metadata")?, 0, 0, 0]);
+    s.bytes(metadata.as_bytes());
+    out.push((SectionId::METADATA, s.finish()));
 
+    debug_assert!(out
+        .iter()
+        .all(|(_, b)| b.len() % 16 == 0 && b.len() >= SECTION_HEADER_LEN));
+    Ok(out)
+}
+
+type Sections = Vec<(SectionId, Vec<u8>)>;
+
+/// `POSN`, `COEF` and `VALD`.
+fn encode_probes(p: &ProbeSet, out: &mut Sections) -> Result<(), FormatError> {
+    let probes = count(p.positions.len(), "more than u32::MAX probes")?;
     let mut s = SectionBuilder::new([probes, 0, 0, 0]);
-    s.vec3s(&f.positions);
+    s.vec3s(&p.positions);
     out.push((SectionId::POSITIONS, s.finish()));
 
-    let c = &f.coefficients;
+    let c = &p.coefficients;
     let stride = c.stride();
     let mut s = SectionBuilder::new([
         c.codec.id(),
@@ -147,21 +183,24 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     s.bytes(&c.data);
     out.push((SectionId::COEFFICIENTS, s.finish()));
 
-    if let Some(v) = &f.validity {
+    if let Some(v) = &p.validity {
         let mut s = SectionBuilder::new([count(v.len(), "validity")?, 0, 0, 0]);
         s.u32s(v.iter().flat_map(|v| [v.value.to_bits(), v.flags]));
         out.push((SectionId::VALIDITY, s.finish()));
     }
+    Ok(())
+}
 
-    if let Some(t) = &f.tetrahedra {
+/// `TETS` and `OUTR`.
+fn encode_mesh(c: &CloudFile, out: &mut Sections) -> Result<(), FormatError> {
+    if let Some(t) = &c.tetrahedra {
         let mut s = SectionBuilder::new([count(t.vertices.len(), "tetrahedra")?, 0, 0, 0]);
         s.u32s(t.vertices.iter().flatten().copied()).pad();
         s.u32s(t.neighbours.iter().flatten().copied()).pad();
         s.f32s(t.barycentric.iter().flatten().flatten().copied());
         out.push((SectionId::TETRAHEDRA, s.finish()));
     }
-
-    if let Some(o) = &f.outer {
+    if let Some(o) = &c.outer {
         let mut s = SectionBuilder::new([count(o.vertices.len(), "hull faces")?, 0, 0, 0]);
         s.u32s(o.vertices.iter().flatten().copied()).pad();
         s.u32s(o.adjacent.iter().flatten().copied()).pad();
@@ -169,103 +208,101 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         s.u32s(o.tetrahedra.iter().copied());
         out.push((SectionId::OUTER, s.finish()));
     }
+    Ok(())
+}
 
-    if let Some(c) = f
-        .octree
-        .as_ref()
-        .and_then(|o| super::octree_compact::encode(o, &f.positions))
-    {
-        // Regular octree (every builder-made one): 1 bit per node.
-        let [w2, w3] = roots_words(c.roots)?;
-        let mut s = SectionBuilder::new([c.nodes, c.max_depth, w2, w3]);
-        s.vec3s([&c.min, &c.max]).pad();
-        s.bytes(&c.bits);
-        out.push((SectionId::OCTREE_COMPACT, s.finish()));
-    } else if let Some(o) = &f.octree {
-        let [w2, w3] = roots_words(o.roots)?;
-        let mut s = SectionBuilder::new([
-            count(o.nodes.len(), "octree nodes")?,
-            count(o.samples.len(), "octree samples")?,
-            w2,
-            w3,
-        ]);
-        for n in &o.nodes {
-            s.vec3s([&n.min, &n.max]);
-            s.u32s([n.first_child, n.depth, n.sample_offset, n.sample_count]);
+/// `OCTC` or `GRID`, and `GRAD`.
+fn encode_volume(v: &VolumeFile, out: &mut Sections) -> Result<(), FormatError> {
+    match &v.structure {
+        VolumeStructure::Adaptive(o) => {
+            // One bit per node: only a regular octree (every one the volume
+            // builder makes) has this encoding.
+            let c = super::octree_compact::encode(o, &v.probes.positions).ok_or(
+                FormatError::Unrepresentable(
+                    "an octree that is not regular (breadth-first, octant children on the root lattice, leaves listing exactly their 8 corner probes)",
+                ),
+            )?;
+            let [w2, w3] = roots_words(c.roots)?;
+            let mut s = SectionBuilder::new([c.nodes, c.max_depth, w2, w3]);
+            s.vec3s([&c.min, &c.max]).pad();
+            s.bytes(&c.bits);
+            out.push((SectionId::OCTREE, s.finish()));
         }
-        s.pad();
-        s.u32s(o.samples.iter().copied());
-        out.push((SectionId::OCTREE, s.finish()));
+        VolumeStructure::Uniform(g) => {
+            let [rx, ry, rz] = g.resolution;
+            let mut s = SectionBuilder::new([rx, ry, rz, 0]);
+            s.vec3s([&g.min, &g.max]);
+            out.push((SectionId::GRID, s.finish()));
+        }
     }
-
-    if let Some(g) = &f.grid {
-        let [rx, ry, rz] = g.resolution;
-        let mut s = SectionBuilder::new([rx, ry, rz, 0]);
-        s.vec3s([&g.min, &g.max]);
-        out.push((SectionId::GRID, s.finish()));
-    }
-
-    if let Some(g) = &f.gradients {
+    if let Some(g) = &v.gradients {
         let per = 3 * (g.order * g.order) as usize;
         let n = g.data.len().checked_div(per).unwrap_or(0);
         let mut s = SectionBuilder::new([g.order, count(n, "gradients")?, 0, 0]);
         s.vec3s(&g.data);
         out.push((SectionId::GRADIENTS, s.finish()));
     }
+    Ok(())
+}
 
-    if !f.rigs.is_empty() {
-        let mut s = SectionBuilder::new([count(f.rigs.len(), "rigs")?, 0, 0, 0]);
-        for r in &f.rigs {
-            let (kind, axes) = match r.model {
-                RigModel::Constant => (0, [AxisModel::Constant; 3]),
-                RigModel::Gradient => (1, [AxisModel::Constant; 3]),
-                RigModel::Tensor(a) => (2, a),
-            };
-            let w = axes.map(axis_words);
-            let (models, counts) = if kind == 2 {
-                ([w[0].0, w[1].0, w[2].0], [w[0].1, w[1].1, w[2].1])
-            } else {
-                ([0; 3], [1; 3])
-            };
-            let params = r
-                .model
-                .parameter_count()
-                .ok_or(FormatError::Unrepresentable("rig parameter count"))?;
-            s.u32s([kind]).u32s(models).u32s(counts).u32s([
-                r.order,
-                count(r.samples.len(), "rig samples")?,
-                params,
-                count(r.transitions.len(), "rig transitions")?,
-                count(r.name.len(), "rig name")?,
-            ]);
-            s.vec3s([&r.bbox_min, &r.bbox_max])
-                .u32s([r.bounding_radius.to_bits(), 0]);
-            s.bytes(r.name.as_bytes()).pad();
-            s.vec3s(&r.samples).pad();
-            s.f32s(r.fitting.iter().copied()).pad();
-            s.f32s(r.transitions.iter().flat_map(|t| [t.distance, t.error]))
-                .pad();
-        }
-        out.push((SectionId::RIGS, s.finish()));
+/// `RIGS`.
+fn encode_rigs(rigs: &[Rig]) -> Result<Vec<u8>, FormatError> {
+    let mut s = SectionBuilder::new([count(rigs.len(), "rigs")?, 0, 0, 0]);
+    for r in rigs {
+        let (kind, axes) = match r.model {
+            RigModel::Constant => (0, [AxisModel::Constant; 3]),
+            RigModel::Gradient => (1, [AxisModel::Constant; 3]),
+            RigModel::Tensor(a) => (2, a),
+        };
+        let w = axes.map(axis_words);
+        let (models, counts) = if kind == 2 {
+            ([w[0].0, w[1].0, w[2].0], [w[0].1, w[1].1, w[2].1])
+        } else {
+            ([0; 3], [1; 3])
+        };
+        let params = r
+            .model
+            .parameter_count()
+            .ok_or(FormatError::Unrepresentable("rig parameter count"))?;
+        s.u32s([kind]).u32s(models).u32s(counts).u32s([
+            r.order,
+            count(r.samples.len(), "rig samples")?,
+            params,
+            count(r.transitions.len(), "rig transitions")?,
+            count(r.name.len(), "rig name")?,
+        ]);
+        s.vec3s([&r.bbox_min, &r.bbox_max])
+            .u32s([r.bounding_radius.to_bits(), 0]);
+        s.bytes(r.name.as_bytes()).pad();
+        s.vec3s(&r.samples).pad();
+        s.f32s(r.fitting.iter().copied()).pad();
+        s.f32s(r.transitions.iter().flat_map(|t| [t.distance, t.error]))
+            .pad();
     }
+    Ok(s.finish())
+}
 
-    if !f.groups.is_empty() {
-        let mut s = SectionBuilder::new([count(f.groups.len(), "light groups")?, probes, 0, 0]);
-        for g in &f.groups {
-            let c = &g.coefficients;
-            s.u32s([
-                c.codec.id(),
-                c.order,
-                c.stride() as u32,
-                count(g.name.len(), "light group name")?,
-            ]);
-            s.bytes(g.name.as_bytes()).pad();
-            s.bytes(&c.data).pad();
-        }
-        out.push((SectionId::LIGHT_GROUPS, s.finish()));
+/// `LGRP`.
+fn encode_groups(p: &ProbeSet) -> Result<Vec<u8>, FormatError> {
+    let probes = count(p.positions.len(), "more than u32::MAX probes")?;
+    let mut s = SectionBuilder::new([count(p.groups.len(), "light groups")?, probes, 0, 0]);
+    for g in &p.groups {
+        let c = &g.coefficients;
+        s.u32s([
+            c.codec.id(),
+            c.order,
+            c.stride() as u32,
+            count(g.name.len(), "light group name")?,
+        ]);
+        s.bytes(g.name.as_bytes()).pad();
+        s.bytes(&c.data).pad();
     }
+    Ok(s.finish())
+}
 
-    if let Some(v) = &f.visibility {
+/// `VISM`, `CVSP`, `PWGT` and `CPLN`.
+fn encode_blend(b: &CloudBlend, out: &mut Sections) -> Result<(), FormatError> {
+    if let Some(v) = &b.distance_moments {
         let mut s = SectionBuilder::new([
             count(v.probe_count(), "visibility maps")?,
             v.resolution,
@@ -277,8 +314,7 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         }
         out.push((SectionId::VISIBILITY, s.finish()));
     }
-
-    if let Some(c) = &f.cell_visibility {
+    if let Some(c) = &b.cell_visibility {
         let mut s = SectionBuilder::new([
             count(c.tet_count(), "cell visibility tetrahedra")?,
             count(c.hull_face_count(), "cell visibility hull faces")?,
@@ -286,21 +322,19 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
             0,
         ]);
         s.bytes(c.mask()).pad().bytes(c.records());
-        out.push((SectionId::CELL_VISIBILITY_SPARSE, s.finish()));
+        out.push((SectionId::CELL_VISIBILITY, s.finish()));
     }
-
-    if let Some(w) = &f.probe_weights {
+    if let Some(w) = &b.probe_weights {
         // -0.0 is written as 0.0 (equal contents, equal bytes).
-        let alpha = (f.brightness_exponent + 0.0).to_bits();
-        let beta = (f.directional_exponent + 0.0).to_bits();
+        let alpha = (b.brightness_exponent + 0.0).to_bits();
+        let beta = (b.directional_exponent + 0.0).to_bits();
         let mut s = SectionBuilder::new([count(w.len(), "probe weights")?, alpha, beta, 0]);
         for x in w {
             s.bytes(&x.to_le_bytes());
         }
         out.push((SectionId::PROBE_WEIGHTS, s.finish()));
     }
-
-    if let Some(p) = &f.cell_planes {
+    if let Some(p) = &b.cell_planes {
         let mut s = SectionBuilder::new([
             count(p.tet_count(), "cell plane tetrahedra")?,
             count(p.len(), "cell planes")?,
@@ -311,18 +345,10 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
         s.f32s(p.planes().iter().flatten().copied());
         out.push((SectionId::CELL_PLANES, s.finish()));
     }
-
-    let mut s = SectionBuilder::new([count(f.metadata.len(), "metadata")?, 0, 0, 0]);
-    s.bytes(f.metadata.as_bytes());
-    out.push((SectionId::METADATA, s.finish()));
-
-    debug_assert!(out
-        .iter()
-        .all(|(_, b)| b.len() % 16 == 0 && b.len() >= SECTION_HEADER_LEN));
-    Ok(out)
+    Ok(())
 }
 
-/// Header words `w2`, `w3` of `OCTR`/`OCTC` for a root grid.
+/// Header words `w2`, `w3` of `OCTC` for a root grid.
 fn roots_words(r: [u32; 3]) -> Result<[u32; 2], FormatError> {
     layout::pack_roots(r).ok_or(FormatError::InvalidValue {
         id: SectionId::OCTREE,
@@ -332,49 +358,18 @@ fn roots_words(r: [u32; 3]) -> Result<[u32; 2], FormatError> {
 }
 
 impl ProbeFile {
-    /// Serializes the file (after [`ProbeFile::validate`]). Deterministic:
-    /// equal contents give equal bytes. The header's minor version is the
-    /// lowest that holds the sections present
-    /// ([`layout::minor_for_sections`]): 0 unless the file has light groups
-    /// (1), a regular octree, written compactly as `OCTC` (2), distance
-    /// moments, `VISM`, or an octree forest ([`layout::MINOR_FOREST`]) (3),
-    /// or cell visibility, written sparse as `CVSP` (5), or fitted probe
-    /// weights, `PWGT` (6), or occluder planes of cells, `CPLN` (7), or a
-    /// non-zero brightness exponent ([`layout::MINOR_BRIGHTNESS`], 8), or a
-    /// non-zero directional one ([`layout::MINOR_DIRECTIONAL`], 9), or an
-    /// L1 evaluation other than linear ([`layout::MINOR_L1_MODE`], 10, in
-    /// the header's flags).
+    /// Serializes the file (after [`ProbeFile::validate`]) as format
+    /// [`VERSION_MAJOR`].[`VERSION_MINOR`]. Deterministic: equal contents
+    /// give equal bytes. Refuses ([`FormatError::Unrepresentable`]) an
+    /// octree that is not regular, which the compact `OCTC` encoding
+    /// cannot hold.
     pub fn to_bytes(&self) -> Result<Vec<u8>, FormatError> {
         self.validate()?;
         let sections = encode_sections(self)?;
-        let forest = self.octree.as_ref().is_some_and(|o| o.is_forest());
-        let minor = layout::minor_for_sections(sections.iter().map(|(id, _)| *id))
-            .max(if forest { layout::MINOR_FOREST } else { 0 })
-            .max(if self.brightness_exponent != 0.0 {
-                layout::MINOR_BRIGHTNESS
-            } else {
-                0
-            })
-            .max(if self.directional_exponent != 0.0 {
-                layout::MINOR_DIRECTIONAL
-            } else {
-                0
-            })
-            .max(if self.l1_mode != super::L1Mode::Linear {
-                layout::MINOR_L1_MODE
-            } else {
-                0
-            })
-            .max(if self.rigs.iter().any(|r| r.bounding_radius != 0.0) {
-                layout::MINOR_RIG_RADIUS
-            } else {
-                0
-            });
-        debug_assert!(minor <= VERSION_MINOR);
         Ok(assemble_file(
-            self.kind.id(),
-            minor,
-            self.l1_mode.flags(),
+            self.kind().id(),
+            VERSION_MINOR,
+            self.l1_mode().flags(),
             &sections,
         ))
     }

@@ -105,7 +105,7 @@ impl Probes {
 
     /// [`Probes::from_file`] of a file known to be valid (read and checked).
     fn build(file: &ProbeFile, options: LoadOptions) -> Result<Self, LoadError> {
-        let source = match file.kind {
+        let source = match file.kind() {
             ProbeFileKind::Volume => {
                 let volume = Volume::from_file(file)?;
                 let interp = options.interpolation;
@@ -117,22 +117,26 @@ impl Probes {
             ProbeFileKind::Rig => Source::None,
             _ => Source::Cloud(Box::new(cloud_with(file, &options)?)),
         };
-        let mut rigs = Vec::with_capacity(file.rigs.len());
-        for (index, rig) in file.rigs.iter().enumerate() {
+        let mut rigs = Vec::with_capacity(file.rigs().len());
+        for (index, rig) in file.rigs().iter().enumerate() {
             rigs.push(RigState::new(rig).map_err(|source| LoadError::Rig { index, source })?);
         }
-        let order = file.coefficients.order;
+        // A rigs file has no probes: the SH order of its (first) rig.
+        let order = match file.probes() {
+            Some(p) => p.coefficients.order,
+            None => file.rigs().first().map_or(1, |r| r.order),
+        };
         Ok(Self {
             source,
-            kind: file.kind,
+            kind: file.kind(),
             order,
             l1_mode: match order {
-                2 => options.l1_mode.unwrap_or(file.l1_mode),
+                2 => options.l1_mode.unwrap_or(file.l1_mode()),
                 _ => L1Mode::Linear,
             },
             rigs,
-            rig_data: file.rigs.clone(),
-            sphere_table: (!file.rigs.is_empty()).then(|| Arc::new(SphereTable::default())),
+            rig_data: file.rigs().to_vec(),
+            sphere_table: (!file.rigs().is_empty()).then(|| Arc::new(SphereTable::default())),
         })
     }
 

@@ -2,7 +2,13 @@
 //! checksum re-sealer so mutations reach the section parsers.
 #![allow(dead_code)]
 
+mod cases;
 pub mod clouds;
+mod parts;
+
+#[allow(unused_imports)] // Only tests/corpus.rs uses them.
+pub use cases::corpus_cases;
+pub use parts::*;
 
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility;
@@ -31,10 +37,18 @@ impl Rng {
     }
 }
 
-/// A cloud of 5 probes holding every section the format knows, with
-/// consistent indices: two tetrahedra sharing a face, a 4-face hull table,
-/// a root-plus-8-leaves octree, gradients, two rigs and JSON metadata.
+/// A cloud of 5 probes holding every section of a cloud but the blend
+/// data, with consistent indices: validity, two tetrahedra sharing a face,
+/// a 4-face hull table, two rigs and JSON metadata (volumes:
+/// [`grid_volume_file`], [`compact_volume_file`]).
 pub fn full_file() -> ProbeFile {
+    full_parts().0
+}
+
+/// [`full_file`] and the SH gradients of [`grid_volume_file`], drawn from
+/// one generator in the order the fixture of format 1 drew them, so every
+/// section the two share with it has the same bytes.
+fn full_parts() -> (ProbeFile, Gradients) {
     let mut rng = Rng(7);
     let positions = vec![
         Vec3::new(0.0, 0.0, 0.0),
@@ -46,7 +60,7 @@ pub fn full_file() -> ProbeFile {
     let order = 3;
     let coeffs: Vec<Vec3> = (0..positions.len() * 9).map(|_| rng.vec3()).collect();
     let mut f = ProbeFile::cloud(positions, order, &coeffs).unwrap();
-    f.validity = Some(
+    pm(&mut f).validity = Some(
         (0..5)
             .map(|i| Validity {
                 value: i as f32 / 4.0,
@@ -58,53 +72,24 @@ pub fn full_file() -> ProbeFile {
             })
             .collect(),
     );
-    f.tetrahedra = Some(TetSection {
+    cm(&mut f).tetrahedra = Some(TetSection {
         vertices: vec![[0, 1, 2, 3], [4, 1, 2, 3]],
         neighbours: vec![[1, NONE, NONE, NONE], [0, NONE, NONE, NONE]],
         barycentric: (0..2)
             .map(|_| [0; 3].map(|_| [0; 4].map(|_| rng.f32())))
             .collect(),
     });
-    f.outer = Some(OuterCells {
+    cm(&mut f).outer = Some(OuterCells {
         vertices: vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [4, 2, 1]],
         adjacent: vec![[1, 2, 3], [2, 0, 3], [0, 1, 3], [0, 1, 2]],
         planes: (0..4).map(|_| [0; 4].map(|_| rng.f32())).collect(),
         tetrahedra: vec![0, 0, 0, 1],
     });
-    let mut nodes = vec![OctreeNode {
-        min: Vec3::ZERO,
-        max: Vec3::ONE,
-        first_child: 1,
-        depth: 0,
-        sample_offset: 0,
-        sample_count: 0,
-    }];
-    for k in 0..8u32 {
-        let lo = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32) * 0.5;
-        nodes.push(OctreeNode {
-            min: lo,
-            max: lo + 0.5,
-            first_child: NONE,
-            depth: 1,
-            sample_offset: k * 8,
-            sample_count: 8 + (k == 3) as u32,
-        });
-    }
-    f.octree = Some(Octree {
-        nodes,
-        samples: (0..65).map(|i| i % 5).collect(),
-        roots: [1, 1, 1],
-    });
-    f.grid = Some(VolumeGrid {
-        min: Vec3::splat(-1.0),
-        max: Vec3::splat(2.0),
-        resolution: [5, 1, 1],
-    });
-    f.gradients = Some(Gradients {
+    let gradients = Gradients {
         order: 2,
         data: (0..5 * 3 * 4).map(|_| rng.vec3()).collect(),
-    });
-    f.rigs = vec![
+    };
+    *f.rigs_mut() = vec![
         Rig {
             name: "car".into(),
             model: RigModel::Tensor([
@@ -145,13 +130,13 @@ pub fn full_file() -> ProbeFile {
             transitions: vec![],
         },
     ];
-    f.metadata =
+    *f.metadata_mut() =
         r#"{"placement":{"method":"adaptive"},"scene_hash":"abc","tool_version":"0.1.0"}"#.into();
-    f
+    (f, gradients)
 }
 
 /// [`full_file`] relit-ready: two light groups, `"lamp"` (f32) and `"sün"`
-/// (f16, a non-ASCII name), whose sum is the file's coefficients (format 1.1).
+/// (f16, a non-ASCII name), whose sum is the file's coefficients.
 pub fn groups_file() -> ProbeFile {
     let mut f = full_file();
     let mut rng = Rng(11);
@@ -168,8 +153,8 @@ pub fn groups_file() -> ProbeFile {
         .map(|c| Vec3::from_array([0, 1, 2].map(|k| f16_to_f32(c[k]))))
         .collect();
     let total: Vec<Vec3> = a.iter().zip(&b).map(|(x, y)| *x + *y).collect();
-    f.coefficients = Coefficients::from_f32(3, &total).unwrap();
-    f.groups = vec![
+    pm(&mut f).coefficients = Coefficients::from_f32(3, &total).unwrap();
+    pm(&mut f).groups = vec![
         LightGroup {
             name: "lamp".into(),
             coefficients: Coefficients::from_f32(3, &a).unwrap(),
@@ -305,8 +290,7 @@ fn with_sections(f: &ProbeFile, edit: impl FnOnce(&mut Vec<(SectionId, Vec<u8>)>
     let mut owned: Vec<(SectionId, Vec<u8>)> =
         sections.iter().map(|s| (s.id, s.bytes.to_vec())).collect();
     edit(&mut owned);
-    let minor = layout::minor_for_sections(owned.iter().map(|(id, _)| *id));
-    assemble_file(f.kind.id(), minor, 0, &owned)
+    assemble_file(f.kind().id(), layout::VERSION_MINOR, 0, &owned)
 }
 
 /// Patches `edit` into section `id`'s bytes (offsets relative to the
@@ -326,486 +310,6 @@ fn patch_header(base: &[u8], edit: impl FnOnce(&mut [u8])) -> Vec<u8> {
     edit(&mut b);
     reseal(&mut b);
     b
-}
-
-/// Broken files, each named for what is wrong, with the error it must give.
-/// `valid_full` is the one good file (it must load and equal [`full_file`]).
-pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
-    let f = full_file();
-    let good = f.to_bytes().unwrap();
-    let entry_field = |k: usize, field: usize| HEADER_LEN + k * ENTRY_LEN + field;
-    let mut v: Vec<(&'static str, Vec<u8>, Expect)> = vec![];
-    v.push(("valid_full", good.clone(), |_| false));
-    v.push(("empty_file", vec![], |e| {
-        matches!(e, FormatError::Truncated { .. })
-    }));
-    v.push((
-        "bad_magic",
-        {
-            let mut b = good.clone();
-            b[0] = b'Q';
-            b
-        },
-        |e| matches!(e, FormatError::BadMagic),
-    ));
-    v.push((
-        "text_file",
-        b"# not a probe file, just some text\n".to_vec(),
-        |e| matches!(e, FormatError::BadMagic),
-    ));
-    v.push((
-        "newer_major_version",
-        patch_header(&good, |b| {
-            b[header::MAJOR..header::MAJOR + 2].copy_from_slice(&2u16.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::UnsupportedVersion { major: 2, .. }),
-    ));
-    v.push(("truncated_header", good[..40].to_vec(), |e| {
-        matches!(
-            e,
-            FormatError::Truncated {
-                needed: 48,
-                len: 40
-            }
-        )
-    }));
-    v.push(("truncated_table", good[..HEADER_LEN + 40].to_vec(), |e| {
-        matches!(e, FormatError::Truncated { .. })
-    }));
-    v.push(
-        ("truncated_section", good[..good.len() - 16].to_vec(), |e| {
-            matches!(e, FormatError::Truncated { .. })
-        }),
-    );
-    v.push((
-        "trailing_bytes",
-        {
-            let mut b = good.clone();
-            b.extend_from_slice(&[0; 16]);
-            b
-        },
-        |e| matches!(e, FormatError::LengthMismatch { .. }),
-    ));
-    v.push((
-        "header_checksum",
-        {
-            let mut b = good.clone();
-            b[header::FLAGS] ^= 1;
-            b
-        },
-        |e| matches!(e, FormatError::ChecksumMismatch { what, .. } if what == "header"),
-    ));
-    v.push((
-        "section_checksum",
-        {
-            let mut b = good.clone();
-            let (off, _) = find_section(&b, SectionId::POSITIONS);
-            b[off + 20] ^= 0x40;
-            b
-        },
-        |e| matches!(e, FormatError::ChecksumMismatch { what, .. } if what == "positions"),
-    ));
-    v.push((
-        "section_out_of_bounds",
-        patch_header(&good, |b| {
-            let at = entry_field(1, entry::OFFSET);
-            let off = b.len() as u64;
-            b[at..at + 8].copy_from_slice(&off.to_le_bytes());
-        }),
-        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
-    ));
-    v.push((
-        "section_length_overflow",
-        patch_header(&good, |b| {
-            let at = entry_field(1, entry::LENGTH);
-            b[at..at + 8].copy_from_slice(&(!15u64).to_le_bytes());
-        }),
-        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
-    ));
-    v.push((
-        "section_inside_table",
-        patch_header(&good, |b| {
-            let at = entry_field(0, entry::OFFSET);
-            b[at..at + 8].copy_from_slice(&16u64.to_le_bytes());
-        }),
-        |e| matches!(e, FormatError::SectionOutOfBounds { .. }),
-    ));
-    v.push((
-        "section_misaligned",
-        patch_header(&good, |b| {
-            let at = entry_field(1, entry::OFFSET);
-            let off = u64::from_le_bytes(b[at..at + 8].try_into().unwrap()) + 4;
-            b[at..at + 8].copy_from_slice(&off.to_le_bytes());
-        }),
-        |e| matches!(e, FormatError::SectionMisaligned { .. }),
-    ));
-    v.push((
-        "sections_overlap",
-        patch_header(&good, |b| {
-            let off = entry_field(0, entry::OFFSET);
-            let o0 = b[off..off + 8].to_vec();
-            let at = entry_field(1, entry::OFFSET);
-            b[at..at + 8].copy_from_slice(&o0);
-        }),
-        |e| matches!(e, FormatError::SectionOverlap { .. }),
-    ));
-    v.push((
-        "duplicate_section",
-        patch_header(&good, |b| {
-            put_u32(b, entry_field(2, entry::ID), SectionId::POSITIONS.0)
-        }),
-        |e| matches!(e, FormatError::DuplicateSection(id) if *id == SectionId::POSITIONS),
-    ));
-    v.push((
-        "unknown_section_same_minor",
-        patch_header(&good, |b| {
-            put_u32(
-                b,
-                entry_field(2, entry::ID),
-                SectionId::from_fourcc(*b"XXXX").0,
-            )
-        }),
-        |e| matches!(e, FormatError::UnknownSection(_)),
-    ));
-    v.push((
-        "missing_positions",
-        with_sections(&f, |s| s.retain(|(id, _)| *id != SectionId::POSITIONS)),
-        |e| matches!(e, FormatError::MissingSection(id) if *id == SectionId::POSITIONS),
-    ));
-    v.push((
-        "volume_without_grid_or_octree",
-        {
-            let mut g = f.clone();
-            g.kind = ProbeFileKind::Volume;
-            g.grid = None;
-            g.octree = None;
-            let b = g.clone().to_bytes();
-            assert!(b.is_err());
-            g.kind = ProbeFileKind::Cloud;
-            patch_header(&g.to_bytes().unwrap(), |b| put_u32(b, header::KIND, 1))
-        },
-        |e| matches!(e, FormatError::MissingSection(id) if *id == SectionId::GRID),
-    ));
-    v.push((
-        "unknown_kind",
-        patch_header(&good, |b| put_u32(b, header::KIND, 7)),
-        |e| matches!(e, FormatError::UnknownKind(7)),
-    ));
-    v.push((
-        "positions_count_too_large",
-        patch(&good, SectionId::POSITIONS, |s| put_u32(s, 0, 6)),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::POSITIONS),
-    ));
-    v.push((
-        "positions_count_absurd",
-        patch(&good, SectionId::POSITIONS, |s| put_u32(s, 0, u32::MAX)),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::POSITIONS),
-    ));
-    v.push(("section_shorter_than_its_header", with_sections(&f, |s| {
-        s.iter_mut().find(|(id, _)| *id == SectionId::METADATA).unwrap().1 = vec![];
-    }), |e| matches!(e, FormatError::SectionSize { id, expected: 16, .. } if *id == SectionId::METADATA)));
-    v.push((
-        "rig_counts_overflow",
-        patch(&good, SectionId::RIGS, |s| {
-            // First rig: a 65535 × 65535 × 1 lattice with u32::MAX samples.
-            let r = 16;
-            put_u32(s, r, 2);
-            for a in 0..3 {
-                put_u32(s, r + 4 + 4 * a, 2);
-            }
-            put_u32(s, r + 16, 65535);
-            put_u32(s, r + 20, 65535);
-            put_u32(s, r + 24, 1);
-            put_u32(s, r + 32, u32::MAX);
-            put_u32(s, r + 36, 65535 * 65535);
-        }),
-        |e| matches!(e, FormatError::CountOverflow(id) if *id == SectionId::RIGS),
-    ));
-    v.push((
-        "rig_unknown_model",
-        patch(&good, SectionId::RIGS, |s| put_u32(s, 16, 9)),
-        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::RIGS),
-    ));
-    v.push(("coefficients_fewer_than_positions", with_sections(&f, |s| {
-        let c = s.iter_mut().find(|(id, _)| *id == SectionId::COEFFICIENTS).unwrap();
-        let mut sec = SectionBuilder::new([0, 3, 4, 108]);
-        sec.bytes(&c.1[16..16 + 4 * 108]);
-        c.1 = sec.finish();
-    }), |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 4 } if *id == SectionId::COEFFICIENTS)));
-    v.push((
-        "unknown_codec",
-        patch(&good, SectionId::COEFFICIENTS, |s| put_u32(s, 0, 9)),
-        |e| matches!(e, FormatError::UnknownCodec(9)),
-    ));
-    v.push((
-        "codec_order_mismatch",
-        patch(&good, SectionId::COEFFICIENTS, |s| put_u32(s, 0, 2)),
-        |e| {
-            matches!(
-                e,
-                FormatError::CodecOrderMismatch {
-                    codec: "l1",
-                    order: 3,
-                    ..
-                }
-            )
-        },
-    ));
-    v.push((
-        "nan_position",
-        patch(&good, SectionId::POSITIONS, |s| {
-            s[16 + 12 * 3 + 4..16 + 12 * 3 + 8].copy_from_slice(&f32::NAN.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::NonFinite { id, element: 3 } if *id == SectionId::POSITIONS),
-    ));
-    v.push(("infinite_coefficient", patch(&good, SectionId::COEFFICIENTS, |s| {
-        s[16 + 108 * 2 + 8..16 + 108 * 2 + 12].copy_from_slice(&f32::INFINITY.to_le_bytes())
-    }), |e| matches!(e, FormatError::NonFinite { id, element: 2 } if *id == SectionId::COEFFICIENTS)));
-    v.push((
-        "nan_barycentric_matrix",
-        patch(&good, SectionId::TETRAHEDRA, |s| {
-            s[16 + 32 + 32 + 48 + 4..16 + 32 + 32 + 48 + 8].copy_from_slice(&f32::NAN.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::NonFinite { id, element: 1 } if *id == SectionId::TETRAHEDRA),
-    ));
-    v.push((
-        "tet_vertex_out_of_range",
-        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 16 + 8, 5)),
-        |e| {
-            matches!(
-                e,
-                FormatError::IndexOutOfRange {
-                    value: 5,
-                    limit: 5,
-                    element: 1,
-                    ..
-                }
-            )
-        },
-    ));
-    v.push((
-        "tet_neighbour_out_of_range",
-        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 32 + 4, 2)),
-        |e| {
-            matches!(
-                e,
-                FormatError::IndexOutOfRange {
-                    value: 2,
-                    limit: 2,
-                    element: 0,
-                    ..
-                }
-            )
-        },
-    ));
-    v.push((
-        "tet_repeated_vertex",
-        patch(&good, SectionId::TETRAHEDRA, |s| put_u32(s, 16 + 4, 0)),
-        |e| matches!(e, FormatError::InvalidTopology { element: 0, .. }),
-    ));
-    v.push((
-        "tet_neighbours_not_symmetric",
-        patch(&good, SectionId::TETRAHEDRA, |s| {
-            put_u32(s, 16 + 32 + 16, u32::MAX)
-        }),
-        |e| matches!(e, FormatError::InvalidTopology { element: 0, .. }),
-    ));
-    v.push((
-        "hull_face_adjacent_out_of_range",
-        patch(&good, SectionId::OUTER, |s| put_u32(s, 16 + 48, 4)),
-        |e| {
-            matches!(
-                e,
-                FormatError::IndexOutOfRange {
-                    value: 4,
-                    limit: 4,
-                    ..
-                }
-            )
-        },
-    ));
-    v.push((
-        "octree_child_before_parent",
-        patch(&good, SectionId::OCTREE, |s| {
-            // Node 1 (a leaf) claims node 1.. as children: a cycle.
-            put_u32(s, 16 + 40 + 24, 1)
-        }),
-        |e| matches!(e, FormatError::IndexOutOfRange { element: 1, .. }),
-    ));
-    v.push((
-        "octree_sample_list_out_of_range",
-        patch(&good, SectionId::OCTREE, |s| {
-            put_u32(s, 16 + 40 * 8 + 32, 60)
-        }),
-        |e| matches!(e, FormatError::IndexOutOfRange { element: 8, .. }),
-    ));
-    v.push((
-        "octree_inverted_box",
-        patch(&good, SectionId::OCTREE, |s| {
-            s[16..20].copy_from_slice(&5.0f32.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::InvalidValue { element: 0, .. }),
-    ));
-    v.push(("grid_resolution_mismatch", {
-        let mut g = f.clone();
-        g.octree = None;
-        let bytes = g.to_bytes().unwrap();
-        patch(&bytes, SectionId::GRID, |s| put_u32(s, 4, 2))
-    }, |e| matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 10 } if *id == SectionId::GRID)));
-    let compact = compact_volume_file().to_bytes().unwrap();
-    v.push((
-        "octc_node_count_not_one_plus_eight_per_parent",
-        patch(&compact, SectionId::OCTREE_COMPACT, |s| put_u32(s, 0, 10)),
-        |e| matches!(e, FormatError::InvalidValue { id, .. } if *id == SectionId::OCTREE_COMPACT),
-    ));
-    v.push((
-        "octc_leaf_corner_without_probe",
-        // Root box max x 1 → 2: the octants' corners leave the probe lattice.
-        patch(&compact, SectionId::OCTREE_COMPACT, |s| {
-            s[28..32].copy_from_slice(&2.0f32.to_le_bytes())
-        }),
-        |e| matches!(e, FormatError::InvalidTopology { id, .. } if *id == SectionId::OCTREE_COMPACT),
-    ));
-    v.push((
-        "metadata_not_utf8",
-        patch(&good, SectionId::METADATA, |s| s[16] = 0xFF),
-        |e| matches!(e, FormatError::InvalidUtf8(id) if *id == SectionId::METADATA),
-    ));
-    v.push((
-        "validity_count_mismatch",
-        with_sections(&f, |s| {
-            let c = s
-                .iter_mut()
-                .find(|(id, _)| *id == SectionId::VALIDITY)
-                .unwrap();
-            let mut sec = SectionBuilder::new([3, 0, 0, 0]);
-            sec.bytes(&c.1[16..16 + 24]);
-            c.1 = sec.finish();
-        }),
-        |e| matches!(e, FormatError::CountMismatch { id, .. } if *id == SectionId::VALIDITY),
-    ));
-    light_group_cases(&mut v);
-    v
-}
-
-/// Broken `LGRP` sections (format 1.1), around [`groups_file`].
-fn light_group_cases(v: &mut Vec<(&'static str, Vec<u8>, Expect)>) {
-    const LGRP: SectionId = SectionId::LIGHT_GROUPS;
-    let g = groups_file();
-    let good = g.to_bytes().unwrap();
-    v.push(("valid_groups", good.clone(), |_| false));
-    let lamp = g.groups[0].coefficients.data.clone();
-    let replace = |sec: Vec<u8>| {
-        with_sections(&g, move |s| {
-            s.iter_mut().find(|(id, _)| *id == LGRP).unwrap().1 = sec;
-        })
-    };
-    // Record 1 ("sün") starts after the section header, record 0's header,
-    // its padded name and its padded data.
-    let rec1 = 16 + 16 + 16 + 544;
-    v.push((
-        "groups_nan_coefficient",
-        patch(&good, LGRP, |s| {
-            // f16 NaN in probe 3 of group 1.
-            let at = rec1 + 16 + 16 + 3 * 54 + 10;
-            s[at..at + 2].copy_from_slice(&0x7E00u16.to_le_bytes());
-        }),
-        |e| matches!(e, FormatError::NonFinite { id, element: 1 } if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_fewer_probes_than_positions",
-        replace(lgrp_section(4, &[(0, 3, 108, b"lamp", &lamp[..4 * 108])])),
-        |e| {
-            matches!(e, FormatError::CountMismatch { id, expected: 5, actual: 4 }
-                if *id == SectionId::LIGHT_GROUPS)
-        },
-    ));
-    v.push((
-        "groups_count_absurd",
-        patch(&good, LGRP, |s| put_u32(s, 0, u32::MAX)),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_probe_count_absurd",
-        patch(&good, LGRP, |s| put_u32(s, 4, u32::MAX)),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_name_length_absurd",
-        patch(&good, LGRP, |s| put_u32(s, 16 + 12, u32::MAX)),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_name_not_utf8",
-        patch(&good, LGRP, |s| s[32] = 0xFF),
-        |e| matches!(e, FormatError::InvalidUtf8(id) if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_duplicate_name",
-        replace(lgrp_section(
-            5,
-            &[(0, 3, 108, b"lamp", &lamp), (0, 3, 108, b"lamp", &lamp)],
-        )),
-        |e| {
-            matches!(e, FormatError::InvalidValue { id, element: 1, .. }
-                if *id == SectionId::LIGHT_GROUPS)
-        },
-    ));
-    v.push((
-        "groups_empty_name",
-        replace(lgrp_section(5, &[(0, 3, 108, b"", &lamp)])),
-        |e| {
-            matches!(e, FormatError::InvalidValue { id, element: 0, .. }
-                if *id == SectionId::LIGHT_GROUPS)
-        },
-    ));
-    v.push((
-        "groups_unknown_codec",
-        patch(&good, LGRP, |s| put_u32(s, 16, 9)),
-        |e| matches!(e, FormatError::UnknownCodec(9)),
-    ));
-    v.push((
-        "groups_stride_mismatch",
-        patch(&good, LGRP, |s| put_u32(s, 16 + 8, 54)),
-        |e| {
-            matches!(
-                e,
-                FormatError::CodecOrderMismatch {
-                    codec: "f32",
-                    order: 3,
-                    stride: 54
-                }
-            )
-        },
-    ));
-    v.push((
-        "groups_order_differs_from_coefficients",
-        replace(lgrp_section(5, &[(0, 2, 48, b"lamp", &lamp[..5 * 48])])),
-        |e| {
-            matches!(e, FormatError::InvalidValue { id, element: 0, .. }
-                if *id == SectionId::LIGHT_GROUPS)
-        },
-    ));
-    v.push((
-        "groups_trailing_bytes",
-        with_sections(&g, |s| {
-            s.iter_mut()
-                .find(|(id, _)| *id == LGRP)
-                .unwrap()
-                .1
-                .extend([0; 16]);
-        }),
-        |e| matches!(e, FormatError::SectionSize { id, .. } if *id == SectionId::LIGHT_GROUPS),
-    ));
-    v.push((
-        "groups_file_with_unknown_section",
-        // A 1.1 file (it has LGRP) is this reader's own minor: an unknown
-        // id is refused, not skipped.
-        with_sections(&g, |s| {
-            s.push((SectionId::from_fourcc(*b"XXXX"), vec![0; 16]));
-        }),
-        |e| matches!(e, FormatError::UnknownSection(_)),
-    ));
 }
 
 /// An adaptive volume whose octree the writer stores as `OCTC`: a root
@@ -845,15 +349,36 @@ pub fn compact_volume_file() -> ProbeFile {
         }
     }
     let coeffs: Vec<Vec3> = (0..27 * 4).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
-    let mut f = ProbeFile::cloud(positions, 2, &coeffs).unwrap();
-    f.kind = ProbeFileKind::Volume;
-    f.octree = Some(Octree {
-        nodes,
-        samples,
-        roots: [1, 1, 1],
-    });
+    let probes = ProbeSet::new(positions, Coefficients::from_f32(2, &coeffs).unwrap());
+    let mut f = VolumeFile::new(
+        probes,
+        VolumeStructure::Adaptive(Octree {
+            nodes,
+            samples,
+            roots: [1, 1, 1],
+        }),
+    );
     f.metadata = "{}".into();
-    f
+    ProbeFile::Volume(f)
+}
+
+/// [`full_file`]'s probes, validity and rigs as a uniform volume of 5 × 1
+/// × 1 samples with L1 SH gradients.
+pub fn grid_volume_file() -> ProbeFile {
+    let (cloud, gradients) = full_parts();
+    let c = c(&cloud);
+    let mut v = VolumeFile::new(
+        c.probes.clone(),
+        VolumeStructure::Uniform(VolumeGrid {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(2.0),
+            resolution: [5, 1, 1],
+        }),
+    );
+    v.gradients = Some(gradients);
+    v.rigs = c.rigs.clone();
+    v.metadata = c.metadata.clone();
+    ProbeFile::Volume(v)
 }
 
 /// Cell-visibility subdivision of [`cvis_file`].
@@ -879,21 +404,21 @@ pub fn dense_records(tets: usize) -> Vec<u8> {
 }
 
 /// `full_file()` with cell visibility from [`dense_records`] (written as
-/// the sparse `CVSP` section, format 1.5).
+/// the sparse `CVSP` section).
 pub fn cvis_file() -> ProbeFile {
     let mut f = full_file();
-    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
-    f.cell_visibility = Some(
+    let tets = c(&f).tetrahedra.as_ref().unwrap().vertices.len();
+    cm(&mut f).blend.cell_visibility = Some(
         probekit_runtime::cloud::CellVisibility::new(K, tets, HULL, dense_records(tets)).unwrap(),
     );
     f
 }
 
-/// [`cvis_file`] with fitted probe weights (`PWGT`, format 1.6).
+/// [`cvis_file`] with fitted probe weights (`PWGT`).
 pub fn weights_file() -> ProbeFile {
     let mut f = cvis_file();
-    let n = f.positions.len();
-    f.probe_weights = Some((0..n).map(|i| 0.25 + 0.5 * i as f32).collect());
+    let n = p(&f).positions.len();
+    cm(&mut f).blend.probe_weights = Some((0..n).map(|i| 0.25 + 0.5 * i as f32).collect());
     f
 }
 
@@ -902,11 +427,11 @@ pub fn weights_file() -> ProbeFile {
 pub const PLANES: [[f32; 4]; 2] = [[0.6, 0.8, 0.0, 0.25], [0.0, 0.0, -1.0, -0.5]];
 
 /// [`cvis_file`] with an occluder plane for each of its two tetrahedra
-/// (`CPLN`, format 1.7).
+/// (`CPLN`).
 pub fn planes_file() -> ProbeFile {
     let mut f = cvis_file();
-    let tets = f.tetrahedra.as_ref().unwrap().vertices.len();
-    f.cell_planes =
+    let tets = c(&f).tetrahedra.as_ref().unwrap().vertices.len();
+    cm(&mut f).blend.cell_planes =
         Some(probekit_runtime::cloud::CellPlanes::new(tets, vec![0, 1], PLANES.to_vec()).unwrap());
     f
 }

@@ -2,6 +2,7 @@
 //! for `pk_volume_sample` of `shaders/probekit_buffers.wgsl`.
 
 use super::{check_size, LayoutError};
+use probekit_runtime::format::VolumeStructure;
 use probekit_runtime::{ProbeFile, Volume};
 
 /// Floats per probe in `pk_sh_coeffs`: 9 RGB coefficients (L2; an L1
@@ -30,14 +31,15 @@ pub struct PackedVolumeGrid {
 /// accepts, with a `GRID` section) for `pk_volume_sample`.
 pub fn pack_volume_grid(file: &ProbeFile) -> Result<PackedVolumeGrid, LayoutError> {
     Volume::from_file(file)?;
-    let g = file.grid.as_ref().ok_or(LayoutError::NotAGrid)?;
-    if file.octree.is_some() {
+    let file = file.as_volume().ok_or(LayoutError::NotAGrid)?;
+    let VolumeStructure::Uniform(g) = &file.structure else {
         return Err(LayoutError::NotAGrid);
-    }
-    let n = (file.coefficients.order * file.coefficients.order) as usize;
-    let count = file.positions.len();
+    };
+    let c = &file.probes.coefficients;
+    let n = (c.order * c.order) as usize;
+    let count = file.probes.positions.len();
     check_size("volume gradient", count * VOLUME_GRADIENT_FLOATS)?;
-    let coeffs = file.coefficients.to_f32()?;
+    let coeffs = c.to_f32()?;
     let mut coefficients = vec![0.0f32; count * VOLUME_PROBE_FLOATS];
     for p in 0..count {
         for i in 0..n.min(9) {

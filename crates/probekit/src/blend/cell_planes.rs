@@ -207,14 +207,17 @@ pub fn bake_cell_planes(
 }
 
 /// [`bake_cell_planes`] for a cloud file's mesh and its cell visibility,
-/// with [`CELL_PLANE_SEED`], ready for [`ProbeFile::cell_planes`]; `None`
+/// with [`CELL_PLANE_SEED`], ready for [`crate::format::CloudBlend::cell_planes`]; `None`
 /// when the file has no cell visibility.
 pub fn bake_file_cell_planes(
     tracer: &Tracer<'_>,
     file: &ProbeFile,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Option<CellPlanes>, CellVisibilityError> {
-    let Some(cells) = &file.cell_visibility else {
+    let Some(cells) = file
+        .as_cloud()
+        .and_then(|c| c.blend.cell_visibility.as_ref())
+    else {
         return Ok(None);
     };
     let mesh = ProbeCloud::mesh_from_file(file)?;

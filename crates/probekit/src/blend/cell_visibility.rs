@@ -219,7 +219,7 @@ pub fn bake_cell_visibility(
 
 /// [`bake_cell_visibility`] of the mesh a cloud file stores (its positions
 /// and `TETS`) at `lattice`'s subdivision for that mesh, ready for
-/// [`ProbeFile::cell_visibility`].
+/// [`crate::format::CloudBlend::cell_visibility`].
 pub fn bake_file_cell_visibility(
     tracer: &Tracer<'_>,
     file: &ProbeFile,

@@ -186,6 +186,7 @@ pub fn bake_distance_moments(
 mod tests {
     use super::*;
     use crate::format::cloud::test_cloud_file;
+    use crate::format::Parts;
     use crate::scene::Scene;
     use probekit_runtime::cloud::{ProbeCloud, VisibilityMaps, WalkState};
     use probekit_runtime::format::ProbeFile;
@@ -340,7 +341,8 @@ mod tests {
             .collect();
         let mut file = test_cloud_file(&pos, &sh);
         let s = VisibilitySettings::new((room.1 - room.0).length(), 1);
-        file.visibility = Some(bake_distance_moments(&tracer, &pos, &s, &|_, _| {}).unwrap());
+        file.cloud_mut().blend.distance_moments =
+            Some(bake_distance_moments(&tracer, &pos, &s, &|_, _| {}).unwrap());
         let file = ProbeFile::from_bytes(&file.to_bytes().unwrap()).unwrap();
         let cloud = ProbeCloud::from_file(&file).unwrap();
         TwoRooms { cloud, file }
@@ -389,7 +391,7 @@ mod tests {
         let direct: f32 = idx
             .iter()
             .zip(w)
-            .map(|(&i, w)| w * file.coefficients.to_f32().unwrap()[i as usize].x)
+            .map(|(&i, w)| w * file.probe_set().coefficients.to_f32().unwrap()[i as usize].x)
             .sum();
         let mut out = [Vec3::ZERO; 1];
         cloud.sh_at(p, &mut st, &mut out);

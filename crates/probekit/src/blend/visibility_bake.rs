@@ -17,10 +17,11 @@ use super::cell_planes::bake_file_cell_planes;
 use super::cell_visibility::{bake_file_cell_visibility, CellLattice, CellVisibilityError};
 use super::visibility::{bake_distance_moments, VisibilityError, VisibilitySettings};
 use crate::capture::{Baker, CaptureSettings};
+use crate::format::Parts;
 use crate::progress::{Clock, PhaseTime};
 use crate::trace::Tracer;
 use probekit_runtime::cloud::ProbeCloud;
-use probekit_runtime::format::ProbeFile;
+use probekit_runtime::format::{CloudBlend, ProbeFile};
 use thiserror::Error;
 
 /// Why a cloud's visibility data cannot be baked.
@@ -36,6 +37,17 @@ pub enum VisibilityBakeError {
     /// The probe weight fit failed.
     #[error(transparent)]
     Weights(#[from] BlendFitError),
+    /// Blend data belongs to a probe cloud; the file is another kind.
+    #[error("blend data belongs to a probe cloud, not a {0} file")]
+    NotACloud(&'static str),
+}
+
+/// Refuses a file that is not a cloud, so that its blend data can be set.
+fn check_cloud(file: &ProbeFile) -> Result<(), VisibilityBakeError> {
+    match file.as_cloud() {
+        Some(_) => Ok(()),
+        None => Err(VisibilityBakeError::NotACloud(file.kind().name())),
+    }
 }
 
 /// Which visibility data to bake for a cloud.
@@ -73,27 +85,30 @@ impl VisibilityBake {
     /// (`settings.probe_weights`; the defaults with `seed` where absent). For a second cloud that should blend as `file`
     /// does (`eval --compare grid`, the `--plot` sweep).
     pub fn like(file: &ProbeFile, seed: u64) -> Self {
-        let meta: serde_json::Value = serde_json::from_str(&file.metadata).unwrap_or_default();
+        let meta: serde_json::Value = serde_json::from_str(file.metadata()).unwrap_or_default();
+        // A volume or rigs file blends without any of it.
+        let none = CloudBlend::default();
+        let b = file.as_cloud().map_or(&none, |c| &c.blend);
         Self {
-            moments: file.visibility.as_ref().map(|v| VisibilitySettings {
+            moments: b.distance_moments.as_ref().map(|v| VisibilitySettings {
                 resolution: v.resolution,
                 ..VisibilitySettings::new(v.max_distance, seed)
             }),
-            cell_subdivision: file.cell_visibility.as_ref().map(|c| {
+            cell_subdivision: b.cell_visibility.as_ref().map(|c| {
                 match CellLattice::from_json(&meta["settings"]["cell_visibility"]) {
                     Some(CellLattice::Auto) => CellLattice::Auto,
                     _ => CellLattice::Fixed(c.subdivision()),
                 }
             }),
-            cell_planes: file.cell_planes.is_some(),
+            cell_planes: b.cell_planes.is_some(),
             // A file from before the exponent was fitted records none: it
             // blends with the one it stores (0).
-            probe_weights: file.probe_weights.as_ref().map(|_| {
+            probe_weights: b.probe_weights.as_ref().map(|_| {
                 BlendFitSettings::from_json(
                     &meta["settings"]["probe_weights"],
                     &BlendFitSettings {
-                        brightness: Some(file.brightness_exponent),
-                        directional: file.directional_exponent,
+                        brightness: Some(b.brightness_exponent),
+                        directional: b.directional_exponent,
                         ..BlendFitSettings::new(seed)
                     },
                 )
@@ -130,13 +145,19 @@ impl VisibilityBake {
         file: &mut ProbeFile,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(), VisibilityBakeError> {
-        file.visibility = match &self.moments {
-            Some(v) => Some(bake_distance_moments(tracer, &file.positions, v, progress)?),
+        check_cloud(file)?;
+        file.cloud_mut().blend.distance_moments = match &self.moments {
+            Some(v) => Some(bake_distance_moments(
+                tracer,
+                file.positions(),
+                v,
+                progress,
+            )?),
             None => None,
         };
-        file.probe_weights = None;
-        file.brightness_exponent = 0.0;
-        file.directional_exponent = 0.0;
+        file.cloud_mut().blend.probe_weights = None;
+        file.cloud_mut().blend.brightness_exponent = 0.0;
+        file.cloud_mut().blend.directional_exponent = 0.0;
         Ok(())
     }
 
@@ -150,17 +171,18 @@ impl VisibilityBake {
         file: &mut ProbeFile,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<(), VisibilityBakeError> {
-        file.cell_visibility = match self.cell_subdivision {
+        check_cloud(file)?;
+        file.cloud_mut().blend.cell_visibility = match self.cell_subdivision {
             Some(lattice) => Some(bake_file_cell_visibility(tracer, file, lattice, progress)?),
             None => None,
         };
-        file.cell_planes = None;
+        file.cloud_mut().blend.cell_planes = None;
         if self.cell_planes {
-            file.cell_planes = bake_file_cell_planes(tracer, file, progress)?;
+            file.cloud_mut().blend.cell_planes = bake_file_cell_planes(tracer, file, progress)?;
         }
-        file.probe_weights = None;
-        file.brightness_exponent = 0.0;
-        file.directional_exponent = 0.0;
+        file.cloud_mut().blend.probe_weights = None;
+        file.cloud_mut().blend.brightness_exponent = 0.0;
+        file.cloud_mut().blend.directional_exponent = 0.0;
         Ok(())
     }
 
@@ -185,9 +207,10 @@ impl VisibilityBake {
         captured: &TrainingSet,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Vec<PhaseTime>, VisibilityBakeError> {
-        file.probe_weights = None;
-        file.brightness_exponent = 0.0;
-        file.directional_exponent = 0.0;
+        check_cloud(file)?;
+        file.cloud_mut().blend.probe_weights = None;
+        file.cloud_mut().blend.brightness_exponent = 0.0;
+        file.cloud_mut().blend.directional_exponent = 0.0;
         let Some(fit) = &self.probe_weights else {
             return Ok(Vec::new());
         };
@@ -220,9 +243,9 @@ impl VisibilityBake {
         clock.lap("training points", rays());
         let f = fit_blend(&cloud, &training, fit, &fit.exponents())?;
         clock.lap("fit", rays());
-        file.probe_weights = Some(f.weights);
-        file.brightness_exponent = f.brightness;
-        file.directional_exponent = f.directional;
+        file.cloud_mut().blend.probe_weights = Some(f.weights);
+        file.cloud_mut().blend.brightness_exponent = f.brightness;
+        file.cloud_mut().blend.directional_exponent = f.directional;
         Ok(clock.take_phases())
     }
 }
@@ -267,20 +290,20 @@ mod tests {
             cell_planes: true,
             probe_weights: None,
         };
-        a.probe_weights = Some(vec![2.0; pos.len()]);
+        a.cloud_mut().blend.probe_weights = Some(vec![2.0; pos.len()]);
         want.bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
             .unwrap();
         let moments = bake_distance_moments(&tracer, &pos, &vs, &|_, _| {}).unwrap();
-        assert_eq!(a.visibility.as_ref(), Some(&moments));
+        assert_eq!(a.cloud().blend.distance_moments.as_ref(), Some(&moments));
         let cells =
             bake_file_cell_visibility(&tracer, &a, CellLattice::Fixed(2), &|_, _| {}).unwrap();
-        assert_eq!(a.cell_visibility.as_ref(), Some(&cells));
+        assert_eq!(a.cloud().blend.cell_visibility.as_ref(), Some(&cells));
         let mesh = probekit_runtime::cloud::ProbeCloud::mesh_from_file(&a).unwrap();
         let planes = bake_cell_planes(&tracer, &mesh, &cells, CELL_PLANE_SEED, &|_, _| {}).unwrap();
         assert!(!planes.is_empty());
-        assert_eq!(a.cell_planes.as_ref(), Some(&planes));
+        assert_eq!(a.cloud().blend.cell_planes.as_ref(), Some(&planes));
         // Weights fitted to the old blend are gone.
-        assert!(a.probe_weights.is_none());
+        assert!(a.cloud().blend.probe_weights.is_none());
         let like = VisibilityBake::like(&a, 7);
         assert_eq!(like.cell_subdivision, Some(CellLattice::Fixed(2)));
         assert!(like.cell_planes);
@@ -292,7 +315,11 @@ mod tests {
         VisibilityBake::none()
             .bake_into(&tracer, &mut a, &|_, _| {}, &|_, _| {})
             .unwrap();
-        assert!(a.visibility.is_none() && a.cell_visibility.is_none() && a.cell_planes.is_none());
+        assert!(
+            a.cloud().blend.distance_moments.is_none()
+                && a.cloud().blend.cell_visibility.is_none()
+                && a.cloud().blend.cell_planes.is_none()
+        );
         assert_eq!(VisibilityBake::like(&a, 7), VisibilityBake::none());
         // A bad subdivision is a typed error.
         let bad = VisibilityBake {

@@ -123,6 +123,7 @@ pub(crate) fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::format::Parts;
     use glam::Vec3;
 
     fn small(v: f32) -> ProbeFile {
@@ -194,7 +195,7 @@ mod tests {
         write_probe_file(&path, &small(1.0)).unwrap();
         let old = fs::read(&path).unwrap();
         let mut bad = small(2.0);
-        bad.positions[1].y = f32::INFINITY;
+        bad.probe_set_mut().positions[1].y = f32::INFINITY;
         assert!(matches!(
             write_probe_file(&path, &bad),
             Err(WriteError::Invalid(FormatError::NonFinite { .. }))

@@ -6,6 +6,7 @@
 use super::{encode_coefficients, FormatError, ProbeFile};
 use crate::capture::Validity;
 use crate::delaunay::{tetrahedralize, DelaunayError, HULL};
+use crate::format::Parts;
 use glam::{DMat3, DVec3, Vec3};
 use probekit_runtime::format::layout::{NONE, VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
 use probekit_runtime::format::{Codec, LightGroup, TetSection, Validity as FileValidity};
@@ -101,10 +102,10 @@ pub fn cloud_file(
     let flat: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().iter().copied()).collect();
     let coefficients = encode_coefficients(codec, order as u32, &flat)?;
     let mut file = ProbeFile::cloud(positions.to_vec(), 1, &vec![Vec3::ZERO; positions.len()])?;
-    file.coefficients = coefficients;
-    file.tetrahedra = Some(tet_section(positions, &t.tets, &t.neighbors));
-    file.validity = Some(validity.to_vec());
-    file.metadata = metadata.to_string();
+    file.probe_set_mut().coefficients = coefficients;
+    file.cloud_mut().tetrahedra = Some(tet_section(positions, &t.tets, &t.neighbors));
+    file.probe_set_mut().validity = Some(validity.to_vec());
+    *file.metadata_mut() = metadata.to_string();
     file.validate()?;
     Ok(file)
 }
@@ -138,7 +139,7 @@ pub fn light_groups(
 /// Decodes a file's light groups back to `(name, radiance SH per probe)`
 /// (the inverse of [`light_groups`] for `f32`; what `merge` reads from parts).
 pub fn decode_light_groups(file: &ProbeFile) -> Result<Vec<(String, Vec<ShRgb>)>, CloudFileError> {
-    file.groups
+    file.groups()
         .iter()
         .map(|g| {
             let n = g.coefficients.coeffs_per_probe().max(1);
@@ -204,7 +205,8 @@ mod tests {
         let validity: Vec<_> = out.validity.iter().map(file_validity).collect();
         let mut f =
             cloud_file(&out.captured_positions, &out.sh, &validity, Codec::F32, "").unwrap();
-        f.groups = light_groups(&out.groups, out.settings.order, Codec::F32).unwrap();
+        f.probe_set_mut().groups =
+            light_groups(&out.groups, out.settings.order, Codec::F32).unwrap();
         f
     }
 
@@ -283,9 +285,9 @@ mod tests {
             assert_eq!(ProbeFile::from_bytes(&bytes).unwrap(), file);
             // (c) run-time relighting vs rebaked scenes, through the runtime query.
             let mut zero = file.clone();
-            zero.coefficients = file.relit(&[("b", Vec3::ZERO)]).unwrap();
+            zero.probe_set_mut().coefficients = file.relit(&[("b", Vec3::ZERO)]).unwrap();
             let mut scaled = file.clone();
-            scaled.coefficients = file.relit(&[("b", scale)]).unwrap();
+            scaled.probe_set_mut().coefficients = file.relit(&[("b", scale)]).unwrap();
             let s_plain = CaptureSettings {
                 ..quick(256, 2, 3, seed)
             };

@@ -10,13 +10,15 @@
 //! The layout is specified byte by byte in `docs/file-format.md`.
 //!
 //! ```no_run
-//! use probekit::format::{write_probe_file, encode_coefficients, Codec, ProbeFile};
+//! use probekit::format::{
+//!     encode_coefficients, write_probe_file, CloudFile, Codec, ProbeFile, ProbeSet,
+//! };
 //! use glam::Vec3;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let positions = vec![Vec3::ZERO, Vec3::X];
 //! let sh = vec![Vec3::splat(0.3); 2 * 9]; // L2 radiance SH, 9 per probe
-//! let mut file = ProbeFile::cloud(positions, 3, &sh)?;
-//! file.coefficients = encode_coefficients(Codec::F16, 3, &sh)?;
+//! let coefficients = encode_coefficients(Codec::F16, 3, &sh)?;
+//! let file = ProbeFile::Cloud(CloudFile::new(ProbeSet::new(positions, coefficients)));
 //! write_probe_file("bake.probes", &file)?;
 //! # Ok(()) }
 //! ```
@@ -24,6 +26,7 @@
 mod atomic;
 pub mod cloud;
 mod metadata;
+mod parts;
 pub mod settings;
 
 pub use atomic::{check_writable, write_atomic, write_probe_file, WriteError};
@@ -31,6 +34,7 @@ pub use metadata::{
     check_scene, check_scene_hash, recorded_scene, scene_hash, BakeMetadata, Placement,
     SceneMismatch,
 };
+pub(crate) use parts::Parts;
 pub use probekit_runtime::format::*;
 
 use glam::Vec3;
@@ -183,9 +187,9 @@ mod tests {
         let enc = encode_coefficients(Codec::F16, order, &coeffs).unwrap();
         assert_eq!(enc.data.len(), 6 * 54);
         let mut file = ProbeFile::cloud(vec![Vec3::ZERO; 6], order, &coeffs).unwrap();
-        file.coefficients = enc;
+        file.probe_set_mut().coefficients = enc;
         let back = ProbeFile::from_bytes(&to_bytes(&file).unwrap()).unwrap();
-        let dec = back.coefficients.to_f32().unwrap();
+        let dec = back.probe_set().coefficients.to_f32().unwrap();
         for (d, c) in dec.iter().zip(&coeffs) {
             for k in 0..3 {
                 // |x| in [2^e, 2^(e+1)) has f16 spacing 2^(e-10); nearest
@@ -242,12 +246,12 @@ mod tests {
         for codec in [Codec::L1Q13, Codec::Zh3Q16, Codec::L2Q28] {
             let enc = encode_coefficients(codec, 3, &coeffs).unwrap();
             let mut file = ProbeFile::cloud(vec![Vec3::ZERO; probes], 3, &coeffs).unwrap();
-            file.coefficients = enc;
+            file.probe_set_mut().coefficients = enc;
             let bytes = to_bytes(&file).unwrap();
             let back = ProbeFile::from_bytes(&bytes).unwrap();
             let stride = [13, 16, 28][codec.id() as usize - 2];
-            assert_eq!(back.coefficients.data.len(), probes * stride);
-            let dec = back.coefficients.to_f32().unwrap();
+            assert_eq!(back.probe_set().coefficients.data.len(), probes * stride);
+            let dec = back.probe_set().coefficients.to_f32().unwrap();
             for (p, probe) in coeffs.chunks_exact(9).enumerate() {
                 let l1: [Vec3; 4] = probe[..4].try_into().unwrap();
                 let l2: [Vec3; 9] = probe.try_into().unwrap();
@@ -269,7 +273,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let coeffs = lcg_coeffs(3 * 4, 5);
         let mut f = ProbeFile::cloud(vec![Vec3::ZERO, Vec3::X, Vec3::Y], 2, &coeffs).unwrap();
-        f.metadata = BakeMetadata::new(
+        *f.metadata_mut() = BakeMetadata::new(
             scene_hash(b"demo"),
             Placement {
                 method: "grid".into(),

@@ -5,6 +5,7 @@ use crate::blend::cell_planes::bake_file_cell_planes;
 use crate::blend::cell_visibility::bake_file_cell_visibility;
 use crate::format::check_scene_hash;
 use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
+use crate::format::Parts;
 use crate::format::ProbeFile;
 use crate::progress::Progress;
 use crate::recipe::BakeRecord;
@@ -36,16 +37,22 @@ pub fn merge(
     let bad = PipelineError::Parts;
     let mut read = Vec::with_capacity(parts.len());
     for (name, file) in parts {
-        let record = BakeRecord::from_json(&file.metadata)
+        if file.as_cloud().is_none() {
+            return Err(bad(format!(
+                "{name}: not a shard part (a {} file)",
+                file.kind().name()
+            )));
+        }
+        let record = BakeRecord::from_json(file.metadata())
             .ok_or_else(|| bad(format!("{name}: not a shard part (no bake record)")))?;
         let Some(p) = record.part else {
             return Err(bad(format!("{name}: not a shard part (a whole bake)")));
         };
-        if p.count != file.positions.len() {
+        if p.count != file.positions().len() {
             return Err(bad(format!(
                 "{name}: part says {} probes but holds {}",
                 p.count,
-                file.positions.len()
+                file.positions().len()
             )));
         }
         read.push(Part {
@@ -110,10 +117,16 @@ pub fn merge(
     let mut sh = Vec::new();
     let mut validity = Vec::new();
     // Distance moments: every part has them (same recipe) or none does.
-    let mut moments = head.file.visibility.clone().map(|mut v| {
-        v.data.clear();
-        v
-    });
+    let mut moments = head
+        .file
+        .cloud()
+        .blend
+        .distance_moments
+        .clone()
+        .map(|mut v| {
+            v.data.clear();
+            v
+        });
     let mut groups: Vec<(String, Vec<ShRgb>)> = Vec::new();
     for (k, p) in read.iter().enumerate() {
         let g = decode_light_groups(p.file)?;
@@ -129,17 +142,17 @@ pub fn merge(
                 dst.extend(src);
             }
         }
-        let c = p.file.coefficients.to_f32()?;
-        let n = p.file.coefficients.coeffs_per_probe().max(1);
-        positions.extend_from_slice(&p.file.positions);
+        let c = p.file.probe_set().coefficients.to_f32()?;
+        let n = p.file.probe_set().coefficients.coeffs_per_probe().max(1);
+        positions.extend_from_slice(p.file.positions());
         for ch in c.chunks(n) {
             sh.push(
                 ShRgb::from_coeffs(ch.to_vec())
                     .ok_or_else(|| bad(format!("{}: coefficients of no SH order", p.name)))?,
             );
         }
-        validity.extend(p.file.validity.clone().unwrap_or_default());
-        match (&mut moments, &p.file.visibility) {
+        validity.extend(p.file.probe_set().validity.clone().unwrap_or_default());
+        match (&mut moments, &p.file.cloud().blend.distance_moments) {
             (None, None) => {}
             (Some(m), Some(v))
                 if m.resolution == v.resolution && m.max_distance == v.max_distance =>
@@ -157,10 +170,10 @@ pub fn merge(
     let mut record = head.record.clone();
     record.part = None;
     let mut file = cloud_file(&positions, &sh, &validity, codec, &record.to_json())?;
-    let order = head.file.coefficients.order as usize;
-    file.groups = light_groups(&groups, order, codec)?;
-    file.l1_mode = recipe.l1_evaluation.l1_mode();
-    file.visibility = moments;
+    let order = head.file.probe_set().coefficients.order as usize;
+    file.probe_set_mut().groups = light_groups(&groups, order, codec)?;
+    file.probe_set_mut().l1_mode = recipe.l1_evaluation.l1_mode();
+    file.cloud_mut().blend.distance_moments = moments;
     let Some(first) = read.first() else {
         return Err(bad("no parts to merge".into()));
     };
@@ -174,24 +187,25 @@ pub fn merge(
             )));
         };
         check_scene_hash(
-            &head.file.metadata,
+            head.file.metadata(),
             head.name,
             &scene.lighting_hash_hex(),
             scene_name,
         )?;
         let baker = crate::capture::Baker::new(scene)?;
         if let Some(lattice) = kinds.cell_subdivision {
-            file.cell_visibility = Some(
+            file.cloud_mut().blend.cell_visibility = Some(
                 bake_file_cell_visibility(baker.tracer(), &file, lattice, &|d, t| {
                     progress("cell visibility", d, t)
                 })
                 .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?,
             );
             if kinds.cell_planes {
-                file.cell_planes = bake_file_cell_planes(baker.tracer(), &file, &|d, t| {
-                    progress("occluder planes", d, t)
-                })
-                .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
+                file.cloud_mut().blend.cell_planes =
+                    bake_file_cell_planes(baker.tracer(), &file, &|d, t| {
+                        progress("occluder planes", d, t)
+                    })
+                    .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
             }
         }
         // The fit trains on what placement captured, where it did: place

@@ -39,6 +39,7 @@ use crate::blend::blend_fit::TrainingSet;
 use crate::blend::visibility_bake::VisibilityBakeError;
 use crate::capture::{BakeError, BakeOutput, Baker, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity, light_groups, CloudFileError};
+use crate::format::Parts;
 use crate::format::{Codec, FormatError, ProbeFile};
 use crate::placement::{grid_points, PlacementError};
 use crate::progress::{Clock, PhaseTime, Progress};
@@ -312,8 +313,8 @@ impl<'s> Bake<'s> {
             codec,
             &record.to_json(),
         )?;
-        f.groups = light_groups(&groups, out.settings.order, codec)?;
-        f.l1_mode = self.recipe.l1_evaluation.l1_mode();
+        f.probe_set_mut().groups = light_groups(&groups, out.settings.order, codec)?;
+        f.probe_set_mut().l1_mode = self.recipe.l1_evaluation.l1_mode();
         Ok(f)
     }
 
@@ -332,8 +333,8 @@ impl<'s> Bake<'s> {
         let order = sh.first().map_or(out.settings.order, |s| s.order()) as u32;
         let flat: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().iter().copied()).collect();
         let mut f = ProbeFile::cloud(out.captured_positions.clone(), order, &flat)?;
-        f.validity = Some(out.validity.iter().map(file_validity).collect());
-        f.groups = light_groups(&groups, out.settings.order, Codec::F32)?;
+        f.probe_set_mut().validity = Some(out.validity.iter().map(file_validity).collect());
+        f.probe_set_mut().groups = light_groups(&groups, out.settings.order, Codec::F32)?;
         let mut record = record.clone();
         record.part = Some(Part {
             shard,
@@ -342,7 +343,7 @@ impl<'s> Bake<'s> {
             count: out.positions.len(),
             total,
         });
-        f.metadata = record.to_json();
+        *f.metadata_mut() = record.to_json();
         Ok(f)
     }
 
@@ -484,8 +485,12 @@ fn report(
     phases: Vec<PhaseTime>,
 ) -> Result<BakeReport, PipelineError> {
     Ok(BakeReport {
-        probes: file.positions.len(),
-        tetrahedra: file.tetrahedra.as_ref().map_or(0, |t| t.vertices.len()),
+        probes: file.positions().len(),
+        tetrahedra: file
+            .cloud()
+            .tetrahedra
+            .as_ref()
+            .map_or(0, |t| t.vertices.len()),
         invalid: out.validity.iter().filter(|v| !v.valid).count(),
         bytes: file.bytes_by_section()?.values().sum(),
         groups: file.group_names().map(str::to_string).collect(),
@@ -498,5 +503,5 @@ fn report(
 /// The capture settings a file's record says it was baked with (`None`
 /// for a file without a record).
 pub fn recorded_capture(file: &ProbeFile) -> Option<CaptureSettings> {
-    BakeRecord::from_json(&file.metadata).map(|r| r.recipe.capture_settings())
+    BakeRecord::from_json(file.metadata()).map(|r| r.recipe.capture_settings())
 }

@@ -141,7 +141,7 @@ pub fn sweep(
                 let pred = predict(&Probes::from_file(&file, *options)?, points)?;
                 Ok((
                     r.placement.method(),
-                    file.positions.len(),
+                    file.positions().len(),
                     metrics(&pred, truth, mean),
                 ))
             });

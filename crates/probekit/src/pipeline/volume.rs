@@ -2,6 +2,7 @@
 //! captured samples, with gradients, as the recipe's `[volume]` says.
 
 use super::PipelineError;
+use crate::format::Parts;
 use crate::format::ProbeFile;
 use crate::progress::{Clock, PhaseTime, Progress};
 use crate::recipe::{BakeRecord, GradientModeName, Recipe, VolumeSettings};
@@ -103,8 +104,8 @@ pub fn bake_volume_from(
     if let Some(g) = recipe.volume.gradients.order {
         truncate_gradients(&mut file, g)?;
     }
-    file.metadata = record.to_json();
-    file.l1_mode = recipe.l1_evaluation.l1_mode();
+    *file.metadata_mut() = record.to_json();
+    file.probe_set_mut().l1_mode = recipe.l1_evaluation.l1_mode();
     file.validate()?;
     clock.lap("assembly", 0);
     Ok((

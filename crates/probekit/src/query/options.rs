@@ -133,9 +133,9 @@ impl QueryOptions {
     /// relights it by the group scales, in place, as an engine does (a
     /// cloud keeps the blend of its baked light).
     pub fn load(&self, file: &ProbeFile) -> Result<Probes, QueryOptionError> {
-        let mut probes = Probes::from_file(file, self.load_options(file.kind)?)?;
+        let mut probes = Probes::from_file(file, self.load_options(file.kind())?)?;
         if !self.group_scales.is_empty() {
-            if file.groups.is_empty() {
+            if file.groups().is_empty() {
                 return Err(QueryOptionError::NoGroups);
             }
             let mut relight = || -> Result<(), FormatError> {

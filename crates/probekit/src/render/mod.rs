@@ -465,7 +465,7 @@ pub fn render(
         rel_rmse,
         max_rel,
         objs.len(),
-        file.positions.len(),
+        file.positions().len(),
     );
     if let Some(ov) = &overlay {
         let depth: Vec<f32> = px.iter().map(|p| p.depth).collect();
@@ -488,7 +488,7 @@ pub fn render(
         object_pixels: objs.len(),
         rel_rmse,
         max_rel_error: max_rel,
-        probes: file.positions.len(),
+        probes: file.positions().len(),
         exposure,
         spheres,
         warnings,

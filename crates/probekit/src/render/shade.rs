@@ -70,7 +70,7 @@ pub(super) struct Overlay {
 
 impl Overlay {
     pub(super) fn new(file: &ProbeFile, probes: &Probes, bake_box: &crate::scene::Aabb) -> Self {
-        let n = file.positions.len().max(1);
+        let n = file.positions().len().max(1);
         let vol = bake_box.size();
         let spacing = (vol.x.max(1e-3) * vol.y.max(1e-3) * vol.z.max(1e-3) / n as f32).cbrt();
         let radius = (0.12 * spacing).min(0.08);
@@ -86,9 +86,12 @@ impl Overlay {
                 })
                 .collect(),
             None => {
-                let k = file.coefficients.coeffs_per_probe();
-                let coeffs = file.coefficients.to_f32().unwrap_or_default();
-                file.positions
+                // A volume's samples (a rigs file has none).
+                let (k, coeffs) = file.probes().map_or((1, Vec::new()), |p| {
+                    let c = &p.coefficients;
+                    (c.coeffs_per_probe(), c.to_f32().unwrap_or_default())
+                });
+                file.positions()
                     .iter()
                     .enumerate()
                     .filter_map(|(i, p)| {

@@ -3,6 +3,7 @@ use super::*;
 use crate::capture::{bake_points, CaptureSettings};
 use crate::format::cloud::{cloud_file, file_validity};
 use crate::format::Codec;
+use crate::format::Parts;
 use crate::scene::{Aabb, Material, Triangle};
 use crate::trace::Ray;
 use glam::Vec2;
@@ -207,7 +208,7 @@ fn bad_input_is_a_typed_error() {
         Err(RenderError::BadSize { .. })
     ));
     let mut part = good.clone();
-    part.tetrahedra = None;
+    part.cloud_mut().tetrahedra = None;
     let small = RenderSettings {
         width: 8,
         height: 8,

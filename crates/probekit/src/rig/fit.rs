@@ -13,7 +13,7 @@
 use super::{mesh::Mesh, sample, RigSetupError, RigSpec};
 use glam::Vec3;
 use nalgebra::DMatrix;
-use probekit_runtime::format::{Coefficients, ProbeFile, ProbeFileKind, Rig, RigModel};
+use probekit_runtime::format::{ProbeFile, Rig, RigFile, RigModel};
 use probekit_runtime::rig::{rig_weights, RigState, MAX_WEIGHTS};
 
 /// Relative singular-value cut-off of the pseudo-inverse. 1e-9 sits far
@@ -158,11 +158,10 @@ impl FittedRig {
 /// A rig-only `.probes` file holding `rigs` (no probes), ready for
 /// [`ProbeFile::to_bytes`].
 pub fn rig_file(rigs: &[FittedRig]) -> ProbeFile {
-    let order = rigs.first().map_or(3, |r| r.rig.order);
-    ProbeFile {
+    ProbeFile::Rigs(RigFile {
         rigs: rigs.iter().map(|r| r.rig.clone()).collect(),
-        ..ProbeFile::new(ProbeFileKind::Rig, Coefficients::empty(order))
-    }
+        metadata: String::new(),
+    })
 }
 
 #[cfg(test)]
@@ -285,12 +284,12 @@ mod tests {
         let b = FittedRig::fit(&car, "gradient".parse().unwrap(), 3, 32, 2, "car").unwrap();
         let bytes = rig_file(&[a.clone(), b]).to_bytes().unwrap();
         let back = ProbeFile::from_bytes(&bytes).unwrap();
-        assert_eq!(back.rigs.len(), 2);
-        assert_eq!(back.rigs[0], a.rig);
+        assert_eq!(back.rigs().len(), 2);
+        assert_eq!(back.rigs()[0], a.rig);
         let samples: Vec<Vec3> = (0..64 * 9)
             .map(|i| Vec3::splat((i % 13) as f32 * 0.1))
             .collect();
-        let (mut s1, mut s2) = (a.state(), RigState::new(&back.rigs[0]).unwrap());
+        let (mut s1, mut s2) = (a.state(), RigState::new(&back.rigs()[0]).unwrap());
         s1.update(&samples).unwrap();
         s2.update(&samples).unwrap();
         for p in car.positions.iter().step_by(50) {

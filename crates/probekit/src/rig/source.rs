@@ -94,12 +94,15 @@ impl ProbeSource {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::format::Parts;
     use crate::rig::fit::FittedRig;
     use crate::rig::mesh;
     use crate::rig::run::{run, RunConfig};
     use crate::rig::split::{update_from_sources, Frame};
     use crate::rig::RigSpec;
-    use probekit_runtime::format::{ProbeFileKind, VolumeGrid};
+    use probekit_runtime::format::{
+        Coefficients, ProbeSet, VolumeFile, VolumeGrid, VolumeStructure,
+    };
     use probekit_runtime::Interp;
 
     const ORDER: usize = 3;
@@ -153,14 +156,15 @@ mod tests {
                 }
             }
         }
-        let mut file = ProbeFile::cloud(pos, ORDER as u32, &coeffs).unwrap();
-        file.kind = ProbeFileKind::Volume;
-        file.grid = Some(VolumeGrid {
-            min: LO,
-            max: HI,
-            resolution: res,
-        });
-        file
+        let probes = ProbeSet::new(pos, Coefficients::from_f32(ORDER as u32, &coeffs).unwrap());
+        ProbeFile::Volume(VolumeFile::new(
+            probes,
+            VolumeStructure::Uniform(VolumeGrid {
+                min: LO,
+                max: HI,
+                resolution: res,
+            }),
+        ))
     }
 
     /// A Delaunay cloud (box corners plus scattered inner points) holding
@@ -187,7 +191,7 @@ mod tests {
         let tet = crate::delaunay::tetrahedralize(&pos).unwrap();
         let coeffs: Vec<Vec3> = pos.iter().flat_map(|p| f.at(*p)).collect();
         let mut file = ProbeFile::cloud(pos.clone(), ORDER as u32, &coeffs).unwrap();
-        file.tetrahedra = Some(crate::format::cloud::tet_section(
+        file.cloud_mut().tetrahedra = Some(crate::format::cloud::tet_section(
             &pos,
             &tet.tets,
             &tet.neighbors,

@@ -3,6 +3,7 @@
 use super::*;
 use crate::capture::{CaptureSettings, ValiditySettings};
 use crate::format::layout::{VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET};
+use crate::format::Parts;
 use crate::scene::{Light, LightKind, Material, Scene, Triangle};
 use crate::sh::lights::sphere_light_sh_and_gradient;
 use glam::{Vec2, Vec3};
@@ -86,8 +87,8 @@ fn common(min: Vec3, max: Vec3, src: &BakerSource, g: GradientMode) -> CommonSet
 }
 
 fn sample_sh(file: &crate::format::ProbeFile, i: usize) -> Vec<Vec3> {
-    let n = (file.coefficients.order * file.coefficients.order) as usize;
-    file.coefficients.to_f32().unwrap()[i * n..(i + 1) * n].to_vec()
+    let n = (file.probe_set().coefficients.order * file.probe_set().coefficients.order) as usize;
+    file.probe_set().coefficients.to_f32().unwrap()[i * n..(i + 1) * n].to_vec()
 }
 
 /// Under a uniform sky `L` and nothing else, every sample's irradiance is
@@ -103,7 +104,7 @@ fn uniform_sky_gives_pi_l_irradiance_at_every_sample() {
     assert_eq!(stats.captures, 12);
     assert_eq!(src.captures(), 12);
     assert_eq!(stats.dilated, 0);
-    for i in 0..file.positions.len() {
+    for i in 0..file.probe_set().positions.len() {
         let sh = probekit_sh::ShRgb::from_coeffs(sample_sh(&file, i)).unwrap();
         for n in probekit_sh::fibonacci_sphere(50) {
             let e = sh.irradiance(n);
@@ -132,8 +133,8 @@ fn sample_inside_a_closed_box_is_flagged_and_dilated_or_offset() {
     let off = BakerSource::new(&sc, settings(64, false)).unwrap();
     let c = common(Vec3::splat(-1.0), Vec3::ONE, &off, GradientMode::None);
     let (file, stats) = build_uniform(&off, &c, [3, 3, 3]).unwrap();
-    assert_eq!(file.positions[centre], Vec3::ZERO);
-    let v = file.validity.as_ref().unwrap();
+    assert_eq!(file.probe_set().positions[centre], Vec3::ZERO);
+    let v = file.probe_set().validity.as_ref().unwrap();
     assert_eq!(stats.dilated, 1);
     assert!(v[centre].flags & VALIDITY_INVALID != 0);
     assert!(v
@@ -155,9 +156,9 @@ fn sample_inside_a_closed_box_is_flagged_and_dilated_or_offset() {
 
     let on = BakerSource::new(&sc, settings(64, true)).unwrap();
     let (file, stats) = build_uniform(&on, &c, [3, 3, 3]).unwrap();
-    let v = file.validity.as_ref().unwrap();
+    let v = file.probe_set().validity.as_ref().unwrap();
     assert_eq!(stats.dilated, 0);
-    assert_eq!(file.positions[centre], Vec3::ZERO);
+    assert_eq!(file.probe_set().positions[centre], Vec3::ZERO);
     assert_eq!(v[centre].flags, VALIDITY_VIRTUAL_OFFSET);
     assert!(v[centre].value >= on.validity_threshold());
     // Captured just outside a face: it sees about half the sky (+ the
@@ -195,12 +196,12 @@ fn central_gradients_match_the_closed_form_and_a_wider_difference() {
     );
     let (file, stats) = build_uniform(&src, &c, [2, 2, 2]).unwrap();
     assert_eq!(stats.captures, 8 * 7);
-    let g = &file.gradients.as_ref().unwrap().data;
+    let g = &file.volume().gradients.as_ref().unwrap().data;
     let n = 9;
     let mut value = vec![Vec3::ZERO; n];
     let mut grad = vec![[Vec3::ZERO; 3]; n];
     let baker = crate::capture::Baker::new(&sc).unwrap();
-    for (i, p) in file.positions.iter().enumerate() {
+    for (i, p) in file.probe_set().positions.iter().enumerate() {
         sphere_light_sh_and_gradient(
             3,
             *p,
@@ -307,7 +308,7 @@ fn adaptive_baker_build_captures_shared_corners_once_and_is_deterministic() {
     assert_eq!(src.captures(), stats.captures);
     // Refined only where the box is: depth-3 leaves exist, and all of them
     // touch the box's octant (x > 0, y < 0, z > 0).
-    let oct = file.octree.as_ref().unwrap();
+    let oct = file.octree().unwrap();
     let deep: Vec<_> = oct
         .nodes
         .iter()

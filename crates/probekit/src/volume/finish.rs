@@ -7,7 +7,7 @@ use super::source::{Captured, VolumeSource};
 use super::VolumeBuildError;
 use crate::format::{
     layout::{VALIDITY_INVALID, VALIDITY_VIRTUAL_OFFSET},
-    Coefficients, Gradients, ProbeFile, ProbeFileKind, Validity,
+    Coefficients, Gradients, ProbeFile, ProbeSet, Validity, VolumeFile, VolumeStructure,
 };
 use glam::Vec3;
 
@@ -32,7 +32,7 @@ pub(super) fn finish(
     nbrs: &[Vec<u32>],
     finest_cell: f32,
     stats: &mut BuildStats,
-    structure: impl FnOnce(&mut ProbeFile),
+    structure: VolumeStructure,
 ) -> Result<ProbeFile, VolumeBuildError> {
     let order = src.order();
     let n = order * order;
@@ -87,19 +87,17 @@ pub(super) fn finish(
                 },
         })
         .collect();
-    let mut file = ProbeFile {
-        positions: points,
+    let probes = ProbeSet {
         validity: Some(validity),
+        ..ProbeSet::new(points, Coefficients::from_f32(order as u32, &coeffs)?)
+    };
+    let file = ProbeFile::Volume(VolumeFile {
         gradients: gradients.map(|data| Gradients {
             order: order as u32,
             data,
         }),
-        ..ProbeFile::new(
-            ProbeFileKind::Volume,
-            Coefficients::from_f32(order as u32, &coeffs)?,
-        )
-    };
-    structure(&mut file);
+        ..VolumeFile::new(probes, structure)
+    });
     file.validate()?;
     Ok(file)
 }
@@ -109,9 +107,10 @@ pub(super) fn finish(
 /// tricubic alike). Gradients cost `3·order²` RGB vectors per
 /// sample, 3× the L2 coefficients themselves; most of the irradiance's
 /// change is in the low bands (BENCHMARKS.md, "Gradient order"). A file
-/// without gradients, or with `order` at least theirs, is left unchanged.
+/// without gradients (or not a volume), or with `order` at least theirs,
+/// is left unchanged.
 pub fn truncate_gradients(file: &mut ProbeFile, order: u32) -> Result<(), VolumeBuildError> {
-    let Some(g) = &mut file.gradients else {
+    let Some(g) = file.as_volume_mut().and_then(|v| v.gradients.as_mut()) else {
         return Ok(());
     };
     if order == 0 {

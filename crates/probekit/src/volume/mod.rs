@@ -83,17 +83,20 @@ pub enum VolumeBuildError {
 /// `resolution` for a uniform grid, `roots` and `max_depth` for an octree).
 pub fn inspect_json(file: &crate::format::ProbeFile) -> Result<serde_json::Value, VolumeError> {
     let v = Volume::from_file(file)?;
+    let (codec, gradients) = file.as_volume().map_or(("f32", false), |f| {
+        (f.probes.coefficients.codec.name(), f.gradients.is_some())
+    });
     let by = file.bytes_by_section()?;
     let bytes: u64 = by.values().sum();
     Ok(serde_json::json!({
         "kind": "volume",
-        "probes": file.positions.len(),
+        "probes": file.positions().len(),
         "leaves": v.leaf_count(),
         "resolution": v.grid_resolution(),
         "roots": v.root_grid(),
         "max_depth": v.max_depth(),
-        "basis": format!("sh{}/{}", file.coefficients.order, file.coefficients.codec.name()),
-        "gradients": file.gradients.is_some(),
+        "basis": format!("sh{}/{}", v.order(), codec),
+        "gradients": gradients,
         "bytes": bytes,
         "bytes_by_section": by,
     }))

@@ -8,7 +8,7 @@ use super::settings::{check_box, near_cubic_roots, AdaptiveSettings, BuildStats}
 use super::source::{Captured, VolumeSource};
 use super::VolumeBuildError;
 use crate::format::lattice_step;
-use crate::format::{layout::NONE, Octree, OctreeNode, ProbeFile};
+use crate::format::{layout::NONE, Octree, OctreeNode, ProbeFile, VolumeStructure};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -348,13 +348,14 @@ pub fn build_adaptive(
         dilated: 0,
     };
     let finest = lat.step.min_element();
-    let file = finish(src, common, points, caps, &nbrs, finest, &mut stats, |f| {
-        f.octree = Some(Octree {
-            nodes,
-            samples: lists,
-            roots,
-        })
-    })?;
+    let structure = VolumeStructure::Adaptive(Octree {
+        nodes,
+        samples: lists,
+        roots,
+    });
+    let file = finish(
+        src, common, points, caps, &nbrs, finest, &mut stats, structure,
+    )?;
     Ok((file, stats))
 }
 

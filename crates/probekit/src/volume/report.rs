@@ -1,5 +1,6 @@
 //! What a volume bake looks like, per octree depth: `probekit volume --plot`.
 
+use crate::format::Parts;
 use crate::format::ProbeFile;
 use crate::plot::{line_chart, PlotError};
 use std::path::Path;
@@ -22,9 +23,9 @@ pub struct DepthRow {
 /// (rows for depths without leaves have zero counts). A uniform grid (no
 /// octree) is one row at depth 0 with every cell a leaf.
 pub fn depth_rows(file: &ProbeFile) -> Vec<DepthRow> {
-    let Some(oct) = &file.octree else {
+    let Some(oct) = &file.octree() else {
         let cells = file
-            .grid
+            .grid()
             .as_ref()
             .map(|g| {
                 g.resolution
@@ -36,7 +37,7 @@ pub fn depth_rows(file: &ProbeFile) -> Vec<DepthRow> {
         return vec![DepthRow {
             depth: 0,
             leaves: cells,
-            samples: file.positions.len(),
+            samples: file.positions().len(),
             volume_fraction: 1.0,
         }];
     };
@@ -47,7 +48,7 @@ pub fn depth_rows(file: &ProbeFile) -> Vec<DepthRow> {
             ..Default::default()
         })
         .collect();
-    let mut finest = vec![None::<u32>; file.positions.len()];
+    let mut finest = vec![None::<u32>; file.positions().len()];
     for n in oct.nodes.iter().filter(|n| n.sample_count > 0) {
         let r = &mut rows[n.depth as usize];
         r.leaves += 1;

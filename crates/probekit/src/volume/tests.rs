@@ -1,4 +1,5 @@
 use super::*;
+use crate::format::Parts;
 use crate::sh::ShRgb;
 use glam::Vec3;
 use std::sync::Mutex;
@@ -181,7 +182,10 @@ fn central_differences_match_the_closed_form_sphere_light_gradient() {
     )
     .unwrap();
     assert_eq!(stats.captures, 27 * 7, "6 extra captures per sample");
-    let (ga, gc) = (&a.gradients.unwrap().data, &c.gradients.unwrap().data);
+    let (ga, gc) = (
+        &a.volume().gradients.as_ref().unwrap().data,
+        &c.volume().gradients.as_ref().unwrap().data,
+    );
     let scale = ga
         .iter()
         .map(|v| v.abs().max_element())
@@ -215,7 +219,7 @@ fn truncated_gradients_keep_the_low_bands_and_flatten_the_rest() {
     )
     .unwrap();
     let depths: Vec<u32> = tree
-        .octree
+        .octree()
         .as_ref()
         .unwrap()
         .nodes
@@ -224,12 +228,12 @@ fn truncated_gradients_keep_the_low_bands_and_flatten_the_rest() {
         .collect();
     assert!(depths.contains(&1) && depths.contains(&3), "a graded tree");
     for full in [grid, tree] {
-        let count = full.positions.len();
+        let count = full.probe_set().positions.len();
         let mut cut = full.clone();
         truncate_gradients(&mut cut, 2).unwrap();
         let (gf, gc) = (
-            full.gradients.as_ref().unwrap(),
-            cut.gradients.as_ref().unwrap(),
+            full.volume().gradients.as_ref().unwrap(),
+            cut.volume().gradients.as_ref().unwrap(),
         );
         assert_eq!((gf.order, gc.order), (3, 2));
         assert_eq!(gc.data.len(), count * 3 * 4);
@@ -363,7 +367,7 @@ fn adaptive_refines_at_the_wall_and_captures_shared_corners_once() {
     keys.dedup();
     assert_eq!(before, keys.len(), "a lattice point was captured twice");
     assert_eq!(stats.captures, before);
-    let oct = file.octree.as_ref().unwrap();
+    let oct = file.octree().unwrap();
     let leaves: Vec<_> = oct
         .nodes
         .iter()
@@ -386,6 +390,7 @@ fn adaptive_refines_at_the_wall_and_captures_shared_corners_once() {
     );
     // Samples unique in the file.
     let mut pos: Vec<_> = file
+        .probe_set()
         .positions
         .iter()
         .map(|p| p.to_array().map(f32::to_bits))
@@ -462,9 +467,9 @@ fn invalid_samples_are_dilated_from_valid_neighbours() {
     let (file, stats) =
         build_uniform(&demo, &common(min, max, GradientMode::None), [21, 5, 5]).unwrap();
     assert_eq!(stats.dilated, 25);
-    let coeffs = file.coefficients.to_f32().unwrap();
-    let flags = file.validity.as_ref().unwrap();
-    for (s, p) in file.positions.iter().enumerate() {
+    let coeffs = file.probe_set().coefficients.to_f32().unwrap();
+    let flags = file.probe_set().validity.as_ref().unwrap();
+    for (s, p) in file.probe_set().positions.iter().enumerate() {
         if (p.x - 1.0).abs() > 1e-4 {
             continue;
         }
@@ -568,7 +573,7 @@ fn ktx2_export_parses_back_and_matches_the_query() {
     let v = Volume::from_file(&file).unwrap();
     let ex = export_ktx2(&v, Ktx2Encoding::F16, None).unwrap();
     assert_eq!(ex.textures.len(), 7); // 27 floats in groups of 4
-    let coeffs = file.coefficients.to_f32().unwrap();
+    let coeffs = file.probe_set().coefficients.to_f32().unwrap();
     for (g, (_, t)) in ex.textures.iter().enumerate() {
         let back = Ktx2::from_bytes(&t.to_bytes()).unwrap();
         assert_eq!(&back, t);
@@ -668,7 +673,7 @@ fn bevy_export_of_a_uniform_volume_puts_each_probes_ambient_cube_on_a_voxel_cent
     assert_eq!(ex.lattice, BevyLattice::Probes);
     let tex = Ktx2::from_bytes(&ex.texture.to_bytes()).unwrap();
     assert_eq!(tex.size, [4, 6, 15]);
-    let coeffs = file.coefficients.to_f32().unwrap();
+    let coeffs = file.probe_set().coefficients.to_f32().unwrap();
     let n = v.coeffs_per_sample();
     let size = (max - min).max_element();
     for z in 0..res[2] {
@@ -677,9 +682,9 @@ fn bevy_export_of_a_uniform_volume_puts_each_probes_ambient_cube_on_a_voxel_cent
                 let s = (x + res[0] * (y + res[1] * z)) as usize;
                 let centre = bevy_voxel_centre(&ex.sidecar, res, [x, y, z]);
                 assert!(
-                    (centre - file.positions[s]).abs().max_element() < 1e-5 * size,
+                    (centre - file.probe_set().positions[s]).abs().max_element() < 1e-5 * size,
                     "voxel {x} {y} {z}: centre {centre} vs probe {}",
-                    file.positions[s]
+                    file.probe_set().positions[s]
                 );
                 let cube =
                     crate::sh::ambient_cube::fit_from_sh_nonnegative(&coeffs[s * n..(s + 1) * n]);
@@ -818,7 +823,7 @@ mod props {
             )
             .unwrap();
             assert!(file
-                .octree
+                .octree()
                 .as_ref()
                 .unwrap()
                 .nodes
@@ -1043,7 +1048,7 @@ fn noisy_settings(noise_k: f32) -> AdaptiveSettings {
 
 /// Depth of the leaf containing `p` (boxes from the file's octree).
 fn leaf_depth(file: &crate::format::ProbeFile, p: Vec3) -> u32 {
-    let o = file.octree.as_ref().unwrap();
+    let o = file.octree().unwrap();
     let mut i = 0;
     loop {
         let n = o.nodes[i];
@@ -1113,7 +1118,7 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
         file
     };
     let deepest = |f: &crate::format::ProbeFile| {
-        f.octree
+        f.octree()
             .as_ref()
             .unwrap()
             .nodes
@@ -1129,7 +1134,7 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
         let f = build(g);
         assert_eq!(deepest(&f), g.max(1));
         assert_eq!(leaf_depth(&f, Vec3::new(0.32, 0.5, 0.5)), g.max(1));
-        assert!(f.positions.len() < seed_rule.positions.len());
+        assert!(f.probe_set().positions.len() < seed_rule.probe_set().positions.len());
     }
     // Far from the slab nothing refines beyond min_depth in either case.
     assert_eq!(leaf_depth(&seed_rule, Vec3::new(0.9, 0.9, 0.9)), 1);
@@ -1138,7 +1143,7 @@ fn geometry_depth_caps_refinement_by_geometry_alone() {
 /// Largest depth difference between two leaves whose closed boxes touch
 /// (brute force over all pairs).
 fn worst_neighbour_jump(file: &crate::format::ProbeFile) -> u32 {
-    let o = file.octree.as_ref().unwrap();
+    let o = file.octree().unwrap();
     let leaves: Vec<_> = o
         .nodes
         .iter()
@@ -1176,8 +1181,8 @@ fn balance_limits_neighbouring_leaves_to_one_level() {
     for p in [Vec3::new(0.3, 0.5, 0.5), Vec3::new(0.9, 0.1, 0.2)] {
         assert!(leaf_depth(&bal, p) >= leaf_depth(&plain, p));
     }
-    let c = bal.coefficients.to_f32().unwrap();
-    for (i, p) in bal.positions.iter().enumerate() {
+    let c = bal.probe_set().coefficients.to_f32().unwrap();
+    for (i, p) in bal.probe_set().positions.iter().enumerate() {
         let want = if p.x < 0.3 { 1.0 } else { 6.0 };
         assert_eq!(c[i], Vec3::splat(want));
     }
@@ -1243,7 +1248,7 @@ mod forest {
         s.geometry = false;
         s.roots = Some([2, 1, 3]);
         let (file, _) = build_adaptive(&src, &s).unwrap();
-        let o = file.octree.as_ref().unwrap();
+        let o = file.octree().unwrap();
         assert_eq!(o.roots, [2, 1, 3]);
         assert_eq!(o.nodes.len(), 6 + 6 * 8);
         let tree = Volume::from_file(&file).unwrap();
@@ -1274,11 +1279,11 @@ mod forest {
     }
 
     /// Leaves of an auto-rooted forest are cubes; the file round-trips
-    /// through `OCTC` at minor 3; a constant field comes back everywhere.
+    /// through `OCTC` as format 2.0; a constant field comes back everywhere.
     #[test]
     fn forest_leaves_are_cubes_and_round_trip() {
         let (file, min, max) = wall_forest();
-        let o = file.octree.as_ref().unwrap();
+        let o = file.octree().unwrap();
         assert_eq!(o.roots, [2, 1, 1]);
         for n in &o.nodes {
             let e = n.max - n.min;
@@ -1286,8 +1291,9 @@ mod forest {
         }
         assert!(o.nodes.iter().any(|n| n.depth == 4));
         let bytes = file.to_bytes().unwrap();
-        let minor = crate::format::layout::header::MINOR;
-        assert_eq!(u16::from_le_bytes([bytes[minor], bytes[minor + 1]]), 3);
+        let major = crate::format::layout::header::MAJOR;
+        let version = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+        assert_eq!((version(major), version(major + 2)), (2, 0));
         let back = crate::format::ProbeFile::from_bytes(&bytes).unwrap();
         assert_eq!(back, file);
         let v = Volume::from_file(&back).unwrap();
@@ -1315,7 +1321,7 @@ mod forest {
         s.roots = None;
         s.prediction_tolerance = Some(0.25);
         let (file, _) = build_adaptive(&demo, &s).unwrap();
-        assert_eq!(file.octree.as_ref().unwrap().roots, [2, 1, 2]);
+        assert_eq!(file.octree().unwrap().roots, [2, 1, 2]);
         let v = Volume::from_file(&file).unwrap();
         let mut rng = Rng(7);
         for _ in 0..16 {
@@ -1386,7 +1392,7 @@ fn emitter_cells_refine_to_emitter_depth_and_are_not_pruned() {
         }
         let off = build(0, prune);
         assert_eq!(leaf_depth(&off, EMITTER), 1);
-        assert_eq!(off.positions.len(), 27);
+        assert_eq!(off.probe_set().positions.len(), 27);
     }
     // An emitter depth beyond max_depth: the emitter's cells alone go on.
     let f = build_adaptive(
@@ -1402,7 +1408,7 @@ fn emitter_cells_refine_to_emitter_depth_and_are_not_pruned() {
     .0;
     assert_eq!(leaf_depth(&f, EMITTER), 6);
     assert_eq!(leaf_depth(&f, Vec3::new(0.1, 0.9, 0.1)), 3);
-    let o = f.octree.as_ref().unwrap();
+    let o = f.octree().unwrap();
     let leaves = o
         .nodes
         .iter()

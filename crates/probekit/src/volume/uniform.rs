@@ -5,7 +5,7 @@ use super::finish::finish;
 use super::settings::{check_box, BuildStats, CommonSettings};
 use super::source::VolumeSource;
 use super::VolumeBuildError;
-use crate::format::{ProbeFile, VolumeGrid};
+use crate::format::{ProbeFile, VolumeGrid, VolumeStructure};
 use glam::Vec3;
 
 /// Uniform grid with `resolution` probes per axis (each ≥ 2) over the box,
@@ -81,13 +81,11 @@ pub fn build_uniform(
         &nbrs,
         cell.min_element(),
         &mut stats,
-        |f| {
-            f.grid = Some(VolumeGrid {
-                min: common.min,
-                max: common.max,
-                resolution,
-            })
-        },
+        VolumeStructure::Uniform(VolumeGrid {
+            min: common.min,
+            max: common.max,
+            resolution,
+        }),
     )
     .map(|f| (f, stats))
 }

@@ -14,7 +14,7 @@ pub fn plane_has_unit_normal(p: &[f32; 4]) -> bool {
     (Vec3::new(p[0], p[1], p[2]).length() - 1.0).abs() <= PLANE_NORMAL_TOLERANCE
 }
 
-/// Occluder planes of tetrahedra (the file's `CPLN` section, format 1.7): a
+/// Occluder planes of tetrahedra (the file's `CPLN` section): a
 /// refinement of the lattice bits for cells that one flat wall cuts.
 ///
 /// A lattice point is a cell's finest unit of visibility: between lattice

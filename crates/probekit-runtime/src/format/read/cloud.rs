@@ -1,16 +1,16 @@
 //! Sections of a probe cloud: its tetrahedra and outer cells, and what
-//! weights its blend: distance moments, cell visibility (dense and
-//! sparse), occluder planes and fitted probe weights.
+//! weights its blend: distance moments, cell visibility, occluder planes
+//! and fitted probe weights.
 
 use super::{bytes_for, pod_vec, Sec};
 use crate::cloud::cell_visibility::{
-    plane_has_unit_normal, record_bytes, record_has_padding, records_len, stored_counts,
-    CellPlanes, CellVisibility, MAX_CELL_SUBDIVISION,
+    plane_has_unit_normal, records_len, stored_counts, CellPlanes, CellVisibility,
+    MAX_CELL_SUBDIVISION,
 };
 use crate::format::error::FormatError;
 use crate::format::layout::{SectionId, SECTION_HEADER_LEN};
 use crate::format::{
-    validate, DistanceMoments, OuterCells, ProbeFile, TetSection, MAX_VISIBILITY_RESOLUTION,
+    validate, CloudFile, DistanceMoments, OuterCells, TetSection, MAX_VISIBILITY_RESOLUTION,
 };
 use crate::prelude::*;
 
@@ -65,32 +65,6 @@ pub(super) fn parse_visibility(s: &Sec<'_>) -> Result<DistanceMoments, FormatErr
     })
 }
 
-pub(super) fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
-    let [tets, faces, k, _] = s.header()?;
-    check_subdivision(s, k)?;
-    let [data] = s.arrays([records_len(k, tets as usize, faces as usize)])?;
-    // Padding bits are checked here: the sparse form drops clear records.
-    let padded = |rec: &[u8], vertices: usize| record_has_padding(rec, vertices, k);
-    let (t, h) = data.split_at(tets as usize * record_bytes(4, k));
-    let bad = t
-        .chunks_exact(record_bytes(4, k))
-        .position(|r| padded(r, 4))
-        .or_else(|| {
-            h.chunks_exact(record_bytes(3, k))
-                .position(|r| padded(r, 3))
-                .map(|i| tets as usize + i)
-        });
-    if let Some(element) = bad {
-        return Err(FormatError::InvalidValue {
-            id: s.id,
-            element: element as u64,
-            reason: "cell visibility record has padding bits set",
-        });
-    }
-    CellVisibility::new(k, tets as usize, faces as usize, data.to_vec())
-        .ok_or(FormatError::CountOverflow(s.id))
-}
-
 fn check_subdivision(s: &Sec<'_>, k: u32) -> Result<(), FormatError> {
     if (1..=MAX_CELL_SUBDIVISION).contains(&k) {
         Ok(())
@@ -103,9 +77,9 @@ fn check_subdivision(s: &Sec<'_>, k: u32) -> Result<(), FormatError> {
     }
 }
 
-/// `CVSP` (1.5): a mask of one bit per cell, then the records of the cells
-/// whose bit is set.
-pub(super) fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
+/// `CVSP`: a mask of one bit per cell, then the records of the cells whose
+/// bit is set.
+pub(super) fn parse_cell_visibility(s: &Sec<'_>) -> Result<CellVisibility, FormatError> {
     let [tets, faces, k, _] = s.header()?;
     check_subdivision(s, k)?;
     let cells = (tets as usize).checked_add(faces as usize);
@@ -122,9 +96,9 @@ pub(super) fn parse_cell_visibility_sparse(s: &Sec<'_>) -> Result<CellVisibility
     .ok_or(FormatError::CountOverflow(s.id))
 }
 
-/// `PWGT` (1.6): one little-endian `f32` per probe, (1.8) the
-/// brightness exponent as `f32` bits in header word `w1` and (1.9) the
-/// directional one in `w2` (all range checked by [`validate`]).
+/// `PWGT`: one little-endian `f32` per probe, the brightness exponent as
+/// `f32` bits in header word `w1` and the directional one in `w2` (all
+/// range checked by [`validate`]).
 pub(super) fn parse_probe_weights(s: &Sec<'_>) -> Result<(Vec<f32>, f32, f32), FormatError> {
     let [count, alpha, beta, _] = s.header()?;
     let [data] = s.arrays([bytes_for(count, 4)])?;
@@ -135,7 +109,7 @@ pub(super) fn parse_probe_weights(s: &Sec<'_>) -> Result<(Vec<f32>, f32, f32), F
     Ok((w, f32::from_bits(alpha), f32::from_bits(beta)))
 }
 
-/// A `CPLN` section (1.7) as stored, its arrays checked against the section
+/// A `CPLN` section as stored, its arrays checked against the section
 /// length only: the mesh's tetrahedron count (header `w0`), the tetrahedra
 /// with a plane and their planes `[n_x, n_y, n_z, d]`. [`build_cell_planes`]
 /// turns it into a [`CellPlanes`] once the whole file is parsed: the
@@ -147,7 +121,7 @@ pub(super) struct RawCellPlanes {
     planes: Vec<[f32; 4]>,
 }
 
-/// `CPLN` (1.7): header `tet_count, count`; `count × u32` tetrahedron
+/// `CPLN`: header `tet_count, count`; `count × u32` tetrahedron
 /// indices, then `count × f32[4]` planes, each array padded to 16.
 pub(super) fn parse_cell_planes(s: &Sec<'_>) -> Result<RawCellPlanes, FormatError> {
     let [tet_count, count, ..] = s.header()?;
@@ -197,15 +171,15 @@ fn first_bad_cell_plane(raw: &RawCellPlanes) -> Option<FormatError> {
         })
 }
 
-/// Builds the planes of a `CPLN` section once `file` holds every other
+/// Builds the planes of a `CPLN` section once `cloud` holds every other
 /// section: where they may stand first
-/// ([`validate::check_cell_planes_context`]: a cloud with cell
-/// visibility, `tet_count` equal to `TETS`'s count), then each entry.
+/// ([`validate::check_cell_planes_context`]: cell visibility present,
+/// `tet_count` equal to `TETS`'s count), then each entry.
 pub(super) fn build_cell_planes(
-    file: &ProbeFile,
+    cloud: &CloudFile,
     raw: RawCellPlanes,
 ) -> Result<CellPlanes, FormatError> {
-    validate::check_cell_planes_context(file, raw.tet_count as usize)?;
+    validate::check_cell_planes_context(cloud, raw.tet_count as usize)?;
     if let Some(e) = first_bad_cell_plane(&raw) {
         return Err(e);
     }

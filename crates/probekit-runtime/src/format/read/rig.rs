@@ -80,7 +80,7 @@ pub(super) fn parse_rigs(s: &Sec<'_>) -> Result<Vec<Rig>, FormatError> {
         let f = |k: usize| f32::from_bits(h[k]);
         let bbox_min = Vec3::new(f(12), f(13), f(14));
         let bbox_max = Vec3::new(f(15), f(16), f(17));
-        // Written 0 before format 1.11 (a reserved word).
+        // 0: unknown (the box's circumscribed sphere is used).
         let bounding_radius = f(18);
         let start = pos + RIG_HEADER_LEN;
         let sizes = [

@@ -1,14 +1,14 @@
 //! Sections of an irradiance volume: the uniform grid, the adaptive
-//! octree (full and compact) and the SH gradients.
+//! octree and the SH gradients.
 
 use super::{bytes_for, pod_vec, vec3s, Sec};
 use crate::format::error::FormatError;
-use crate::format::layout::{unpack_roots, SectionId, OCTREE_NODE_LEN};
+use crate::format::layout::{unpack_roots, SectionId};
 use crate::format::octree_compact::Compact;
-use crate::format::{Gradients, Octree, OctreeNode, VolumeGrid};
+use crate::format::{Gradients, VolumeGrid};
 use glam::Vec3;
 
-/// The root grid of an `OCTR`/`OCTC` header (`w2`, `w3`).
+/// The root grid of an `OCTC` header (`w2`, `w3`).
 fn parse_roots(id: SectionId, w2: u32, w3: u32) -> Result<[u32; 3], FormatError> {
     unpack_roots(w2, w3).ok_or(FormatError::InvalidValue {
         id,
@@ -17,34 +17,11 @@ fn parse_roots(id: SectionId, w2: u32, w3: u32) -> Result<[u32; 3], FormatError>
     })
 }
 
-pub(super) fn parse_octree(s: &Sec<'_>) -> Result<Octree, FormatError> {
-    let [nodes, samples, w2, w3] = s.header()?;
-    let roots = parse_roots(SectionId::OCTREE, w2, w3)?;
-    let [n, sm] = s.arrays([bytes_for(nodes, OCTREE_NODE_LEN), bytes_for(samples, 4)])?;
-    let nodes = pod_vec::<[u32; 10]>(n)
-        .into_iter()
-        .map(|w| {
-            let f = |k: usize| f32::from_bits(w[k]);
-            OctreeNode {
-                min: Vec3::new(f(0), f(1), f(2)),
-                max: Vec3::new(f(3), f(4), f(5)),
-                first_child: w[6],
-                depth: w[7],
-                sample_offset: w[8],
-                sample_count: w[9],
-            }
-        })
-        .collect();
-    Ok(Octree {
-        nodes,
-        samples: pod_vec(sm),
-        roots,
-    })
-}
-
-pub(super) fn parse_octree_compact(s: &Sec<'_>) -> Result<Compact, FormatError> {
+/// `OCTC`: the compact octree, expanded against the positions once the
+/// whole file is read ([`Compact::expand`]).
+pub(super) fn parse_octree(s: &Sec<'_>) -> Result<Compact, FormatError> {
     let [nodes, max_depth, w2, w3] = s.header()?;
-    let roots = parse_roots(SectionId::OCTREE_COMPACT, w2, w3)?;
+    let roots = parse_roots(SectionId::OCTREE, w2, w3)?;
     let bits_len = (nodes as usize).div_ceil(8);
     let [b, bits] = s.arrays([Some(24), Some(bits_len)])?;
     let b = pod_vec::<[f32; 6]>(b);
