@@ -56,7 +56,7 @@ pub unsafe extern "C" fn pk_walk_state_reset(state: *mut PkWalkState) {
 /// (`probekit_runtime::Probes::query`). These are the weights the
 /// shaders' `pk_blend_l1` / `pk_blend_l2` take, so a GPU blend of the four
 /// probes equals [`pk_sh`] — except for a file whose `PWGT` stores a
-/// directional brightness exponent (format 1.9): [`pk_sh`] then blends per
+/// directional brightness exponent: [`pk_sh`] then blends per
 /// direction, which four weights cannot express, so use [`pk_sh`] per
 /// object. Not a cloud: [`PkStatus::WrongKind`]. `state`
 /// as in [`pk_irradiance`]. No allocation.

@@ -105,7 +105,7 @@ pub struct AdaptiveSettings {
     /// balance bounds that reach to twice the fine size.
     pub balance: bool,
     /// Root cells per axis: the box is first cut into this grid and each
-    /// root cell is an octree (a forest, format 1.3); depths count from the
+    /// root cell is an octree (a forest); depths count from the
     /// root cells. `None` = [`near_cubic_roots`] of the box; `Some([1, 1,
     /// 1])` = Tatarchuk's single octree over the whole box, whose cells copy
     /// the box's aspect ratio.

@@ -1188,7 +1188,7 @@ fn balance_limits_neighbouring_leaves_to_one_level() {
     }
 }
 
-/// Forests of near-cubic root octrees (format 1.3).
+/// Forests of near-cubic root octrees.
 mod forest {
     use super::*;
 
