@@ -178,11 +178,18 @@ pub fn point_sh(order: usize, p: Vec3, light_pos: Vec3, intensity: Vec3, out: &m
 /// linear ramp in `cos` in between. Source: the `KHR_lights_punctual`
 /// specification, "Inner and Outer Cone Angles" (Khronos, 2018).
 pub fn spot_attenuation(cos_to_receiver: f32, inner_rad: f32, outer_rad: f32) -> f32 {
-    let (ci, co) = (inner_rad.cos(), outer_rad.cos());
-    let scale = 1.0 / (ci - co).max(0.001);
-    let offset = -co * scale;
+    let [scale, offset] = spot_scale_offset(inner_rad, outer_rad);
     let t = (cos_to_receiver * scale + offset).clamp(0.0, 1.0);
     t * t
+}
+
+/// The `[scale, offset]` of [`spot_attenuation`] for cone half-angles
+/// `inner_rad` and `outer_rad` (radians): what a shader needs to apply the
+/// same attenuation, `t = clamp(cd·scale + offset, 0, 1)`, `t²`.
+pub fn spot_scale_offset(inner_rad: f32, outer_rad: f32) -> [f32; 2] {
+    let (ci, co) = (inner_rad.cos(), outer_rad.cos());
+    let scale = 1.0 / (ci - co).max(0.001);
+    [scale, -co * scale]
 }
 
 /// A spot light: a point light at `light_pos` whose intensity is multiplied by

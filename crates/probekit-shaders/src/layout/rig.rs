@@ -12,6 +12,7 @@ use super::{check_size, LayoutError};
 use glam::Vec3;
 use probekit_runtime::format::{AxisModel, RigModel};
 use probekit_runtime::rig::{Light, SphereTable, SplitRig};
+use probekit_runtime::sh::lights::spot_scale_offset;
 
 /// Words of the header at the start of each packed rig.
 pub const RIG_HEADER_WORDS: usize = 20;
@@ -130,9 +131,8 @@ pub fn pack_rig_light(light: &Light, share: f32) -> [u32; RIG_LIGHT_WORDS] {
             put(1, position);
             put(4, direction);
             put(8, intensity);
-            let (ci, co) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
-            let scale = 1.0 / (ci - co).max(0.001);
-            (LIGHT_SPOT, 0.0, [scale, -co * scale])
+            let cone = spot_scale_offset(inner_deg.to_radians(), outer_deg.to_radians());
+            (LIGHT_SPOT, 0.0, cone)
         }
         Light::Disk {
             position,
