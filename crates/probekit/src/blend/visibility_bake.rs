@@ -50,6 +50,14 @@ fn check_cloud(file: &ProbeFile) -> Result<(), VisibilityBakeError> {
     }
 }
 
+/// Removes what the weight fit stores (probe weights and both brightness
+/// exponents): it was fitted to the blend data a bake step replaces.
+fn drop_fitted_weights(blend: &mut CloudBlend) {
+    blend.probe_weights = None;
+    blend.brightness_exponent = 0.0;
+    blend.directional_exponent = 0.0;
+}
+
 /// Which visibility data to bake for a cloud.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VisibilityBake {
@@ -155,9 +163,7 @@ impl VisibilityBake {
             )?),
             None => None,
         };
-        file.cloud_mut().blend.probe_weights = None;
-        file.cloud_mut().blend.brightness_exponent = 0.0;
-        file.cloud_mut().blend.directional_exponent = 0.0;
+        drop_fitted_weights(&mut file.cloud_mut().blend);
         Ok(())
     }
 
@@ -180,9 +186,7 @@ impl VisibilityBake {
         if self.cell_planes {
             file.cloud_mut().blend.cell_planes = bake_file_cell_planes(tracer, file, progress)?;
         }
-        file.cloud_mut().blend.probe_weights = None;
-        file.cloud_mut().blend.brightness_exponent = 0.0;
-        file.cloud_mut().blend.directional_exponent = 0.0;
+        drop_fitted_weights(&mut file.cloud_mut().blend);
         Ok(())
     }
 
@@ -208,9 +212,7 @@ impl VisibilityBake {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<Vec<PhaseTime>, VisibilityBakeError> {
         check_cloud(file)?;
-        file.cloud_mut().blend.probe_weights = None;
-        file.cloud_mut().blend.brightness_exponent = 0.0;
-        file.cloud_mut().blend.directional_exponent = 0.0;
+        drop_fitted_weights(&mut file.cloud_mut().blend);
         let Some(fit) = &self.probe_weights else {
             return Ok(Vec::new());
         };
