@@ -109,6 +109,8 @@ fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32, radiu
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: None,
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     }
 }
 

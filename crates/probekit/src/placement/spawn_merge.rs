@@ -380,6 +380,8 @@ mod tests {
             inner_angle: 0.0,
             outer_angle: 0.0,
             group: None,
+            mode: crate::scene::LightMode::Auto,
+            angular_diameter: 0.0,
         };
         let mut s = Scene::from_triangles(
             "shadow-edge",

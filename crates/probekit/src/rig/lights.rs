@@ -265,6 +265,8 @@ mod tests {
             inner_angle: 0.25,
             outer_angle: 0.5,
             group: None,
+            mode: crate::scene::LightMode::Auto,
+            angular_diameter: 0.0,
         };
         let Some(Light::Spot {
             inner_deg,

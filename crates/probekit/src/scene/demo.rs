@@ -182,6 +182,8 @@ pub(crate) fn build() -> Scene {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: Some("lamp".into()),
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     });
     parts.lights.push(Light {
         kind: LightKind::Directional,
@@ -193,6 +195,8 @@ pub(crate) fn build() -> Scene {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: Some("sun".into()),
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     });
     let extras = SceneExtras {
         environment: EnvironmentDesc {

@@ -247,6 +247,8 @@ pub(crate) fn load(path: &Path) -> Result<Parts, SceneError> {
                 inner_angle: inner,
                 outer_angle: outer,
                 group: None,
+                mode: crate::scene::LightMode::Auto,
+                angular_diameter: 0.0,
             });
         }
         for child in node.children() {

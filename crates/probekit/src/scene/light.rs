@@ -21,6 +21,41 @@ pub enum LightKind {
     Disk,
 }
 
+/// Where a light's direct term is evaluated: in the probes' SH, or exactly
+/// at run time with each probe's occlusion of it stored beside the SH
+/// (`docs/scene-format.md`, "Light modes").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightMode {
+    /// The bake decides: run time where its held-out estimate says that
+    /// lowers the error (small, bright, local lights), baked otherwise.
+    #[default]
+    Auto,
+    /// All of its light goes into the probes' SH.
+    Baked,
+    /// Its direct light is evaluated at run time (exact unoccluded
+    /// irradiance × the probes' blended occlusion); its bounce light stays
+    /// in the SH, in its light group.
+    Runtime,
+}
+
+impl LightMode {
+    /// The scene file's name of the mode (`"auto"`, `"baked"`, `"runtime"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            LightMode::Auto => "auto",
+            LightMode::Baked => "baked",
+            LightMode::Runtime => "runtime",
+        }
+    }
+
+    /// The mode named `name` in a scene file.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [LightMode::Auto, LightMode::Baked, LightMode::Runtime]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+}
+
 /// An analytic light. Units: see the module docs and `docs/scene-format.md`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Light {
@@ -43,6 +78,12 @@ pub struct Light {
     pub outer_angle: f32,
     /// Optional light group name, for capturing lights separately (`bake --groups`).
     pub group: Option<String>,
+    /// Baked, run-time or chosen by the bake ([`LightMode`]).
+    pub mode: LightMode,
+    /// Directional lights: the angular diameter of the sun's disc (radians,
+    /// in (0, π/2)), over which its occlusion is sampled; 0 for a
+    /// direction with no extent and for every other kind.
+    pub angular_diameter: f32,
 }
 
 impl Light {

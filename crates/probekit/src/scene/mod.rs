@@ -33,7 +33,7 @@ mod scene_file;
 
 pub use geometry::{Aabb, BakeBoxError, MeshObject, Triangle};
 pub(crate) use hash::Fnv1a;
-pub use light::{EmissiveTriangle, Light, LightKind};
+pub use light::{EmissiveTriangle, Light, LightKind, LightMode};
 pub(crate) use loading::{load_mesh_file, transform_triangle, Parts, SceneExtras};
 pub use loading::{SceneError, SceneWarning};
 pub use material::{srgb_to_linear, AlphaMode, Material, Texture};

@@ -227,6 +227,8 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 0.0
             },
             group: l.group.clone(),
+            mode: crate::scene::LightMode::Auto,
+            angular_diameter: 0.0,
         });
     }
 

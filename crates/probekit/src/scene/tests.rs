@@ -230,6 +230,8 @@ fn sphere_light_radiance_integrates_to_its_intensity() {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: None,
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     };
     let lr = l.radiance().x as f64;
     let r = l.radius as f64;

@@ -182,6 +182,8 @@ fn central_gradients_match_the_closed_form_and_a_wider_difference() {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: None,
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     };
     let sc = scene(Vec::new(), Vec3::ZERO, vec![l.clone()]);
     let mut s = settings(1024, false);
@@ -585,6 +587,8 @@ fn contains_emitter_finds_emissive_triangles_and_positional_lights() {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: None,
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     };
     let sphere = light(LightKind::Sphere, Vec3::splat(-0.5), 0.1);
     // A directional light has no position (its field is ignored).

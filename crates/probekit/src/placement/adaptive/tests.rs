@@ -127,6 +127,8 @@ fn light_shells_are_geometric_and_inside_the_box() {
         inner_angle: 0.0,
         outer_angle: 0.0,
         group: None,
+        mode: crate::scene::LightMode::Auto,
+        angular_diameter: 0.0,
     };
     let sun = Light {
         kind: LightKind::Directional,
