@@ -12,7 +12,7 @@
 
 use super::{
     Coefficients, FormatError, Gradients, L1Mode, LightGroup, Octree, OuterCells, ProbeFileKind,
-    Rig, TetSection, Validity, VolumeGrid,
+    Rig, RuntimeLights, TetSection, Validity, VolumeGrid,
 };
 use crate::cloud::{CellPlanes, CellVisibility};
 use crate::format::DistanceMoments;
@@ -39,6 +39,10 @@ pub struct ProbeSet {
     /// `positions`, at the order of `coefficients`; names unique. See
     /// [`ProbeFile::relit`] and [`super::Relighter`].
     pub groups: Vec<LightGroup>,
+    /// Lights an engine evaluates at run time, whose direct light the SH
+    /// leaves out, and each probe's occlusion of them (`LITE` and `OCCL`;
+    /// `None`: every light is in the SH). See [`super::RuntimeLights`].
+    pub runtime_lights: Option<RuntimeLights>,
 }
 
 impl ProbeSet {
@@ -51,6 +55,7 @@ impl ProbeSet {
             l1_mode: L1Mode::Linear,
             validity: None,
             groups: Vec::new(),
+            runtime_lights: None,
         }
     }
 }

@@ -12,11 +12,11 @@ pub const MAGIC: [u8; 8] = *b"PROBEKIT";
 /// every 1.x file: bake it again) or a newer one
 /// ([`FormatError::UnsupportedVersion`](super::FormatError::UnsupportedVersion)).
 pub const VERSION_MAJOR: u16 = 2;
-/// Minor version written. A reader of 2.0 loads files of a larger minor of
-/// the same major and skips their unknown sections; everything this
-/// version defines is in every 2.0 file's vocabulary (no feature needs a
-/// minor of its own).
-pub const VERSION_MINOR: u16 = 0;
+/// Minor version written. A reader loads files of a larger minor of the
+/// same major and skips their unknown sections. 2.1 adds the run-time
+/// lights (`LITE`) and the probes' occlusion of them (`OCCL`); a 2.0 reader
+/// skips both and answers with the SH part alone.
+pub const VERSION_MINOR: u16 = 1;
 
 /// Bits of the header's flags word holding the intended evaluation of L1
 /// (order-2) coefficients: 0 linear, 1 hallucinated ZH3; 2 and 3 are
@@ -52,6 +52,10 @@ pub const ALIGN: usize = 16;
 pub const SECTION_HEADER_LEN: usize = 16;
 /// Bytes in one rig record header.
 pub const RIG_HEADER_LEN: usize = 80;
+/// Bytes in one run-time light record (`LITE`).
+pub const RUNTIME_LIGHT_LEN: usize = 64;
+/// Most run-time lights a file holds (a light index is one byte in `OCCL`).
+pub const MAX_RUNTIME_LIGHTS: usize = 255;
 /// Bytes in one light-group record header (`LGRP`).
 pub const GROUP_HEADER_LEN: usize = 16;
 /// "No element": hull neighbour, leaf node's children, face without a tetrahedron.
@@ -117,11 +121,21 @@ impl SectionId {
     /// one plane `[n_x, n_y, n_z, d]` each
     /// ([`crate::cloud::CellPlanes`]). Only with `CVSP`.
     pub const CELL_PLANES: Self = Self::from_fourcc(*b"CPLN");
+    /// Lights an engine evaluates at run time (the probes' SH leaves out
+    /// their direct light): one 64-byte record each, then their light-group
+    /// names ([`super::RuntimeLights`]).
+    pub const RUNTIME_LIGHTS: Self = Self::from_fourcc(*b"LITE");
+    /// Each probe's occlusion of the run-time lights, 8 bits per light that
+    /// reaches it, stored sparse: a count per probe, then `(light, value)`
+    /// byte pairs ([`super::LightOcclusion`]). Only with `LITE`.
+    pub const LIGHT_OCCLUSION: Self = Self::from_fourcc(*b"OCCL");
     /// Pseudo-id naming the file header in errors and size tables.
     pub const HEADER: Self = Self::from_fourcc(*b"HEAD");
 
     /// Every section this version knows, in the order the writer emits them.
-    pub const KNOWN: [Self; 15] = [
+    pub const KNOWN: [Self; 17] = [
+        Self::RUNTIME_LIGHTS,
+        Self::LIGHT_OCCLUSION,
         Self::POSITIONS,
         Self::COEFFICIENTS,
         Self::VALIDITY,
@@ -168,6 +182,8 @@ impl SectionId {
             Self::CELL_VISIBILITY => "cell_visibility",
             Self::PROBE_WEIGHTS => "probe_weights",
             Self::CELL_PLANES => "cell_planes",
+            Self::RUNTIME_LIGHTS => "runtime_lights",
+            Self::LIGHT_OCCLUSION => "light_occlusion",
             Self::HEADER => "header",
             _ => return None,
         })

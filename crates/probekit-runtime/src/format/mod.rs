@@ -27,6 +27,7 @@ pub mod layout;
 #[cfg(not(feature = "write"))]
 #[allow(dead_code)]
 pub(crate) mod layout;
+mod lights;
 mod octree_compact;
 mod read;
 mod validate;
@@ -40,6 +41,7 @@ pub use contents::{
 pub use error::FormatError;
 pub use groups::{LightGroup, Relighter};
 pub use layout::SectionId;
+pub use lights::{quantize_occlusion, LightOcclusion, RuntimeLight, RuntimeLights};
 pub use visibility::{DistanceMoments, MAX_VISIBILITY_RESOLUTION};
 
 // The byte-level reading and writing the baker and tools use (feature

@@ -4,6 +4,7 @@
 //! invariants. Every offset and size is computed with checked arithmetic.
 
 mod cloud;
+mod lights;
 mod probes;
 mod rig;
 mod volume;
@@ -334,7 +335,9 @@ fn belongs(kind: ProbeFileKind, id: SectionId) -> bool {
         SectionId::POSITIONS
         | SectionId::COEFFICIENTS
         | SectionId::VALIDITY
-        | SectionId::LIGHT_GROUPS => kind != ProbeFileKind::Rig,
+        | SectionId::LIGHT_GROUPS
+        | SectionId::RUNTIME_LIGHTS
+        | SectionId::LIGHT_OCCLUSION => kind != ProbeFileKind::Rig,
         SectionId::OCTREE | SectionId::GRID | SectionId::GRADIENTS => kind == ProbeFileKind::Volume,
         _ => kind == ProbeFileKind::Cloud,
     }
@@ -347,6 +350,8 @@ struct Decoded {
     coefficients: Option<super::Coefficients>,
     validity: Option<Vec<super::Validity>>,
     groups: Vec<super::LightGroup>,
+    runtime_lights: Option<Vec<super::RuntimeLight>>,
+    occlusion: Option<(super::LightOcclusion, u32)>,
     tetrahedra: Option<super::TetSection>,
     outer: Option<super::OuterCells>,
     compact: Option<super::octree_compact::Compact>,
@@ -399,6 +404,8 @@ pub(super) fn parse(bytes: &[u8]) -> Result<ProbeFile, FormatError> {
             SectionId::GRADIENTS => d.gradients = Some(parse_gradients(&s)?),
             SectionId::RIGS => d.rigs = parse_rigs(&s)?,
             SectionId::LIGHT_GROUPS => d.groups = parse_groups(&s)?,
+            SectionId::RUNTIME_LIGHTS => d.runtime_lights = Some(lights::parse_runtime_lights(&s)?),
+            SectionId::LIGHT_OCCLUSION => d.occlusion = Some(lights::parse_light_occlusion(&s)?),
             SectionId::VISIBILITY => d.moments = Some(parse_visibility(&s)?),
             SectionId::CELL_VISIBILITY => d.cells = Some(parse_cell_visibility(&s)?),
             SectionId::PROBE_WEIGHTS => d.weights = Some(parse_probe_weights(&s)?),
@@ -440,6 +447,21 @@ fn assemble(
         l1_mode,
         validity: d.validity,
         groups: d.groups,
+        runtime_lights: match (d.runtime_lights, d.occlusion) {
+            (None, None) => None,
+            (Some(lights), Some((occlusion, count))) => {
+                if count as usize != lights.len() {
+                    return Err(FormatError::CountMismatch {
+                        id: SectionId::LIGHT_OCCLUSION,
+                        expected: lights.len() as u64,
+                        actual: u64::from(count),
+                    });
+                }
+                Some(super::RuntimeLights { lights, occlusion })
+            }
+            (Some(_), None) => return Err(FormatError::MissingSection(SectionId::LIGHT_OCCLUSION)),
+            (None, Some(_)) => return Err(FormatError::MissingSection(SectionId::RUNTIME_LIGHTS)),
+        },
     };
     if kind == ProbeFileKind::Volume {
         let structure = match (d.grid, d.compact) {

@@ -132,6 +132,10 @@ fn validate_probes(p: &ProbeSet) -> Result<(), FormatError> {
         }
     }
 
+    if let Some(l) = &p.runtime_lights {
+        l.validate(probes)?;
+    }
+
     // Light groups: one SH per probe each, at the coefficients' order.
     for (k, g) in p.groups.iter().enumerate() {
         let id = SectionId::LIGHT_GROUPS;

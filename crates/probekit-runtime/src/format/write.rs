@@ -13,8 +13,8 @@ use super::layout::{
     VERSION_MAJOR, VERSION_MINOR,
 };
 use super::{
-    crc32, AxisModel, CloudBlend, CloudFile, ProbeFile, ProbeSet, Rig, RigModel, VolumeFile,
-    VolumeStructure,
+    crc32, AxisModel, CloudBlend, CloudFile, ProbeFile, ProbeSet, Rig, RigModel, RuntimeLights,
+    VolumeFile, VolumeStructure,
 };
 use crate::prelude::*;
 use alloc::collections::BTreeMap;
@@ -148,6 +148,9 @@ pub(super) fn encode_sections(f: &ProbeFile) -> Result<Vec<(SectionId, Vec<u8>)>
     }
     if let Some(p) = f.probes().filter(|p| !p.groups.is_empty()) {
         out.push((SectionId::LIGHT_GROUPS, encode_groups(p)?));
+    }
+    if let Some(l) = f.probes().and_then(|p| p.runtime_lights.as_ref()) {
+        encode_runtime_lights(l, &mut out)?;
     }
     if let Some(c) = cloud {
         encode_blend(&c.blend, &mut out)?;
@@ -298,6 +301,33 @@ fn encode_groups(p: &ProbeSet) -> Result<Vec<u8>, FormatError> {
         s.bytes(&c.data).pad();
     }
     Ok(s.finish())
+}
+
+/// `LITE` and `OCCL`.
+fn encode_runtime_lights(l: &RuntimeLights, out: &mut Sections) -> Result<(), FormatError> {
+    let mut s = SectionBuilder::new([count(l.lights.len(), "run-time lights")?, 0, 0, 0]);
+    for r in &l.lights {
+        let (kind, words) = super::lights::light_words(&r.light);
+        s.u32s([kind, count(r.group.len(), "light group name")?]);
+        // -0.0 is written as 0.0 (equal contents, equal bytes).
+        s.f32s(words.iter().map(|w| *w + 0.0)).u32s([0]);
+    }
+    for r in &l.lights {
+        s.bytes(r.group.as_bytes());
+    }
+    s.pad();
+    out.push((SectionId::RUNTIME_LIGHTS, s.finish()));
+    let o = &l.occlusion;
+    let mut s = SectionBuilder::new([
+        count(o.probe_count(), "more than u32::MAX probes")?,
+        count(l.lights.len(), "run-time lights")?,
+        count(o.entries().len(), "occlusion entries")?,
+        0,
+    ]);
+    s.bytes(o.counts()).pad();
+    s.bytes(bytemuck::cast_slice(o.entries())).pad();
+    out.push((SectionId::LIGHT_OCCLUSION, s.finish()));
+    Ok(())
 }
 
 /// `VISM`, `CVSP`, `PWGT` and `CPLN`.

@@ -2,6 +2,7 @@
 //! one query shape.
 
 mod error;
+mod lights;
 mod options;
 mod query;
 
@@ -11,7 +12,7 @@ pub use query::{Cell, Query};
 
 use crate::cloud::visibility::MAX_SHARPNESS;
 use crate::cloud::{ProbeCloud, WalkState};
-use crate::format::{FormatError, L1Mode, ProbeFile, ProbeFileKind, Relighter, Rig};
+use crate::format::{FormatError, L1Mode, ProbeFile, ProbeFileKind, Relighter, Rig, RuntimeLight};
 use crate::prelude::*;
 use crate::rig::{RigState, SphereTable, SplitRig};
 use crate::volume::{Interp, Volume, VolumeError};
@@ -46,6 +47,8 @@ pub struct Probes {
     /// The sphere-light table split rigs share; built when the file has
     /// rigs.
     sphere_table: Option<Arc<SphereTable>>,
+    /// Lights evaluated at run time and the probes' occlusion of them.
+    lights: Option<lights::LightTerm>,
 }
 
 /// What answers position queries.
@@ -137,6 +140,7 @@ impl Probes {
             rigs,
             rig_data: file.rigs().to_vec(),
             sphere_table: (!file.rigs().is_empty()).then(|| Arc::new(SphereTable::default())),
+            lights: file.probes().and_then(lights::LightTerm::new),
         })
     }
 
@@ -208,14 +212,67 @@ impl Probes {
     /// non-zero length; normalized here), linear RGB, not divided by π
     /// (divide by π for outgoing radiance of a white Lambertian surface).
     /// All stored bands are used; an L1 file in
-    /// [`L1Mode::Zh3Hallucinated`] adds the hallucinated zonal lobe.
+    /// [`L1Mode::Zh3Hallucinated`] adds the hallucinated zonal lobe. A file
+    /// with run-time lights adds, per light, its exact unoccluded
+    /// irradiance times the probes' visible fractions of it blended with
+    /// the SH's weights ([`crate::format::RuntimeLights`]): the whole light
+    /// of the scene. An engine drawing those lights itself asks for
+    /// [`Probes::sh_irradiance`] and [`Probes::light_occlusion`] instead.
     pub fn irradiance(
         &self,
         state: &mut ObjectState,
         position: Vec3,
         normal: Vec3,
     ) -> Result<[f32; 3], QueryError> {
-        self.irradiance_at(state, position, normal, 0)
+        self.irradiance_at(state, position, normal, 0, true)
+    }
+
+    /// The SH part of [`Probes::irradiance`]: without the run-time lights'
+    /// direct light (equal to it for a file without run-time lights).
+    pub fn sh_irradiance(
+        &self,
+        state: &mut ObjectState,
+        position: Vec3,
+        normal: Vec3,
+    ) -> Result<[f32; 3], QueryError> {
+        self.irradiance_at(state, position, normal, 0, false)
+    }
+
+    /// The lights the file leaves to run time (empty if none): the SH holds
+    /// everything else, their bounce light included.
+    pub fn runtime_lights(&self) -> &[RuntimeLight] {
+        self.lights.as_ref().map_or(&[], |l| l.lights())
+    }
+
+    /// Each run-time light's visible fraction at `position`, in `[0, 1]`:
+    /// the probes' stored fractions blended with the SH's weights, in the
+    /// order of [`Probes::runtime_lights`], into `out[..count]`. For an
+    /// engine that evaluates those lights itself: their unoccluded
+    /// irradiance times this is what [`Probes::irradiance`] adds to the SH
+    /// part (or use it to dim the engine's own shadowed light where the
+    /// probes see none). `out` shorter than the light count is a
+    /// [`QueryError::LengthMismatch`].
+    pub fn light_occlusion(
+        &self,
+        state: &mut ObjectState,
+        position: Vec3,
+        out: &mut [f32],
+    ) -> Result<(), QueryError> {
+        self.has_probes()?;
+        query::check_position(position, 0)?;
+        let count = self.runtime_lights().len();
+        if out.len() < count {
+            return Err(QueryError::LengthMismatch {
+                positions: 1,
+                normals: count,
+                results: out.len(),
+            });
+        }
+        if let Some(t) = &self.lights {
+            let (p, w) = self.blend_weights(state, position);
+            t.occlusion_into(&p, &w, &mut out[..count]);
+        }
+        Ok(())
     }
 
     /// [`Probes::sh_at`] for every point of `positions`, in order, sharing
@@ -263,7 +320,7 @@ impl Probes {
             });
         }
         for (index, ((&p, &n), o)) in positions.iter().zip(normals).zip(out).enumerate() {
-            *o = self.irradiance_at(state, p, n, index)?;
+            *o = self.irradiance_at(state, p, n, index, true)?;
         }
         Ok(())
     }
@@ -412,19 +469,33 @@ impl Probes {
         Ok(rig.irradiance(position, n).to_array())
     }
 
-    /// One irradiance query, `index` its place in a batch (for errors).
+    /// One irradiance query, `index` its place in a batch (for errors);
+    /// `with_lights`: add the run-time lights' term.
     fn irradiance_at(
         &self,
         state: &mut ObjectState,
         position: Vec3,
         normal: Vec3,
         index: usize,
+        with_lights: bool,
     ) -> Result<[f32; 3], QueryError> {
         self.has_probes()?;
         query::check_position(position, index)?;
         let n = query::unit_normal(normal, index)?;
         let k = (self.order * self.order) as usize;
-        let e = if k <= 9 {
+        let terms = self.lights.as_ref().filter(|_| with_lights);
+        let e = if let Some(t) = terms {
+            // One blend for the SH and the lights' occlusion.
+            let mut buf = [Vec3::ZERO; MAX_COEFFS];
+            let (probes, weights) = self.sample_weighted(state, position, &mut buf[..k]);
+            let e = if k == 4 && self.l1_mode == L1Mode::Zh3Hallucinated {
+                let l1: &[Vec3; 4] = buf[..4].try_into().unwrap_or(&[Vec3::ZERO; 4]);
+                probekit_sh::zh3::zh3_hallucinated_irradiance(l1, n)
+            } else {
+                crate::eval::irradiance(&buf[..k], n)
+            };
+            e + t.irradiance(&probes, &weights, position, n)
+        } else if k <= 9 {
             let mut buf = [Vec3::ZERO; 9];
             self.sample(state, position, &mut buf[..k])?;
             if self.l1_mode == L1Mode::Zh3Hallucinated {
@@ -469,6 +540,48 @@ impl Probes {
             *out = query::hallucinate(out);
         }
         Ok(())
+    }
+
+    /// The probes and weights of the blend at `p` (a cloud's four, a
+    /// volume cell's eight corners; unused slots weigh 0).
+    fn blend_weights(&self, state: &mut ObjectState, p: Vec3) -> ([u32; 8], [f32; 8]) {
+        let (mut probes, mut weights) = ([0u32; 8], [0.0f32; 8]);
+        match &self.source {
+            Source::Cloud(c) => {
+                let (_, p4, w4) = c.blend_at(p, &mut state.walk);
+                probes[..4].copy_from_slice(&p4);
+                weights[..4].copy_from_slice(&w4);
+            }
+            Source::Volume(v, _) => (_, probes, weights) = v.cell_at(p),
+            Source::None => {}
+        }
+        (probes, weights)
+    }
+
+    /// [`Self::sample`] that also returns the blend's probes and weights
+    /// (a cloud blends once for both).
+    fn sample_weighted(
+        &self,
+        state: &mut ObjectState,
+        p: Vec3,
+        out: &mut [Vec3],
+    ) -> ([u32; 8], [f32; 8]) {
+        match &self.source {
+            Source::Cloud(c) => {
+                let (_, p4, w4) = c.blend_at(p, &mut state.walk);
+                c.blend_sh(&p4, &w4, out);
+                let (mut probes, mut weights) = ([0u32; 8], [0.0f32; 8]);
+                probes[..4].copy_from_slice(&p4);
+                weights[..4].copy_from_slice(&w4);
+                (probes, weights)
+            }
+            Source::Volume(v, interp) => {
+                v.sample_into(p, *interp, out);
+                let (_, probes, weights) = v.cell_at(p);
+                (probes, weights)
+            }
+            Source::None => ([0; 8], [0.0; 8]),
+        }
     }
 
     /// The stored coefficients at `p` into `out` (`order²` long).
