@@ -343,11 +343,21 @@ pub(crate) struct Emitters {
 impl Emitters {
     /// Prepares the scene's lights and loads its environment map.
     pub(crate) fn new(scene: &Scene) -> Result<Self, BakeError> {
-        let mut names: Vec<String> = scene
+        let names: Vec<String> = scene
             .lights
             .iter()
             .map(|l| l.group.clone().unwrap_or_else(|| DEFAULT_GROUP.to_string()))
             .collect();
+        Self::with_light_groups(scene, &names)
+    }
+
+    /// [`Emitters::new`] with light `i` in group `light_groups[i]` instead
+    /// of its own `group` (one name per light).
+    pub(crate) fn with_light_groups(
+        scene: &Scene,
+        light_groups: &[String],
+    ) -> Result<Self, BakeError> {
+        let mut names: Vec<String> = light_groups.to_vec();
         names.push(EMISSIVE_GROUP.into());
         names.push(ENVIRONMENT_GROUP.into());
         names.sort();
@@ -367,7 +377,7 @@ impl Emitters {
             {
                 return Err(bad("non-finite position, direction, colour or intensity"));
             }
-            let group = gi(l.group.as_deref().unwrap_or(DEFAULT_GROUP));
+            let group = gi(light_groups.get(i).map_or(DEFAULT_GROUP, String::as_str));
             let power = l.color * l.intensity;
             if power.max_element() <= 0.0 {
                 continue;

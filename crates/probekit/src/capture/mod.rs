@@ -153,6 +153,28 @@ impl<'s> Baker<'s> {
         self.emitters.env = Emitters::map_environment(map, intensity, rotation_y_degrees);
     }
 
+    /// Puts light `i` of the scene in light group `light_groups[i]` for
+    /// every capture after this (one name per light; emissive triangles
+    /// and the environment keep their groups). The bake's run-time light
+    /// split gives each candidate light a group of its own this way, so
+    /// that a capture can leave its direct light out and report it apart.
+    pub fn set_light_groups(&mut self, light_groups: &[String]) -> Result<(), BakeError> {
+        if light_groups.len() != self.scene.lights.len() {
+            return Err(BakeError::BadSettings(format!(
+                "{} light group names for {} lights",
+                light_groups.len(),
+                self.scene.lights.len()
+            )));
+        }
+        let env = std::mem::replace(
+            &mut self.emitters.env,
+            emitters::Environment::Black,
+        );
+        self.emitters = Emitters::with_light_groups(self.scene, light_groups)?;
+        self.emitters.env = env;
+        Ok(())
+    }
+
     /// The scene.
     pub fn scene(&self) -> &'s Scene {
         self.scene

@@ -8,14 +8,23 @@ use super::{
 use toml::{Table, Value};
 
 /// Top-level keys.
-const TOP: [&str; 7] = [
+const TOP: [&str; 8] = [
     "box",
     "codec",
     "l1_evaluation",
     "placement",
     "capture",
+    "lights",
     "blend",
     "volume",
+];
+/// `[lights]` keys.
+const LIGHTS: [&str; 5] = [
+    "split",
+    "max_per_probe",
+    "occlusion_samples",
+    "decision_points",
+    "resolved",
 ];
 /// `[capture]` keys.
 const CAPTURE: [&str; 8] = [
@@ -185,6 +194,7 @@ pub(super) fn check_keys(layer: &str, table: &Table, merged: &Table) -> Result<(
         // A section's key at the top (`samples` for `capture.samples`).
         let home = [
             ("capture", &CAPTURE[..]),
+            ("lights", &LIGHTS[..]),
             ("blend", &BLEND[..]),
             ("volume.gradients", &GRADIENTS[..]),
         ]
@@ -252,6 +262,9 @@ pub(super) fn check_keys(layer: &str, table: &Table, merged: &Table) -> Result<(
         if let Some(v) = sub(layer, c, "validity", "capture.validity")? {
             check_plain(layer, "capture.validity", v, &VALIDITY)?;
         }
+    }
+    if let Some(l) = sub(layer, table, "lights", "lights")? {
+        check_plain(layer, "lights", l, &LIGHTS)?;
     }
     if let Some(b) = sub(layer, table, "blend", "blend")? {
         check_plain(layer, "blend", b, &BLEND)?;
@@ -365,6 +378,21 @@ impl Recipe {
             }
         }
         self.validate_placement()?;
+        let l = &self.lights;
+        if !(1..=probekit_runtime::format::layout::MAX_RUNTIME_LIGHTS as u32)
+            .contains(&l.max_per_probe)
+        {
+            return Err(bad(
+                "lights.max_per_probe",
+                format!("{}: expected 1 to 255", l.max_per_probe),
+            ));
+        }
+        if l.occlusion_samples == 0 {
+            return Err(bad("lights.occlusion_samples", "0: expected at least 1".into()));
+        }
+        if l.decision_points == 0 {
+            return Err(bad("lights.decision_points", "0: expected at least 1".into()));
+        }
         let c = &self.capture;
         if c.samples == 0 {
             return Err(bad("capture.samples", "0: expected at least 1".into()));

@@ -54,6 +54,8 @@ pub struct Recipe {
     pub placement: Placement,
     /// How each probe's light is captured (clouds and volumes).
     pub capture: Capture,
+    /// Which lights are left to run time (clouds and volumes).
+    pub lights: Lights,
     /// The data a cloud blends with, against leaks (`probekit bake`).
     pub blend: Blend,
     /// The layout of an irradiance volume (`probekit volume`).
@@ -68,6 +70,7 @@ impl Default for Recipe {
             l1_evaluation: L1Evaluation::Linear,
             placement: Placement::default(),
             capture: Capture::default(),
+            lights: Lights::default(),
             blend: Blend::default(),
             volume: VolumeRecipe::default(),
         }
@@ -327,6 +330,51 @@ impl Default for Capture {
             validity: Validity::default(),
         }
     }
+}
+
+/// The run-time light split: which lights' direct light is left out of the
+/// probes' SH and evaluated exactly at run time, times each probe's stored
+/// occlusion of it (`docs/scene-format.md`, "Light modes").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Lights {
+    /// Split lights as their `mode` says; false bakes every light.
+    pub split: bool,
+    /// Most run-time lights that may reach one probe (K); beyond it,
+    /// whole lights are demoted to baked, lowest contribution first.
+    pub max_per_probe: u32,
+    /// Stratified shadow rays per probe and light for the visible fraction
+    /// of a sphere, a disk or a sun with an angular diameter.
+    pub occlusion_samples: u32,
+    /// Held-out points on which `auto` lights are decided.
+    pub decision_points: u32,
+    /// The bake's choice per scene light, in the scene's order (written by
+    /// the bake into the file's record; a recipe that gives it is followed
+    /// instead of deciding again). Empty: decide.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub resolved: Vec<ResolvedMode>,
+}
+
+impl Default for Lights {
+    fn default() -> Self {
+        Lights {
+            split: true,
+            max_per_probe: 4,
+            occlusion_samples: 64,
+            decision_points: 2000,
+            resolved: Vec::new(),
+        }
+    }
+}
+
+/// Where a light ended up after the bake's choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResolvedMode {
+    /// Its light is in the SH.
+    Baked,
+    /// Its direct light is evaluated at run time.
+    Runtime,
 }
 
 /// Probe validity: probes inside geometry are moved out or flagged.
