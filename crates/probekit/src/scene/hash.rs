@@ -12,8 +12,8 @@ impl Scene {
     /// every material (name bytes, base colour, alpha, alpha mode tag + cutoff, emissive,
     /// texture indices or u32::MAX, double-sided byte), every texture (width, height, texels),
     /// every light (kind tag, position, direction, colour, intensity, radius, angles, group
-    /// name), the environment (colour, intensity, rotation, and the map file's bytes — by
-    /// content, not by path).
+    /// name, mode tag, angular diameter), the environment (colour, intensity, rotation, and
+    /// the map file's bytes — by content, not by path).
     ///
     /// Not hashed: where the scene was loaded from (a relative and an absolute path, or a run
     /// from another folder, hash the same), warnings, the `[bake]` table (box, samples,
@@ -79,6 +79,8 @@ impl Scene {
                 }
                 None => h.u32(0),
             }
+            h.u32(l.mode as u32);
+            h.f32(l.angular_diameter);
         }
         let e = &self.environment;
         h.vec3(e.color);

@@ -270,4 +270,6 @@ pub(crate) mod tests_support {
 }
 
 #[cfg(test)]
+mod light_tests;
+#[cfg(test)]
 mod tests;

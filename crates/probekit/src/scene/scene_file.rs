@@ -2,8 +2,8 @@
 //! `[environment]`, `[bake]`, `[[region]]`. Paths are relative to the scene file.
 
 use super::{
-    load_mesh_file, Aabb, BakeSettings, EnvironmentDesc, Light, LightKind, Parts, Region, Scene,
-    SceneError, SceneExtras,
+    load_mesh_file, Aabb, BakeSettings, EnvironmentDesc, Light, LightKind, LightMode, Parts,
+    Region, Scene, SceneError, SceneExtras,
 };
 use glam::{Mat4, Quat, Vec3};
 use serde::Deserialize;
@@ -43,6 +43,8 @@ struct LightEntry {
     inner_angle_degrees: Option<f32>,
     outer_angle_degrees: Option<f32>,
     group: Option<String>,
+    mode: Option<String>,
+    angular_diameter_degrees: Option<f32>,
 }
 
 #[derive(Deserialize)]
@@ -198,6 +200,11 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
         };
         let inner = l.inner_angle_degrees.unwrap_or(0.0);
         let outer = l.outer_angle_degrees.unwrap_or(45.0);
+        if kind == LightKind::Spot && outer.is_finite() && outer <= 0.0 {
+            return Err(bad(format!(
+                "{what}: outer_angle_degrees must be in (0, 180], got {outer}"
+            )));
+        }
         if kind == LightKind::Spot
             && !(inner.is_finite()
                 && outer.is_finite()
@@ -209,6 +216,38 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 "{what}: need 0 ≤ inner_angle_degrees ≤ outer_angle_degrees ≤ 180"
             )));
         }
+        let mode = match &l.mode {
+            None => LightMode::Auto,
+            Some(name) => LightMode::from_name(name).ok_or_else(|| {
+                bad(format!(
+                    "{what}: mode '{name}' is not one of auto, baked, runtime"
+                ))
+            })?,
+        };
+        if mode == LightMode::Runtime {
+            if l.intensity <= 0.0 {
+                return Err(bad(format!("{what}: a runtime light needs intensity > 0")));
+            }
+            if color.max_element() <= 0.0 {
+                return Err(bad(format!(
+                    "{what}: a runtime light needs a color that is not all zero"
+                )));
+            }
+        }
+        let angular_diameter = match l.angular_diameter_degrees {
+            None => 0.0,
+            Some(_) if kind != LightKind::Directional => {
+                return Err(bad(format!(
+                    "{what}: only directional lights have angular_diameter_degrees"
+                )))
+            }
+            Some(a) if a.is_finite() && a > 0.0 && a < 90.0 => a.to_radians(),
+            Some(a) => {
+                return Err(bad(format!(
+                    "{what}: angular_diameter_degrees must be finite and in (0, 90), got {a}"
+                )))
+            }
+        };
         parts.lights.push(Light {
             kind,
             position,
@@ -227,8 +266,8 @@ pub(crate) fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
                 0.0
             },
             group: l.group.clone(),
-            mode: crate::scene::LightMode::Auto,
-            angular_diameter: 0.0,
+            mode,
+            angular_diameter,
         });
     }
 
