@@ -59,6 +59,7 @@
 
 pub(crate) mod emitters;
 mod integrator;
+pub mod occlusion;
 mod probe;
 mod reference;
 pub mod validity;
@@ -69,6 +70,7 @@ mod stratified_tests;
 pub(crate) mod tests;
 
 pub use emitters::{DEFAULT_GROUP, EMISSIVE_GROUP, ENVIRONMENT_GROUP};
+pub use occlusion::{visible_fraction, visible_fractions};
 pub use probe::{CaptureResult, CaptureSettings, CHUNK};
 pub use reference::{ReferenceResult, ReferenceSettings};
 pub use validity::{Validity, ValiditySettings};
