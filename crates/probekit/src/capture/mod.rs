@@ -168,10 +168,7 @@ impl<'s> Baker<'s> {
                 self.scene.lights.len()
             )));
         }
-        let env = std::mem::replace(
-            &mut self.emitters.env,
-            emitters::Environment::Black,
-        );
+        let env = std::mem::replace(&mut self.emitters.env, emitters::Environment::Black);
         self.emitters = Emitters::with_light_groups(self.scene, light_groups)?;
         self.emitters.env = env;
         Ok(())

@@ -24,6 +24,7 @@
 //! `capture`, `assembly`, `distance moments`, `cell visibility` and
 //! `weight fit`.
 
+pub mod lights;
 mod merge;
 mod positions;
 pub mod sweep;
@@ -129,6 +130,9 @@ pub struct BakeReport {
     /// Wall and CPU seconds and rays per stage, in order (see the module
     /// docs).
     pub phases: Vec<PhaseTime>,
+    /// The run-time light split (`None`: every light baked).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lights: Option<lights::LightSplitReport>,
 }
 
 /// A finished bake: the file and its report.
@@ -148,6 +152,8 @@ pub struct Bake<'s> {
     bake_box: Aabb,
     baker: Baker<'s>,
     load: PhaseTime,
+    /// The candidates of the run-time light split.
+    split: lights::LightSplit,
 }
 
 impl<'s> Bake<'s> {
@@ -160,7 +166,24 @@ impl<'s> Bake<'s> {
         let bake_box = recipe.bake_box_in(scene);
         bake_box.check_bake_box()?;
         recipe.placement_method(None).check_size(&bake_box)?;
-        let baker = Baker::new(scene)?;
+        let resolved = &recipe.lights.resolved;
+        if !resolved.is_empty() && resolved.len() != scene.lights.len() {
+            return Err(RecipeError::Value {
+                layer: String::new(),
+                key: "lights.resolved".into(),
+                message: format!(
+                    "{} choices for the scene's {} lights: give one per light, or none",
+                    resolved.len(),
+                    scene.lights.len()
+                ),
+            }
+            .into());
+        }
+        let split = lights::LightSplit::new(scene, &recipe.lights, recipe.capture.indirect_only);
+        let mut baker = Baker::new(scene)?;
+        if !split.candidates.is_empty() {
+            baker.set_light_groups(&split.capture_groups)?;
+        }
         let load = clock.lap("load", baker.tracer().rays()).clone();
         Ok(Bake {
             scene,
@@ -169,6 +192,7 @@ impl<'s> Bake<'s> {
             bake_box,
             baker,
             load,
+            split,
         })
     }
 
@@ -217,7 +241,7 @@ impl<'s> Bake<'s> {
     /// probes out of geometry and lamps), before the capture: a set that
     /// spans no volume there is refused now rather than after the capture.
     pub fn place(&self, progress: Progress<'_>) -> Result<Placed, PipelineError> {
-        let capture = self.recipe.placement_capture();
+        let capture = self.placement_capture();
         let mut report = PlacementReport {
             count: 0,
             held_out_error: None,
@@ -286,13 +310,43 @@ impl<'s> Bake<'s> {
         progress: Progress<'_>,
     ) -> Result<BakeOutput, PipelineError> {
         let range = crate::capture::shard_range(positions.len(), shard, shards)?;
-        Ok(self.baker.bake_shard(
-            positions,
-            shard,
-            shards,
-            &self.recipe.capture_settings(),
-            &|done, _| progress("capture", done, range.len()),
-        )?)
+        let mut settings = self.recipe.capture_settings();
+        if !self.split.candidates.is_empty() {
+            // Every candidate's direct light left out and reported apart.
+            settings.exclude_direct = self.split.excluded_groups(&self.split.candidates);
+            settings.groups = true;
+            settings.split_direct = true;
+        }
+        Ok(self
+            .baker
+            .bake_shard(positions, shard, shards, &settings, &|done, _| {
+                progress("capture", done, range.len())
+            })?)
+    }
+
+    /// Placement's capture settings: the probes' own, less the direct light
+    /// of every candidate of the run-time light split.
+    fn placement_capture(&self) -> CaptureSettings {
+        let mut c = self.recipe.placement_capture();
+        c.exclude_direct = self.split.excluded_groups(&self.split.candidates);
+        c
+    }
+
+    /// The capture settings of the weight fit's training points for
+    /// `file`: the probes' own, less the direct light of the lights its
+    /// record says run at run time.
+    fn fit_capture(&self, file: &ProbeFile) -> CaptureSettings {
+        let mut c = self.recipe.capture_settings();
+        if let Some(r) = BakeRecord::from_json(file.metadata()) {
+            let runtime: Vec<usize> = (r.recipe.lights.resolved.iter().enumerate())
+                .filter(|(_, m)| **m == crate::recipe::ResolvedMode::Runtime)
+                .map(|(i, _)| i)
+                .collect();
+            if runtime.iter().all(|&i| i < self.split.capture_groups.len()) {
+                c.exclude_direct = self.split.excluded_groups(&runtime);
+            }
+        }
+        c
     }
 
     /// Stage 3: the cloud file of a whole capture — tetrahedra,
@@ -352,9 +406,13 @@ impl<'s> Bake<'s> {
     /// (all light; not with `capture.indirect_only`, since placement
     /// captures all light). Empty otherwise, and for placements that
     /// capture none (grid, manual).
-    pub fn captured_training(&self, placed: &Placed) -> TrainingSet {
+    pub fn captured_training(&self, placed: &Placed, file: &ProbeFile) -> TrainingSet {
         let settings = self.recipe.capture_settings();
-        let (positions, sh) = if settings.split_direct || !settings.exclude_direct.is_empty() {
+        // Placement left out every candidate's direct light: its points
+        // hold what the file stores only if every candidate runs at run time.
+        let runtime = file.probes().and_then(|p| p.runtime_lights.as_ref());
+        let same = runtime.map_or(0, |r| r.lights.len()) == self.split.candidates.len();
+        let (positions, sh) = if settings.split_direct || !same {
             (Vec::new(), Vec::new())
         } else {
             placed.free_points.iter().cloned().unzip()
@@ -385,7 +443,7 @@ impl<'s> Bake<'s> {
         clock.lap("cell visibility", self.rays());
         let sub = kinds.fit_weights_into(
             &self.baker,
-            &self.recipe.capture_settings(),
+            &self.fit_capture(file),
             file,
             captured,
             &|d, t| progress("weight fit", d, t),
@@ -414,14 +472,56 @@ impl<'s> Bake<'s> {
         clock.lap("capture", self.rays());
         let mut record = self.record();
         record.placed = Some(placed.report.clone());
+        let (out, split) = self.split_lights(out, &mut record, progress)?;
+        if split.is_some() {
+            clock.lap("light split", self.rays());
+        }
         let mut file = self.assemble(&out, &record)?;
+        if let Some(s) = &split {
+            file.probe_set_mut().runtime_lights = s.lights.clone();
+        }
         clock.lap("assembly", self.rays());
-        let training = self.captured_training(placed);
+        let training = self.captured_training(placed, &file);
         self.blend_data(&mut file, true, &training, progress, &mut clock)?;
         file.validate()?;
         let phases = self.phases(clock);
-        let report = report(&file, &out, None, placed.report.clone(), phases)?;
+        let mut report = report(&file, &out, None, placed.report.clone(), phases)?;
+        report.lights = split.map(|s| s.report);
         Ok(Baked { file, report })
+    }
+
+    /// The run-time light split of a whole capture (`lights` module):
+    /// occlusion, the held-out choice, K per probe, the composed capture;
+    /// the choice goes into `record`. Nothing to do without candidates.
+    fn split_lights(
+        &self,
+        out: BakeOutput,
+        record: &mut BakeRecord,
+        progress: Progress<'_>,
+    ) -> Result<(BakeOutput, Option<lights::Split>), PipelineError> {
+        if self.split.candidates.is_empty() {
+            return Ok((out, None));
+        }
+        progress("light split", 0, 1);
+        let mut s = lights::resolve(&self.baker, &self.split, &self.recipe, &self.bake_box, out)?;
+        progress("light split", 1, 1);
+        record.recipe.lights.resolved = s.resolved.clone();
+        let out = std::mem::replace(
+            &mut s.output,
+            BakeOutput {
+                first_index: 0,
+                positions: Vec::new(),
+                captured_positions: Vec::new(),
+                sh: Vec::new(),
+                direct: None,
+                indirect: None,
+                groups: Vec::new(),
+                groups_indirect: Vec::new(),
+                validity: Vec::new(),
+                settings: CaptureSettings::default(),
+            },
+        );
+        Ok((out, Some(s)))
     }
 
     /// Shard `shard` of `shards` as a part file for [`merge`]. Placement is
@@ -433,6 +533,13 @@ impl<'s> Bake<'s> {
         shards: usize,
         progress: Progress<'_>,
     ) -> Result<Baked, PipelineError> {
+        if !self.split.candidates.is_empty() {
+            return Err(PipelineError::Parts(
+                "a sharded bake bakes every light into the probes: add `split = false` under \
+                 [lights] in the recipe (or mode = \"baked\" on the scene's lights)"
+                    .into(),
+            ));
+        }
         let mut clock = Clock::new(self.rays());
         let placed = self.place(progress)?;
         clock.lap_with("placement", self.rays(), placed.phases.clone());
@@ -497,6 +604,7 @@ fn report(
         shard,
         placement,
         phases,
+        lights: None,
     })
 }
 

@@ -54,6 +54,7 @@ fn bake_is_the_same_for_one_and_two_threads_and_reports_its_phases() {
             "load",
             "placement",
             "capture",
+            "light split",
             "assembly",
             "distance moments",
             "cell visibility",

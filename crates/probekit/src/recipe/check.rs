@@ -388,10 +388,16 @@ impl Recipe {
             ));
         }
         if l.occlusion_samples == 0 {
-            return Err(bad("lights.occlusion_samples", "0: expected at least 1".into()));
+            return Err(bad(
+                "lights.occlusion_samples",
+                "0: expected at least 1".into(),
+            ));
         }
         if l.decision_points == 0 {
-            return Err(bad("lights.decision_points", "0: expected at least 1".into()));
+            return Err(bad(
+                "lights.decision_points",
+                "0: expected at least 1".into(),
+            ));
         }
         let c = &self.capture;
         if c.samples == 0 {

@@ -1293,7 +1293,7 @@ mod forest {
         let bytes = file.to_bytes().unwrap();
         let major = crate::format::layout::header::MAJOR;
         let version = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
-        assert_eq!((version(major), version(major + 2)), (2, 0));
+        assert_eq!((version(major), version(major + 2)), (2, 1));
         let back = crate::format::ProbeFile::from_bytes(&bytes).unwrap();
         assert_eq!(back, file);
         let v = Volume::from_file(&back).unwrap();
