@@ -38,6 +38,11 @@ pub struct FileSummary {
     pub bytes_by_section: BTreeMap<String, u64>,
     /// Light group names (`LGRP`).
     pub groups: Vec<String>,
+    /// Run-time lights (`LITE`): per light its kind, position (or
+    /// direction) and light group, and the probes whose occlusion of it is
+    /// stored (`OCCL`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub runtime_lights: Vec<serde_json::Value>,
     /// Distance moments (`VISM`): `{"resolution","max_distance"}`.
     pub visibility: Option<serde_json::Value>,
     /// Cell visibility: `{"subdivision","cells","stored_cells","planes"}`.
@@ -62,6 +67,39 @@ pub struct FileSummary {
     /// `gradients` ([`crate::volume::inspect_json`]), as top-level keys.
     #[serde(flatten)]
     pub volume: Option<BTreeMap<String, serde_json::Value>>,
+}
+
+/// The `runtime_lights` of [`FileSummary`].
+fn runtime_lights_json(file: &ProbeFile) -> Vec<serde_json::Value> {
+    use probekit_runtime::rig::Light;
+    let Some(r) = file.probes().and_then(|p| p.runtime_lights.as_ref()) else {
+        return Vec::new();
+    };
+    r.lights
+        .iter()
+        .enumerate()
+        .map(|(l, rl)| {
+            let probes = r
+                .occlusion
+                .entries()
+                .iter()
+                .filter(|e| e[0] as usize == l)
+                .count();
+            let kind = match rl.light {
+                Light::Sphere { .. } => "sphere",
+                Light::Point { .. } => "point",
+                Light::Spot { .. } => "spot",
+                Light::Disk { .. } => "disk",
+                Light::Directional { .. } => "directional",
+            };
+            serde_json::json!({
+                "kind": kind,
+                "group": rl.group,
+                "position": rl.light.position().map(|p| p.to_array()),
+                "probes": probes,
+            })
+        })
+        .collect()
 }
 
 /// Summarises `file`.
@@ -120,6 +158,7 @@ pub fn summarize(file: &ProbeFile) -> Result<FileSummary, FormatError> {
         bytes,
         bytes_by_section: by.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
         groups: file.group_names().map(str::to_string).collect(),
+        runtime_lights: runtime_lights_json(file),
         visibility: blend.and_then(|b| b.distance_moments.as_ref()).map(
             |v| serde_json::json!({ "resolution": v.resolution, "max_distance": v.max_distance }),
         ),
@@ -232,6 +271,15 @@ impl fmt::Display for FileSummary {
         }
         if !self.groups.is_empty() {
             writeln!(f, "  light groups: {}", self.groups.join(", "))?;
+        }
+        for l in &self.runtime_lights {
+            writeln!(
+                f,
+                "  run-time light: {} (group {}), occlusion stored at {} probes",
+                l["kind"].as_str().unwrap_or("?"),
+                l["group"].as_str().unwrap_or("?"),
+                l["probes"]
+            )?;
         }
         if self.rigs > 0 && self.kind != "rigs" {
             writeln!(f, "  {} irradiance rig(s)", self.rigs)?;

@@ -219,8 +219,52 @@ pub fn run(a: &BakeArgs) -> Result<()> {
             "{outname}: {} probes ({} invalid), {} bytes{part}",
             report.probes, report.invalid, report.bytes
         );
+        if let Some(l) = &report.lights {
+            println!("{}", light_split_line(&scene, l));
+        }
     }
     Ok(())
+}
+
+/// One line on the run-time light split: which lights run at run time,
+/// which `auto` lights stayed baked and which were demoted.
+fn light_split_line(
+    scene: &probekit::scene::Scene,
+    l: &probekit::pipeline::lights::LightSplitReport,
+) -> String {
+    let names = |v: &[usize]| -> String {
+        let n: Vec<String> = v
+            .iter()
+            .map(|&i| {
+                let light = &scene.lights[i];
+                match &light.group {
+                    Some(g) => format!("light {} ({g})", i + 1),
+                    None => format!("light {}", i + 1),
+                }
+            })
+            .collect();
+        n.join(", ")
+    };
+    let mut line = if l.runtime.is_empty() {
+        "every light baked into the probes".to_string()
+    } else {
+        format!(
+            "run-time lights: {} ({} occlusion entries)",
+            names(&l.runtime),
+            l.occlusion_entries
+        )
+    };
+    if !l.kept_baked.is_empty() {
+        line += &format!("; kept baked (baking wins on held-out points): {}", names(&l.kept_baked));
+    }
+    if !l.demoted.is_empty() {
+        line += &format!(
+            "; demoted to baked (more than {} run-time lights reach a probe): {}",
+            l.max_per_probe,
+            names(&l.demoted)
+        );
+    }
+    line
 }
 
 /// Tells on stderr which probes share a position with an earlier one: the

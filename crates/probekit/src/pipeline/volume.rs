@@ -6,7 +6,11 @@ use crate::format::Parts;
 use crate::format::ProbeFile;
 use crate::progress::{Clock, PhaseTime, Progress};
 use crate::recipe::{BakeRecord, GradientModeName, Recipe, VolumeSettings};
+use crate::capture::CaptureSettings;
 use crate::scene::{Aabb, Scene};
+use super::lights::LightSplit;
+use glam::Vec3;
+use probekit_sh::ShRgb;
 use crate::volume::{
     build_adaptive, build_uniform, truncate_gradients, BakerSource, BuildStats, VolumeSource,
 };
@@ -53,11 +57,18 @@ pub fn bake_volume(
     }
     let bake_box = recipe.bake_box_in(scene);
     bake_box.check_bake_box()?;
-    let recipe = recipe.resolved_for(scene);
+    let mut recipe = recipe.resolved_for(scene);
     let mut clock = Clock::new(0);
-    let src = BakerSource::new(scene, recipe.capture_settings())?
+    // The run-time light split: candidates left out of every capture.
+    let split = LightSplit::new(scene, &recipe.lights, recipe.capture.indirect_only);
+    let mut settings = recipe.capture_settings();
+    settings.exclude_direct = split.excluded_groups(&split.candidates);
+    let mut src = BakerSource::new(scene, settings)?
         .with_progress(progress)
         .with_max_offset(0.25 * recipe.finest_volume_cell(&bake_box));
+    if !split.candidates.is_empty() {
+        src = src.with_light_groups(&split.capture_groups)?;
+    }
     let load = clock.lap("load", src.rays()).clone();
     let record = BakeRecord::new(scene_name, scene, recipe.clone());
     let threshold = src.validity_threshold();
@@ -65,7 +76,12 @@ pub fn bake_volume(
     if let Some(e) = src.take_error() {
         return Err(e.into());
     }
-    let (file, mut report) = built?;
+    let (mut file, mut report) = built?;
+    if !split.candidates.is_empty() {
+        let mut clock = Clock::new(src.rays());
+        split_volume_lights(&src, &split, &mut recipe, &bake_box, &mut file)?;
+        report.phases.push(clock.lap("light split", src.rays()).clone());
+    }
     // The build's rays and its capture sub-phase, from the tracer.
     let capture = src.capture_time();
     if let Some(build) = report.phases.iter_mut().find(|p| p.phase == "build") {
@@ -79,6 +95,63 @@ pub fn bake_volume(
     }
     report.phases.insert(0, load);
     Ok((file, report))
+}
+
+/// The run-time light split of a built volume (`super::lights`): the
+/// candidates' direct light at every sample from a capture of direct light
+/// only, each sample's occlusion, the held-out choice and K per sample;
+/// lights that end baked get their direct light back in the samples' SH
+/// (their SH gradients, where the volume has them, keep the light it was
+/// built with). The choice goes into the file's record.
+fn split_volume_lights(
+    src: &BakerSource<'_>,
+    split: &LightSplit,
+    recipe: &mut Recipe,
+    bake_box: &Aabb,
+    file: &mut ProbeFile,
+) -> Result<(), PipelineError> {
+    let baker = src.baker();
+    let positions = file.positions().to_vec();
+    let order = recipe.capture.order;
+    let direct = CaptureSettings {
+        bounces: 0,
+        groups: true,
+        split_direct: true,
+        exclude_direct: Vec::new(),
+        ..recipe.capture_settings()
+    };
+    let mut out = baker.bake_points_from(&positions, 0, &direct, &|_, _| {})?;
+    let probes = file
+        .probes()
+        .ok_or(PipelineError::Parts("a volume without samples".into()))?;
+    let coeffs = probes.coefficients.to_f32()?;
+    let k = probes.coefficients.coeffs_per_probe();
+    out.sh = coeffs
+        .chunks(k)
+        .map(|c| ShRgb::from_coeffs(c.to_vec()).unwrap_or_else(|| ShRgb::zeros(order)))
+        .collect();
+    out.captured_positions = positions;
+    let mut no_groups = recipe.clone();
+    no_groups.capture.groups = false;
+    no_groups.capture.indirect_only = false;
+    let s = super::lights::resolve(baker, split, &no_groups, bake_box, out)?;
+    let flat: Vec<Vec3> = s
+        .output
+        .sh
+        .iter()
+        .flat_map(|c| c.coeffs().iter().copied())
+        .collect();
+    let codec = file.probe_set_mut().coefficients.codec;
+    file.probe_set_mut().coefficients =
+        crate::format::encode_coefficients(codec, k.isqrt() as u32, &flat)?;
+    file.probe_set_mut().runtime_lights = s.lights;
+    recipe.lights.resolved = s.resolved;
+    if let Some(mut record) = BakeRecord::from_json(file.metadata()) {
+        record.recipe.lights.resolved = recipe.lights.resolved.clone();
+        *file.metadata_mut() = record.to_json();
+    }
+    file.validate()?;
+    Ok(())
 }
 
 /// Bakes the volume `recipe` describes from any source (an analytic one,

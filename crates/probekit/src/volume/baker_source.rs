@@ -125,6 +125,20 @@ impl<'s> BakerSource<'s> {
         self
     }
 
+    /// Puts the scene's lights in `light_groups` (one name per light) for
+    /// the captures ([`Baker::set_light_groups`]): with the settings'
+    /// `exclude_direct`, how a volume leaves run-time lights' direct light
+    /// out.
+    pub fn with_light_groups(mut self, light_groups: &[String]) -> Result<Self, BakeError> {
+        self.baker.set_light_groups(light_groups)?;
+        Ok(self)
+    }
+
+    /// The baker behind the captures.
+    pub fn baker(&self) -> &Baker<'s> {
+        &self.baker
+    }
+
     /// The capture settings.
     pub fn settings(&self) -> &CaptureSettings {
         &self.settings
