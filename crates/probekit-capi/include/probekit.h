@@ -28,8 +28,8 @@
  *   - Every pointer is checked for null; bad input returns a PkStatus error
  *     (constructors return NULL, getters 0 / -1) and sets the calling
  *     thread's message, pk_last_error(). Nothing panics or aborts.
- *   - Queries (pk_irradiance*, pk_sh*, pk_rig_irradiance*, pk_rig_update*)
- *     never allocate.
+ *   - Queries (pk_irradiance*, pk_sh*, pk_light_occlusion,
+ *     pk_rig_irradiance*, pk_rig_update*) never allocate.
  *   - A PkProbes is read-only after loading (a volume's interpolation and
  *     the L1 evaluation are chosen at load, PkLoadOptions), so many threads
  *     may query one handle. A PkWalkState or PkRig belongs to one object and
@@ -60,7 +60,7 @@ typedef enum PkStatus {
     PK_ERR_WRONG_KIND = 5,       /* call does not apply to this handle's kind */
     PK_ERR_BUFFER_TOO_SMALL = 6, /* output buffer too short; nothing written */
     PK_ERR_NO_GRADIENTS = 7,     /* interpolation mode needs gradients the volume lacks */
-    PK_ERR_OUT_OF_RANGE = 8,     /* index (rig number) out of range */
+    PK_ERR_OUT_OF_RANGE = 8,     /* index (rig, run-time light) out of range */
     PK_ERR_PANIC = 9             /* internal error caught at the boundary (a bug) */
 } PkStatus;
 
@@ -178,10 +178,22 @@ void pk_walk_state_reset(PkWalkState *state);
  * normal[3] into out_rgb[3]; an L1 file in PK_L1_MODE_ZH3_HALLUCINATED adds
  * the hallucinated zonal lobe. state may be NULL (cold walk every call) and is
  * ignored for volumes. Outside a cloud's convex hull the closest hull point
- * is used; outside a volume's box the point is clamped to it. */
+ * is used; outside a volume's box the point is clamped to it. The whole
+ * light of the scene: a file with run-time lights (see below) adds each
+ * one's exact irradiance times its blended occlusion to the SH part. */
 PkStatus pk_irradiance(const PkProbes *probes, PkWalkState *state,
                        const float *position, const float *normal,
                        float *out_rgb);
+
+/* The SH part of pk_irradiance: irradiance (not divided by π; linear RGB,
+ * W/m² for a scene in W) at position[3] for normal[3] into out_rgb[3]
+ * without the direct light of the file's run-time lights (their bounce
+ * light stays in), for an engine that draws those lights itself. Equal to
+ * pk_irradiance for a file without run-time lights. Arguments as in
+ * pk_irradiance. */
+PkStatus pk_sh_irradiance(const PkProbes *probes, PkWalkState *state,
+                          const float *position, const float *normal,
+                          float *out_rgb);
 
 /* pk_irradiance for count points: positions, normals and out_rgb hold
  * 3·count floats each. Visited in order with one walk state. On error,
@@ -327,6 +339,43 @@ PkStatus pk_split_rig_irradiance(const PkSplitRig *rig, const float *position,
 PkStatus pk_split_rig_irradiance_many(const PkSplitRig *rig, size_t count,
                                       const float *positions,
                                       const float *normals, float *out_rgb);
+
+/* ---- run-time lights (format 2.1) --------------------------------------- */
+
+/* A bake may leave the direct light of small, local lights out of the SH for
+ * the engine to evaluate exactly; each probe stores the visible fraction of
+ * each such light, which queries blend with the SH's weights:
+ *   pk_irradiance = pk_sh_irradiance
+ *                   + sum over lights l of E_l(x, n) · occlusion_l(x)
+ * with E_l the light's exact unoccluded irradiance (not divided by π). */
+
+/* Number of run-time lights (at most 255); 0 for a file without them, a
+ * rigs-only file, or NULL. Indices 0..count-1 below. */
+size_t pk_runtime_light_count(const PkProbes *probes);
+
+/* Run-time light index into *out (the PkLight of the split rigs): world
+ * coordinates (m), direction = unit way light travels, intensity W/sr per
+ * linear RGB channel (PK_LIGHT_DIRECTIONAL: irradiance facing it, W/m²);
+ * fields its kind does not use are 0. PK_ERR_OUT_OF_RANGE for index >=
+ * pk_runtime_light_count. */
+PkStatus pk_runtime_light(const PkProbes *probes, size_t index, PkLight *out);
+
+/* Light group of run-time light index (UTF-8: the group its bounce light was
+ * baked into; scale that group when dimming the light) into buf (buf_len
+ * bytes, NUL-terminated); *name_len (may be NULL) receives its length
+ * without the NUL. Too short: nothing written, PK_ERR_BUFFER_TOO_SMALL (ask
+ * with buf = NULL, buf_len = 0), as pk_rig_name. */
+PkStatus pk_runtime_light_group(const PkProbes *probes, size_t index,
+                                char *buf, size_t buf_len, size_t *name_len);
+
+/* Each run-time light's visible fraction in [0, 1] at position[3] (metres)
+ * into out[0..count), count = pk_runtime_light_count (out_len >= count; the
+ * rest of out untouched; out may be NULL when count is 0): the probes'
+ * stored fractions blended with the SH's weights. out_len < count:
+ * PK_ERR_BUFFER_TOO_SMALL, nothing written. state as in pk_irradiance. */
+PkStatus pk_light_occlusion(const PkProbes *probes, PkWalkState *state,
+                            const float *position, float *out,
+                            size_t out_len);
 
 #ifdef __cplusplus
 }

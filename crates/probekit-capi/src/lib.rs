@@ -13,9 +13,9 @@
 //! * No panic crosses the boundary: the code has no panicking path on bad
 //!   input, and every body runs under [`std::panic::catch_unwind`] as a last
 //!   guard ([`PkStatus::Panic`]).
-//! * Queries ([`pk_irradiance`], [`pk_sh`], their batched forms, the rig
-//!   queries) never allocate; only loading, state creation and error
-//!   reporting do.
+//! * Queries ([`pk_irradiance`], [`pk_sh`], their batched forms,
+//!   [`pk_sh_irradiance`], [`pk_light_occlusion`], the rig queries) never
+//!   allocate; only loading, state creation and error reporting do.
 //! * A [`PkProbes`] is immutable after loading (a volume's interpolation
 //!   and the L1 evaluation are chosen at load, [`PkLoadOptions`]), so it
 //!   can be queried from many threads at once; a [`PkWalkState`] or a
@@ -23,6 +23,11 @@
 //!   the same time.
 //! * Every query goes through [`probekit_runtime::Probes`]: the C API and
 //!   the Rust runtime give the same numbers.
+//! * A file with run-time lights (format 2.1): [`pk_irradiance`] includes
+//!   their direct light; an engine drawing them itself reads them with
+//!   [`pk_runtime_light_count`], [`pk_runtime_light`] and
+//!   [`pk_runtime_light_group`], and adds their light, times
+//!   [`pk_light_occlusion`], to [`pk_sh_irradiance`].
 //!
 //! Conventions are those of `probekit_sh`: right-handed, +Y up, metres,
 //! linear RGB, real SH indexed `l(l+1)+m` (Sloan's Condon–Shortley phase),
@@ -40,6 +45,7 @@ mod error;
 mod probes;
 mod query;
 mod rig;
+mod runtime_lights;
 mod split;
 mod volume;
 
@@ -52,11 +58,14 @@ pub use probes::{
     pk_probe_count, pk_probes_load_bytes, pk_probes_load_file, pk_sh_count, pk_sh_order, PkKind,
     PkLoadOptions, PkProbes, PK_L1_MODE_AS_BAKED, PK_L1_MODE_LINEAR, PK_L1_MODE_ZH3_HALLUCINATED,
 };
-pub use query::{pk_irradiance, pk_irradiance_many, pk_sh, pk_sh_many};
+pub use query::{pk_irradiance, pk_irradiance_many, pk_sh, pk_sh_irradiance, pk_sh_many};
 pub use rig::{
     pk_rig_count, pk_rig_free, pk_rig_irradiance, pk_rig_irradiance_many, pk_rig_name, pk_rig_new,
     pk_rig_order, pk_rig_sample_count, pk_rig_sample_points, pk_rig_update,
     pk_rig_update_from_probes, PkRig,
+};
+pub use runtime_lights::{
+    pk_light_occlusion, pk_runtime_light, pk_runtime_light_count, pk_runtime_light_group,
 };
 pub use split::{
     pk_split_rig_free, pk_split_rig_irradiance, pk_split_rig_irradiance_many, pk_split_rig_new,

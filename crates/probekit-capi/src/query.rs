@@ -16,8 +16,11 @@ fn at(e: QueryError, i: usize) -> Error {
 
 /// Irradiance at `position[3]` (metres) for `normal[3]` (any non-zero
 /// length) into `out_rgb[3]` (not divided by π;
-/// `probekit_runtime::Probes::irradiance`). `state` may be null (a cold
-/// walk each call) and is ignored for volumes. No allocation.
+/// `probekit_runtime::Probes::irradiance`): the whole light of the scene,
+/// a file's run-time lights' direct light included (each light's exact
+/// irradiance times its blended occlusion; [`crate::pk_sh_irradiance`]
+/// leaves it out). `state` may be null (a cold walk each call) and is
+/// ignored for volumes. No allocation.
 #[no_mangle]
 pub unsafe extern "C" fn pk_irradiance(
     probes: *const PkProbes,
@@ -26,6 +29,38 @@ pub unsafe extern "C" fn pk_irradiance(
     normal: *const f32,
     out_rgb: *mut f32,
 ) -> PkStatus {
+    // SAFETY: the caller's contract is this function's.
+    unsafe { irradiance_one(probes, state, position, normal, out_rgb, true) }
+}
+
+/// The SH part of [`pk_irradiance`] (`probekit_runtime::Probes::sh_irradiance`):
+/// irradiance (not divided by π, linear RGB, W/m² for a scene in W) at
+/// `position[3]` for `normal[3]` into `out_rgb[3]` without the direct light
+/// of the file's run-time lights, for an engine that draws those lights
+/// itself ([`crate::pk_runtime_light`], [`crate::pk_light_occlusion`]);
+/// their bounce light stays in. Equal to [`pk_irradiance`] for a file
+/// without run-time lights. Arguments as in [`pk_irradiance`]. No allocation.
+#[no_mangle]
+pub unsafe extern "C" fn pk_sh_irradiance(
+    probes: *const PkProbes,
+    state: *mut PkWalkState,
+    position: *const f32,
+    normal: *const f32,
+    out_rgb: *mut f32,
+) -> PkStatus {
+    // SAFETY: the caller's contract is this function's.
+    unsafe { irradiance_one(probes, state, position, normal, out_rgb, false) }
+}
+
+/// [`pk_irradiance`] (`lights`) or [`pk_sh_irradiance`] (not `lights`).
+unsafe fn irradiance_one(
+    probes: *const PkProbes,
+    state: *mut PkWalkState,
+    position: *const f32,
+    normal: *const f32,
+    out_rgb: *mut f32,
+    lights: bool,
+) -> PkStatus {
     run(|| {
         let h = handle(probes)?;
         let p = vec3_in(position, "position")?;
@@ -33,7 +68,12 @@ pub unsafe extern "C" fn pk_irradiance(
         let out = floats_out(out_rgb, 3, "out_rgb")?;
         let mut cold = ObjectState::new();
         let ws = walk_state(state).unwrap_or(&mut cold);
-        out.copy_from_slice(&h.probes.irradiance(ws, p, n)?);
+        let e = if lights {
+            h.probes.irradiance(ws, p, n)?
+        } else {
+            h.probes.sh_irradiance(ws, p, n)?
+        };
+        out.copy_from_slice(&e);
         Ok(())
     })
 }

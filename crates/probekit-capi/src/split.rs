@@ -49,6 +49,66 @@ pub struct PkLight {
 }
 
 impl PkLight {
+    /// The C form of `l`, fields its kind does not use zero (what
+    /// [`crate::pk_runtime_light`] writes).
+    pub(crate) fn from_light(l: &Light) -> Self {
+        let mut c = PkLight {
+            kind: 0,
+            position: [0.0; 3],
+            direction: [0.0; 3],
+            radius: 0.0,
+            inner_deg: 0.0,
+            outer_deg: 0.0,
+            intensity: [0.0; 3],
+        };
+        match *l {
+            Light::Sphere {
+                position,
+                radius,
+                intensity,
+            } => {
+                c.kind = PK_LIGHT_SPHERE;
+                (c.position, c.radius, c.intensity) = (position.into(), radius, intensity.into());
+            }
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                c.kind = PK_LIGHT_POINT;
+                (c.position, c.intensity) = (position.into(), intensity.into());
+            }
+            Light::Spot {
+                position,
+                direction,
+                inner_deg,
+                outer_deg,
+                intensity,
+            } => {
+                c.kind = PK_LIGHT_SPOT;
+                (c.position, c.direction) = (position.into(), direction.into());
+                (c.inner_deg, c.outer_deg, c.intensity) = (inner_deg, outer_deg, intensity.into());
+            }
+            Light::Disk {
+                position,
+                direction,
+                radius,
+                intensity,
+            } => {
+                c.kind = PK_LIGHT_DISK;
+                (c.position, c.direction) = (position.into(), direction.into());
+                (c.radius, c.intensity) = (radius, intensity.into());
+            }
+            Light::Directional {
+                direction,
+                irradiance,
+            } => {
+                c.kind = PK_LIGHT_DIRECTIONAL;
+                (c.direction, c.intensity) = (direction.into(), irradiance.into());
+            }
+        }
+        c
+    }
+
     fn to_light(self, i: usize) -> Result<Light, Error> {
         let bad = |what: &str| Error::new(PkStatus::InvalidArgument, format!("light {i}: {what}"));
         let floats = [self.radius, self.inner_deg, self.outer_deg];

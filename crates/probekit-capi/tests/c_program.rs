@@ -7,6 +7,9 @@
 //! * independently of the runtime, the interpolated SH reproduces the linear
 //!   field stored in the probes (barycentric and trilinear interpolation, and
 //!   tricubic Hermite with exact gradients, are exact for linear fields);
+//! * a file with run-time lights: their parameters and groups, the SH part,
+//!   the combined irradiance and the blended occlusion match
+//!   `probekit_runtime::Probes` (and the Rust side of the C API);
 //! * a corrupted file, a missing file, short bytes, null pointers, a NaN
 //!   position, short buffers and wrong kinds give the documented status and
 //!   a non-empty message, and the program does not crash.
@@ -22,7 +25,7 @@ use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::ProbeFile;
 use probekit_runtime::rig::RigState;
-use probekit_runtime::{Interp, ProbeCloud, Volume};
+use probekit_runtime::{Interp, LoadOptions, ObjectState, ProbeCloud, Probes, Volume};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -190,6 +193,9 @@ fn c_program_matches_the_rust_runtime() {
     let volume_path = dir.join("volume.probes");
     let broken_path = dir.join("broken.probes");
     let points_path = dir.join("points.txt");
+    let lit_path = dir.join("lit.probes");
+    let lit_bytes = with_runtime_lights(volume.clone()).to_bytes().unwrap();
+    std::fs::write(&lit_path, &lit_bytes).unwrap();
     std::fs::write(&cloud_path, &cloud_bytes).unwrap();
     std::fs::write(&volume_path, volume.to_bytes().unwrap()).unwrap();
     let mut broken = cloud_bytes.clone();
@@ -290,7 +296,13 @@ fn c_program_matches_the_rust_runtime() {
 
     // Run.
     let run = Command::new(&exe)
-        .args([&cloud_path, &volume_path, &broken_path, &points_path])
+        .args([
+            &cloud_path,
+            &volume_path,
+            &broken_path,
+            &points_path,
+            &lit_path,
+        ])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&run.stdout).to_string();
@@ -383,6 +395,54 @@ fn c_program_matches_the_rust_runtime() {
     assert_eq!(line("VBADMODE"), "VBADMODE 4");
     // A cloud has no interpolation.
     assert_eq!(line("WRONGKIND"), "WRONGKIND -1");
+
+    // Run-time lights: parameters as the Rust side of the C API reads them,
+    // queries as the runtime answers them.
+    let lights = runtime_lights();
+    assert_eq!(line("LITCOUNT"), format!("LITCOUNT {}", lights.len()));
+    let h = unsafe {
+        probekit_capi::pk_load_bytes(lit_bytes.as_ptr(), lit_bytes.len(), std::ptr::null_mut())
+    };
+    assert!(!h.is_null());
+    for (j, l) in lights.iter().enumerate() {
+        let mut c = std::mem::MaybeUninit::<probekit_capi::PkLight>::uninit();
+        let st = unsafe { probekit_capi::pk_runtime_light(h, j, c.as_mut_ptr()) };
+        assert_eq!(st, probekit_capi::PkStatus::Ok);
+        // SAFETY: written on success.
+        let c = unsafe { c.assume_init() };
+        let mut want = vec![c.kind as f32];
+        want.extend(c.position.iter().chain(&c.direction));
+        want.extend([c.radius, c.inner_deg, c.outer_deg]);
+        want.extend(c.intensity);
+        close(&rec["LL"][&(j as i64)], &want, &format!("LL {j}"));
+        assert_eq!(line(&format!("LG{j}")), format!("LG{j} {}", l.group));
+        // Asked with no buffer: PK_ERR_BUFFER_TOO_SMALL and the length.
+        assert_eq!(rec["LGLEN"][&(j as i64)], [6.0, l.group.len() as f32]);
+    }
+    unsafe { probekit_capi::pk_free(h) };
+    let probes = Probes::from_file(
+        &ProbeFile::from_bytes(&lit_bytes).unwrap(),
+        LoadOptions::default(),
+    )
+    .unwrap();
+    let mut os = ObjectState::new();
+    let mut occ = vec![0.0f32; lights.len()];
+    for (i, &(p, n)) in pts.iter().enumerate() {
+        let e = probes.irradiance(&mut os, p, n).unwrap();
+        close(&rec["LE"][&(i as i64)], &e, &format!("LE {i}"));
+        let sh = probes.sh_irradiance(&mut os, p, n).unwrap();
+        close(&rec["LS"][&(i as i64)], &sh, &format!("LS {i}"));
+        probes.light_occlusion(&mut os, p, &mut occ).unwrap();
+        close(&rec["LO"][&(i as i64)], &occ, &format!("LO {i}"));
+    }
+    assert!(
+        (0..pts.len()).any(|i| rec["LE"][&(i as i64)] != rec["LS"][&(i as i64)]),
+        "the lights add light somewhere"
+    );
+    assert_eq!(line("LOSHORT"), "LOSHORT 6 1");
+    assert_eq!(line("LONULL"), "LONULL 1 1");
+    assert_eq!(line("LRANGE"), "LRANGE 8 8");
+    assert_eq!(line("LNULL"), "LNULL 1 1 0");
 
     // Errors: status codes and messages, no crash.
     let b = line("BROKEN");

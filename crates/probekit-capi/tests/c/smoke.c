@@ -3,7 +3,8 @@
  * crates/probekit-capi/tests/c_program.rs, which compares what it prints with
  * the Rust runtime's answers.
  *
- * usage: smoke CLOUD.probes VOLUME.probes BROKEN.probes POINTS.txt
+ * usage: smoke CLOUD.probes VOLUME.probes BROKEN.probes POINTS.txt LIT.probes
+ * LIT.probes: a file with run-time lights (format 2.1).
  * POINTS.txt: a count n, then n lines "px py pz nx ny nz".
  * Output: one record per line, "TAG index values...", floats as %.9g.
  * Exit status 0 when every call that must succeed did; the Rust test checks
@@ -54,14 +55,14 @@ int main(int argc, char **argv) {
     int n = 0, i, k;
     FILE *pf;
     PkStatus st = PK_OK;
-    PkProbes *cloud, *volume, *bytes_cloud, *broken;
+    PkProbes *cloud, *volume, *bytes_cloud, *broken, *lit;
     PkWalkState *ws;
     unsigned char *data;
     size_t len = 0, name_len = 0;
     char name[64];
 
-    if (argc != 5) {
-        fprintf(stderr, "usage: smoke CLOUD VOLUME BROKEN POINTS\n");
+    if (argc != 6) {
+        fprintf(stderr, "usage: smoke CLOUD VOLUME BROKEN POINTS LIT\n");
         return 2;
     }
     if (pk_abi_version() != PK_ABI_VERSION) {
@@ -201,6 +202,52 @@ int main(int argc, char **argv) {
     }
     printf("WRONGKIND %d\n", pk_volume_interp(cloud));
     pk_free(volume);
+
+    /* ---- run-time lights: parameters, SH part, occlusion ---- */
+    lit = pk_load_file(argv[5], &st);
+    if (!lit) {
+        printf("FAIL load lit status=%d error=%s\n", (int)st, pk_last_error());
+        return 1;
+    }
+    {
+        size_t nl = pk_runtime_light_count(lit), j;
+        float occ[16], e3[3];
+        PkLight l;
+        printf("LITCOUNT %lu\n", (unsigned long)nl);
+        if (nl > 16) return 1;
+        for (j = 0; j < nl; j++) {
+            check(pk_runtime_light(lit, j, &l), "pk_runtime_light");
+            printf("LL %d %u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n",
+                   (int)j, l.kind, l.position[0], l.position[1], l.position[2], l.direction[0],
+                   l.direction[1], l.direction[2], l.radius, l.inner_deg, l.outer_deg,
+                   l.intensity[0], l.intensity[1], l.intensity[2]);
+            st = pk_runtime_light_group(lit, j, NULL, 0, &name_len);
+            printf("LGLEN %d %d %lu\n", (int)j, (int)st, (unsigned long)name_len);
+            check(pk_runtime_light_group(lit, j, name, sizeof name, NULL), "pk_runtime_light_group");
+            printf("LG%d %s\n", (int)j, name);
+        }
+        for (i = 0; i < n; i++) {
+            float e[3], s3[3];
+            check(pk_irradiance(lit, ws, &pos[3 * i], &nrm[3 * i], e), "lit pk_irradiance");
+            check(pk_sh_irradiance(lit, ws, &pos[3 * i], &nrm[3 * i], s3), "pk_sh_irradiance");
+            check(pk_light_occlusion(lit, ws, &pos[3 * i], occ, 16), "pk_light_occlusion");
+            print3("LE", i, e);
+            print3("LS", i, s3);
+            printf("LO %d", i);
+            for (j = 0; j < nl; j++) printf(" %.9g", occ[j]);
+            printf("\n");
+        }
+        st = pk_light_occlusion(lit, NULL, &pos[0], occ, nl > 0 ? nl - 1 : 0);
+        printf("LOSHORT %d %d\n", (int)st, pk_last_error()[0] != '\0');
+        printf("LONULL %d %d\n", (int)pk_light_occlusion(lit, NULL, &pos[0], NULL, nl),
+               (int)pk_light_occlusion(NULL, NULL, &pos[0], occ, 16));
+        printf("LRANGE %d %d\n", (int)pk_runtime_light(lit, nl, &l),
+               (int)pk_runtime_light_group(lit, nl, name, sizeof name, NULL));
+        printf("LNULL %d %d %lu\n", (int)pk_runtime_light(lit, 0, NULL),
+               (int)pk_sh_irradiance(lit, NULL, NULL, &nrm[0], e3),
+               (unsigned long)pk_runtime_light_count(NULL));
+    }
+    pk_free(lit);
 
     /* ---- bad input: errors, never crashes ---- */
     broken = pk_load_file(argv[3], &st);

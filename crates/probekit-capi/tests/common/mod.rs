@@ -144,3 +144,79 @@ pub fn points() -> Vec<(Vec3, Vec3)> {
     v.push((Vec3::new(3.0, 0.5, -1.0), Vec3::X)); // outside the hull / box
     v
 }
+
+/// Run-time lights (format 2.1), one of each kind, groups with a non-ASCII
+/// name among them.
+pub fn runtime_lights() -> Vec<probekit_runtime::format::RuntimeLight> {
+    use probekit_runtime::format::RuntimeLight;
+    use probekit_runtime::rig::Light;
+    let l = |light, group: &str| RuntimeLight {
+        light,
+        group: group.into(),
+    };
+    vec![
+        l(
+            Light::Point {
+                position: Vec3::new(0.5, 2.5, 1.0),
+                intensity: Vec3::new(4.0, 3.0, 2.0),
+            },
+            "lamp",
+        ),
+        l(
+            Light::Sphere {
+                position: Vec3::new(1.5, 1.0, 2.4),
+                radius: 0.1,
+                intensity: Vec3::splat(2.0),
+            },
+            "default",
+        ),
+        l(
+            Light::Spot {
+                position: Vec3::new(1.0, 3.0, 1.0),
+                direction: Vec3::NEG_Y,
+                inner_deg: 10.0,
+                outer_deg: 30.0,
+                intensity: Vec3::new(1.0, 0.5, 0.25),
+            },
+            "default",
+        ),
+        l(
+            Light::Disk {
+                position: Vec3::new(-0.5, 1.0, 1.0),
+                direction: Vec3::X,
+                radius: 0.2,
+                intensity: Vec3::new(0.5, 1.5, 1.0),
+            },
+            "panel",
+        ),
+        l(
+            Light::Directional {
+                direction: Vec3::new(0.0, -0.6, -0.8),
+                irradiance: Vec3::splat(3.0),
+            },
+            "sün",
+        ),
+    ]
+}
+
+/// `f` (27 probes) with [`runtime_lights`] and a fixed pattern of
+/// quantised occlusion per probe and light, a quarter of it zero (not
+/// stored).
+pub fn with_runtime_lights(mut f: ProbeFile) -> ProbeFile {
+    use probekit_runtime::format::{LightOcclusion, RuntimeLights};
+    let lights = runtime_lights();
+    let probes = f.probes().expect("probes").positions.len();
+    let values: Vec<u8> = (0..probes * lights.len())
+        .map(|i| match i % 4 {
+            0 => 0,
+            1 => 255,
+            _ => ((i * 37 + 11) % 254 + 1) as u8,
+        })
+        .collect();
+    f.probes_mut().expect("probes").runtime_lights = Some(RuntimeLights {
+        occlusion: LightOcclusion::from_dense(lights.len(), &values).unwrap(),
+        lights,
+    });
+    f.validate().unwrap();
+    f
+}
