@@ -1,6 +1,7 @@
 // probekit_check.wgsl — the reference compute kernel: calls every function
-// of probekit.wgsl, probekit_buffers.wgsl, probekit_cloud.wgsl,
-// probekit_bricks.wgsl and probekit_rig.wgsl once per test case. The tests of
+// of probekit.wgsl, probekit_buffers.wgsl, probekit_lights.wgsl,
+// probekit_cloud.wgsl, probekit_bricks.wgsl and probekit_rig.wgsl once per
+// test case. The tests of
 // crates/probekit-shaders run it on wgpu and compare with the Rust functions;
 // the generator compiles it so that naga's HLSL/GLSL/MSL back ends emit the
 // whole library (they only write what an entry point can reach).
@@ -30,7 +31,11 @@
 // Mode 1 (PK_CHECK_CLOUD), from pk_cloud: [0..4) the blend's probes,
 //   [4..8) its weights, [8..35) pk_cloud_sh, [35..38) pk_cloud_irradiance,
 //   [38..41) pk_cloud_irradiance_zh3, [41..43) pk_cloud_locate(p) as
-//   (index, hull flag), [43..70) pk_cloud_sh in the located cell.
+//   (index, hull flag), [43..70) pk_cloud_sh in the located cell,
+//   [70..73) pk_cloud_sh_irradiance, [73..76) pk_cloud_sh_irradiance_zh3,
+//   [76..79) pk_cloud_lights_irradiance of the blend, [79..87)
+//   pk_cloud_light_occlusion of run-time lights 0..7 (0 past the count),
+//   [87] pk_cloud_light_count.
 // Mode 2 (PK_CHECK_VOLUME), from pk_sh_coeffs/pk_sh_gradients and
 //   check_params.grid: [27k..27k+27) pk_volume_sample with interpolation k
 //   (trilinear, Taylor, tricubic), [81+3k..84+3k) its irradiance,
@@ -111,6 +116,18 @@ fn check_cloud(a: u32, o: u32) {
     check_out[o + 41u] = f32(located & ~PK_CLOUD_HULL);
     check_out[o + 42u] = f32(located >> 31u);
     check_put_l2(o + 43u, pk_cloud_sh(located, p));
+    check_put(o + 70u, pk_cloud_sh_irradiance(cell, p, n));
+    check_put(o + 73u, pk_cloud_sh_irradiance_zh3(cell, p, n));
+    check_put(o + 76u, pk_cloud_lights_irradiance(w, p, n));
+    let lights = pk_cloud_light_count();
+    for (var l = 0u; l < 8u; l = l + 1u) {
+        var v = 0.0;
+        if l < lights {
+            v = pk_cloud_light_occlusion(w, l);
+        }
+        check_out[o + 79u + l] = v;
+    }
+    check_out[o + 87u] = f32(lights);
 }
 
 fn check_volume(a: u32, o: u32) {

@@ -3,8 +3,15 @@
 // holds a point, times each probe's Chebyshev visibility (VISM), the cell
 // visibility bits or occluder plane (CVSP, CPLN), the fitted probe weight
 // and brightness factor (PWGT), renormalized with the hidden-cell fallback;
-// then the plain or directional blend of the probes' radiance SH.
-// Concatenate after probekit.wgsl and probekit_buffers.wgsl.
+// then the plain or directional blend of the probes' radiance SH; plus the
+// file's run-time lights (LITE, OCCL): each light's exact irradiance
+// (`pk_light_irradiance` of probekit_lights.wgsl) times the probes' visible
+// fractions of it blended with the same weights, as probekit_runtime's
+// `Probes::irradiance` adds them.
+// Concatenate after probekit.wgsl, probekit_buffers.wgsl and
+// probekit_lights.wgsl (whose `pk_sphere_table` the light term reads: bind
+// it to use `pk_cloud_irradiance`; `pk_cloud_sh_irradiance`, the SH part
+// alone, does not read it).
 //
 // Everything comes from one u32 storage buffer, `pk_cloud`, that
 // `probekit_shaders::layout::pack_cloud` fills from a loaded cloud: a
@@ -46,6 +53,12 @@ const PK_CLOUD_H_CELL_BITS: u32 = 22u;
 const PK_CLOUD_H_PLANES: u32 = 23u;
 const PK_CLOUD_H_DIR_TABLES: u32 = 24u;
 const PK_CLOUD_H_START_GRID: u32 = 25u;
+// Run-time lights: their count (0 without), the offset of their records
+// (PK_RIG_LIGHT_WORDS words each, world space) and of the probes' occlusion
+// rows (⌈count/4⌉ words per probe, four 8-bit fractions per word).
+const PK_CLOUD_H_LIGHTS: u32 = 26u;
+const PK_CLOUD_H_LIGHT_RECORDS: u32 = 27u;
+const PK_CLOUD_H_LIGHT_OCCLUSION: u32 = 28u;
 
 // Flags (header word PK_CLOUD_H_FLAGS): which weighting is on.
 const PK_CLOUD_FLAG_VISIBILITY: u32 = 1u;
@@ -652,16 +665,91 @@ fn pk_cloud_sh(cell: u32, p: vec3<f32>) -> PkShL2 {
     return pk_cloud_blend(pk_cloud_weights(cell, p));
 }
 
-/// Irradiance (not divided by π) at `p` in cell `cell` for unit normal `n`
-/// (ProbeCloud::irradiance).
-fn pk_cloud_irradiance(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+// --- run-time lights (probekit_runtime's probes/lights.rs) -------------------
+
+/// Number of run-time lights packed (0 for a cloud without).
+fn pk_cloud_light_count() -> u32 {
+    return pk_cloud_u(PK_CLOUD_H_LIGHTS);
+}
+
+fn pk_cloud_u4(i: u32) -> vec4<u32> {
+    return vec4<u32>(pk_cloud[i], pk_cloud[i + 1u], pk_cloud[i + 2u], pk_cloud[i + 3u]);
+}
+
+/// Run-time light `l` (world space; its record as a rig's near light).
+fn pk_cloud_light(l: u32) -> PkRigLight {
+    let r = pk_cloud_off(PK_CLOUD_H_LIGHT_RECORDS) + PK_RIG_LIGHT_WORDS * l;
+    return pk_light_unpack(pk_cloud_u4(r), pk_cloud_u4(r + 4u), pk_cloud_u4(r + 8u), pk_cloud_u4(r + 12u));
+}
+
+/// Probe `i`'s visible fraction of run-time light `l`: its stored 8-bit
+/// value / 255, 0 where the file lists none (LightOcclusion::value).
+fn pk_cloud_probe_light_occlusion(i: u32, l: u32) -> f32 {
+    let stride = (pk_cloud_light_count() + 3u) / 4u;
+    let word = pk_cloud[pk_cloud_off(PK_CLOUD_H_LIGHT_OCCLUSION) + stride * i + l / 4u];
+    return f32((word >> (8u * (l & 3u))) & 0xffu) / 255.0;
+}
+
+/// Run-time light `l`'s visible fraction blended with the weights `wt`:
+/// Σ w_k·v_k over the slots with w_k ≠ 0 (Probes::light_occlusion).
+fn pk_cloud_light_occlusion(wt: PkCloudWeights, l: u32) -> f32 {
+    var v = 0.0;
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        let w = wt.weights[k];
+        if w != 0.0 {
+            v = v + w * pk_cloud_probe_light_occlusion(wt.probes[k], l);
+        }
+    }
+    return v;
+}
+
+/// The run-time lights' term at `p` for unit normal `n` with blend weights
+/// `wt` (those of `pk_cloud_weights`, before any directional correction):
+/// Σ_l pk_light_irradiance(light l, p, n) × its blended visible fraction,
+/// skipping lights no probe of the blend sees; zero without lights (the
+/// runtime's LightTerm::irradiance).
+fn pk_cloud_lights_irradiance(wt: PkCloudWeights, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var e = vec3<f32>(0.0);
+    let count = pk_cloud_light_count();
+    for (var l = 0u; l < count; l = l + 1u) {
+        let v = pk_cloud_light_occlusion(wt, l);
+        if v > 0.0 {
+            e = e + v * pk_light_irradiance(pk_cloud_light(l), p, n);
+        }
+    }
+    return e;
+}
+
+// --- irradiance ---------------------------------------------------------------
+
+/// The SH part of the irradiance (not divided by π) at `p` in cell `cell`
+/// for unit normal `n`, without the run-time lights' direct light
+/// (ProbeCloud::irradiance, Probes::sh_irradiance).
+fn pk_cloud_sh_irradiance(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return pk_irradiance_l2(pk_cloud_sh(cell, p), n);
 }
 
-/// Irradiance (not divided by π) at `p` in cell `cell` for unit normal `n`
-/// by hallucinated ZH3 from the blended L1 (blend as usual, then
-/// probekit_sh::zh3::zh3_hallucinated_irradiance of the blend's bands ≤ 1):
-/// the evaluation an L1 cloud (13-byte codec) may choose.
-fn pk_cloud_irradiance_zh3(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+/// Irradiance (not divided by π) at `p` in cell `cell` for unit normal `n`:
+/// the SH part plus the run-time lights' term, one blend for both
+/// (Probes::irradiance; pk_cloud_sh_irradiance for a cloud without lights).
+fn pk_cloud_irradiance(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let wt = pk_cloud_weights(cell, p);
+    return pk_irradiance_l2(pk_cloud_blend(wt), n) + pk_cloud_lights_irradiance(wt, p, n);
+}
+
+/// The SH part of the irradiance (not divided by π) at `p` in cell `cell`
+/// for unit normal `n` by hallucinated ZH3 from the blended L1 (blend as
+/// usual, then probekit_sh::zh3::zh3_hallucinated_irradiance of the
+/// blend's bands ≤ 1): the evaluation an L1 cloud (13-byte codec) may
+/// choose.
+fn pk_cloud_sh_irradiance_zh3(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return pk_irradiance_zh3_hallucinated(pk_l2_to_l1(pk_cloud_sh(cell, p)), n);
+}
+
+/// pk_cloud_sh_irradiance_zh3 plus the run-time lights' term (an L1 file
+/// in `L1Mode::Zh3Hallucinated`: Probes::irradiance).
+fn pk_cloud_irradiance_zh3(cell: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let wt = pk_cloud_weights(cell, p);
+    let sh = pk_irradiance_zh3_hallucinated(pk_l2_to_l1(pk_cloud_blend(wt)), n);
+    return sh + pk_cloud_lights_irradiance(wt, p, n);
 }

@@ -3,11 +3,13 @@
 // 2011, §3), as probekit_runtime's `SplitRig::irradiance` evaluates it
 // (crates/probekit-runtime/src/rig.rs, rig/split.rs, rig/lights.rs): the
 // rig's radiance SH at the vertex from its parameters, convolved with the
-// clamped cosine, plus each near light's exact irradiance times its
-// per-vertex share. The CPU half (`SplitRig::update`: which lights are
-// near, the shares, the refit of the parameters) runs once per frame in the
-// runtime or the C API; `probekit_shaders::layout::pack_split_rig` writes
-// its result into `pk_rig`. Concatenate after probekit.wgsl.
+// clamped cosine, plus each near light's exact irradiance
+// (`pk_light_irradiance` of probekit_lights.wgsl) times its per-vertex
+// share. The CPU half (`SplitRig::update`: which lights are near, the
+// shares, the refit of the parameters) runs once per frame in the runtime
+// or the C API; `probekit_shaders::layout::pack_split_rig` writes its
+// result into `pk_rig`. Concatenate after probekit.wgsl and
+// probekit_lights.wgsl.
 //
 // Two u32 storage buffers (floats stored as their bits; docs/shaders.md
 // gives the layouts):
@@ -17,15 +19,14 @@
 //   its near lights (PK_RIG_LIGHT_WORDS words each). Functions take `rig`,
 //   the word offset of the rig's header in `pk_rig` (0 for a buffer that
 //   holds one rig).
-// * `pk_sphere_table`: the runtime's `SphereTable` (word 0 its side, then
-//   side² f32 entries, row j = sin α, column i = cos θ), shared by every
-//   rig (`probekit_shaders::layout::pack_sphere_table`).
+// * `pk_sphere_table` (declared in probekit_lights.wgsl): the runtime's
+//   `SphereTable`, shared by every rig
+//   (`probekit_shaders::layout::pack_sphere_table`).
 //
 // Positions and normals are in the object's own coordinates (those of the
 // mesh the rig was fitted to; the near lights are packed in them).
 
 @group(0) @binding(5) var<storage, read> pk_rig: array<u32>;
-@group(0) @binding(6) var<storage, read> pk_sphere_table: array<u32>;
 
 // Header words of a packed rig (probekit_shaders::layout::RIG_HEADER).
 const PK_RIG_H_MODEL: u32 = 0u;
@@ -49,37 +50,9 @@ const PK_RIG_AXIS_CONSTANT: u32 = 0u;
 const PK_RIG_AXIS_GRADIENT: u32 = 1u;
 const PK_RIG_AXIS_LATTICE: u32 = 2u;
 
-// Light kinds (the C API's PK_LIGHT_*; probekit_runtime's `Light`).
-const PK_LIGHT_SPHERE: u32 = 0u;
-const PK_LIGHT_POINT: u32 = 1u;
-const PK_LIGHT_SPOT: u32 = 2u;
-const PK_LIGHT_DISK: u32 = 3u;
-const PK_LIGHT_DIRECTIONAL: u32 = 4u;
-/// Words per light record: kind, position (3 f32), direction (3 f32),
-/// radius, intensity (3 f32), spot scale, spot offset, per-vertex share,
-/// two reserved words.
-const PK_RIG_LIGHT_WORDS: u32 = 16u;
 /// Most model functions with a weight at one point (probekit_runtime's
 /// `rig::MAX_WEIGHTS`).
 const PK_RIG_MAX_WEIGHTS: u32 = 8u;
-
-/// One light of a rig scene in the object's frame (probekit_runtime's
-/// `rig::Light`): `kind` a PK_LIGHT_*, `position` (m; unused for a
-/// directional light), unit `direction` the way light travels (spot axis,
-/// disk normal, directional), `radius` (m; sphere and disk), `intensity`
-/// W/sr per channel (a directional light's irradiance facing it, W/m²), and
-/// for a spot the attenuation's `spot_scale = 1/max(cos inner − cos outer,
-/// 0.001)` and `spot_offset = −cos outer · spot_scale`, computed on the CPU
-/// as `probekit_sh::lights::spot_attenuation` computes them.
-struct PkRigLight {
-    kind: u32,
-    position: vec3<f32>,
-    direction: vec3<f32>,
-    radius: f32,
-    intensity: vec3<f32>,
-    spot_scale: f32,
-    spot_offset: f32,
-}
 
 /// The non-zero model functions of a rig at a point: `index[k]` the
 /// parameter, `weight[k]` its weight, `count` how many
@@ -98,113 +71,13 @@ fn pk_rig_v3(i: u32) -> vec3<f32> {
     return vec3<f32>(pk_rig_f(i), pk_rig_f(i + 1u), pk_rig_f(i + 2u));
 }
 
-// --- the sphere-light table and the lights ---------------------------------
-
-/// Unit-radiance irradiance of a sphere light at `(cos θ, sin α)` from
-/// `pk_sphere_table`, bilinear, arguments clamped to the table's range and
-/// NaN read as its start (`SphereTable::lookup`, step for step).
-fn pk_sphere_table_lookup(cos_theta: f32, sin_alpha: f32) -> f32 {
-    let size = pk_sphere_table[0];
-    let m = f32(size - 1u);
-    var x = clamp((cos_theta + 1.0) * 0.5, 0.0, 1.0) * m;
-    var y = clamp(sin_alpha, 0.0, 1.0) * m;
-    if x != x {
-        x = 0.0;
-    }
-    if y != y {
-        y = 0.0;
-    }
-    let i = min(u32(x), size - 2u);
-    let j = min(u32(y), size - 2u);
-    let fx = x - f32(i);
-    let fy = y - f32(j);
-    let row0 = 1u + j * size + i;
-    let row1 = row0 + size;
-    let a00 = bitcast<f32>(pk_sphere_table[row0]);
-    let a10 = bitcast<f32>(pk_sphere_table[row0 + 1u]);
-    let a01 = bitcast<f32>(pk_sphere_table[row1]);
-    let a11 = bitcast<f32>(pk_sphere_table[row1 + 1u]);
-    let a = a00 + (a10 - a00) * fx;
-    let b = a01 + (a11 - a01) * fx;
-    return a + (b - a) * fy;
-}
-
-/// The glTF spot attenuation `t²`, `t = clamp(cos · scale + offset, 0, 1)`
-/// (probekit_sh::lights::spot_attenuation with its scale and offset
-/// precomputed, see PkRigLight).
-fn pk_spot_attenuation(cos_to_receiver: f32, scale: f32, offset: f32) -> f32 {
-    let t = clamp(cos_to_receiver * scale + offset, 0.0, 1.0);
-    return t * t;
-}
-
-/// Exact irradiance (not divided by π) of `light` at surface point `p` with
-/// unit normal `n`, unshadowed (`rig::Light::irradiance` with the sphere
-/// table, the runtime's per-vertex path): a sphere through
-/// pk_sphere_table_lookup (its horizon-clipped form factor, Snyder 1996) times
-/// its radiance `I/(π r²)`, `I` inside it; a disk as the sphere of equal
-/// projected area and radiance in the same table, zero behind it; point and
-/// spot `I·max(0, n·ω)/d²` (spot times its attenuation); directional
-/// `E·max(0, n·(−dir))`.
-fn pk_light_irradiance(light: PkRigLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    switch light.kind {
-        case PK_LIGHT_SPHERE: {
-            let w = light.position - p;
-            let d = length(w);
-            let l = light.intensity / (PK_PI * light.radius * light.radius);
-            if d <= light.radius {
-                return l * PK_PI;
-            }
-            return l * pk_sphere_table_lookup(dot(n, w) / d, light.radius / d);
-        }
-        case PK_LIGHT_POINT: {
-            let w = light.position - p;
-            let d2 = dot(w, w);
-            if d2 <= 0.0 {
-                return vec3<f32>(0.0);
-            }
-            return light.intensity * (max(dot(n, w), 0.0) / (d2 * sqrt(d2)));
-        }
-        case PK_LIGHT_SPOT: {
-            let w = light.position - p;
-            let d2 = dot(w, w);
-            if d2 <= 0.0 {
-                return vec3<f32>(0.0);
-            }
-            let d = sqrt(d2);
-            let att = pk_spot_attenuation(dot(light.direction, -w / d), light.spot_scale, light.spot_offset);
-            return light.intensity * (att * max(dot(n, w), 0.0) / (d2 * d));
-        }
-        case PK_LIGHT_DISK: {
-            let w = p - light.position;
-            let d = length(w);
-            let facing = dot(w, light.direction);
-            if facing <= 0.0 || d <= 0.0 {
-                return vec3<f32>(0.0);
-            }
-            let l = light.intensity / (PK_PI * light.radius * light.radius);
-            let req = light.radius * sqrt(facing / d);
-            return l * pk_sphere_table_lookup(-dot(n, w) / d, min(req / d, 1.0));
-        }
-        case PK_LIGHT_DIRECTIONAL: {
-            return light.intensity * max(dot(n, -light.direction), 0.0);
-        }
-        default: {
-            return vec3<f32>(0.0);
-        }
-    }
+fn pk_rig_u4(i: u32) -> vec4<u32> {
+    return vec4<u32>(pk_rig[i], pk_rig[i + 1u], pk_rig[i + 2u], pk_rig[i + 3u]);
 }
 
 /// The light record whose first word is `word` of `pk_rig`.
 fn pk_rig_light_at(word: u32) -> PkRigLight {
-    return PkRigLight(
-        pk_rig[word],
-        pk_rig_v3(word + 1u),
-        pk_rig_v3(word + 4u),
-        pk_rig_f(word + 7u),
-        pk_rig_v3(word + 8u),
-        pk_rig_f(word + 11u),
-        pk_rig_f(word + 12u),
-    );
+    return pk_light_unpack(pk_rig_u4(word), pk_rig_u4(word + 4u), pk_rig_u4(word + 8u), pk_rig_u4(word + 12u));
 }
 
 /// Word of near light `k` of the rig at `rig`.

@@ -3,12 +3,13 @@
 
 use probekit_shaders::layout::{
     BRICKS_HEADER, CLOUD_FLAG_CELLS, CLOUD_FLAG_PROBE_WEIGHTS, CLOUD_FLAG_VISIBILITY, CLOUD_HEADER,
-    CLOUD_HEADER_WORDS, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS, RIG_CODES,
-    RIG_HEADER, RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
+    CLOUD_HEADER_WORDS, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS, LIGHT_CODES,
+    RIG_CODES, RIG_HEADER, RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
 };
 use probekit_shaders::{
     full_wgsl, generate, library_wgsl, validate_wgsl, PROBEKIT_BRICKS_WGSL, PROBEKIT_BUFFERS_WGSL,
-    PROBEKIT_CLOUD_WGSL, PROBEKIT_RIG_WGSL, PROBEKIT_WGSL, REGENERATE_COMMAND,
+    PROBEKIT_CLOUD_WGSL, PROBEKIT_LIGHTS_WGSL, PROBEKIT_RIG_WGSL, PROBEKIT_WGSL,
+    REGENERATE_COMMAND,
 };
 use std::path::PathBuf;
 
@@ -53,11 +54,17 @@ fn wgsl_validates_with_naga() {
         "pk_cloud_sh",
         "pk_cloud_irradiance",
         "pk_cloud_irradiance_zh3",
+        "pk_cloud_sh_irradiance",
+        "pk_cloud_sh_irradiance_zh3",
+        "pk_cloud_light",
+        "pk_cloud_light_occlusion",
+        "pk_cloud_lights_irradiance",
         "pk_cloud_locate",
         "pk_bricks_sh_l2",
         "pk_bricks_irradiance",
         "pk_bricks_irradiance_zh3",
         "pk_sphere_table_lookup",
+        "pk_light_unpack",
         "pk_light_irradiance",
         "pk_rig_weights",
         "pk_rig_sh",
@@ -73,9 +80,14 @@ fn wgsl_validates_with_naga() {
         );
     }
     assert!(library.entry_points.is_empty());
-    // The rig file needs only the pure library.
-    let lib_rig = format!("{PROBEKIT_WGSL}\n{PROBEKIT_RIG_WGSL}");
+    // The light file needs only the pure library, the rig file those two.
+    let lib_lights = format!("{PROBEKIT_WGSL}\n{PROBEKIT_LIGHTS_WGSL}");
+    validate_wgsl("probekit_lights.wgsl", &lib_lights).unwrap_or_else(|e| panic!("{e}"));
+    let lib_rig = format!("{lib_lights}\n{PROBEKIT_RIG_WGSL}");
     validate_wgsl("probekit_rig.wgsl", &lib_rig).unwrap_or_else(|e| panic!("{e}"));
+    // The cloud file needs the pure library, the buffers and the lights.
+    let lib_cloud = format!("{lib_buffers}\n{PROBEKIT_LIGHTS_WGSL}\n{PROBEKIT_CLOUD_WGSL}");
+    validate_wgsl("probekit_cloud.wgsl", &lib_cloud).unwrap_or_else(|e| panic!("{e}"));
     let (full, _) =
         validate_wgsl("probekit_check.wgsl", &full_wgsl()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(full.entry_points.len(), 6);
@@ -126,11 +138,17 @@ fn layout_constants_agree_with_the_wgsl() {
     }
     // The last header entry is a vec3 (the box's max corner).
     assert!(RIG_HEADER.iter().all(|&(_, w)| w + 3 <= RIG_HEADER_WORDS));
+    // Rig codes in the rig file, light kinds in the light file.
+    let lights_rig = format!("{PROBEKIT_LIGHTS_WGSL}\n{PROBEKIT_RIG_WGSL}");
     for (name, value) in RIG_CODES {
-        assert_eq!(wgsl_const(PROBEKIT_RIG_WGSL, name), value, "{name}");
+        assert_eq!(wgsl_const(&lights_rig, name), value, "{name}");
+    }
+    for (name, value) in LIGHT_CODES {
+        assert_eq!(wgsl_const(PROBEKIT_LIGHTS_WGSL, name), value, "{name}");
+        assert!(RIG_CODES.contains(&(name, value)), "{name}");
     }
     assert_eq!(
-        wgsl_const(PROBEKIT_RIG_WGSL, "PK_RIG_LIGHT_WORDS"),
+        wgsl_const(PROBEKIT_LIGHTS_WGSL, "PK_RIG_LIGHT_WORDS"),
         RIG_LIGHT_WORDS as u32
     );
 }
@@ -152,6 +170,7 @@ fn generated_files_are_up_to_date() {
             "pk_bricks_sh_l2",
             "pk_rig_irradiance",
             "pk_light_irradiance",
+            "pk_cloud_lights_irradiance",
             "pk_sphere_table_lookup",
         ] {
             assert!(f.contents.contains(name), "{} lacks {name}", f.name);

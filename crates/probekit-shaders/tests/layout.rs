@@ -14,17 +14,18 @@ use probekit_runtime::cloud::{
     face_neighbors, lattice_tets, CellPlanes, CellVisibility, TetMesh, VisibilityMaps,
 };
 use probekit_runtime::format::{
-    AxisModel, Coefficients, Gradients, Octree, OctreeNode, ProbeSet, Rig, RigModel, Transition,
-    VolumeFile, VolumeGrid, VolumeStructure,
+    AxisModel, Coefficients, Gradients, LightOcclusion, Octree, OctreeNode, ProbeSet, Rig,
+    RigModel, RuntimeLight, RuntimeLights, Transition, VolumeFile, VolumeGrid, VolumeStructure,
 };
 use probekit_runtime::rig::{Light, SphereTable, SplitRig};
 use probekit_runtime::sh::basis::eval_l2;
 use probekit_runtime::sh::LUMINANCE;
 use probekit_runtime::{ProbeCloud, ProbeFile};
 use probekit_shaders::layout::{
-    pack_bricks, pack_cloud, pack_sphere_table, pack_split_rig, pack_volume_grid, BrickAtlas,
-    BrickEncoding, LayoutError, CLOUD_HEADER, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE,
-    CLOUD_TET_WORDS, RIG_HEADER, RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
+    light_occlusion_words, pack_bricks, pack_cloud, pack_cloud_with_lights, pack_rig_light,
+    pack_sphere_table, pack_split_rig, pack_volume_grid, BrickAtlas, BrickEncoding, LayoutError,
+    CLOUD_HEADER, CLOUD_HULL, CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS, RIG_HEADER,
+    RIG_HEADER_WORDS, RIG_LIGHT_WORDS,
 };
 use std::sync::Arc;
 
@@ -311,6 +312,105 @@ fn cloud_buffer_holds_the_runtime_data() {
     assert!(n >= 1);
     assert_eq!(w.len(), g + 9 + n);
     assert!(w[g + 9..].iter().all(|&t| (t as usize) < tets));
+
+    // No run-time lights: a zero count and empty sections.
+    assert_eq!(h(w, "PK_CLOUD_H_LIGHTS"), 0);
+    assert_eq!(h(w, "PK_CLOUD_H_LIGHT_RECORDS"), g);
+    assert_eq!(h(w, "PK_CLOUD_H_LIGHT_OCCLUSION"), g);
+    assert!(packed.lights.is_empty());
+    assert_eq!(&w[29..32], &[0, 0, 0]);
+}
+
+/// Run-time lights: the records `pack_rig_light` writes (share 1), then
+/// per probe its 8-bit occlusion values four to a word, the file's values
+/// exactly; the rest of the buffer as without lights.
+#[test]
+fn cloud_runtime_lights_layout() {
+    let cloud = test_cloud();
+    let probes = cloud.probe_count();
+    let lights: Vec<RuntimeLight> = [
+        Light::Sphere {
+            position: Vec3::new(1.0, 1.0, 0.4),
+            radius: 0.1,
+            intensity: Vec3::new(3.0, 2.0, 1.0),
+        },
+        Light::Point {
+            position: Vec3::new(2.0, 0.5, 0.2),
+            intensity: Vec3::splat(4.0),
+        },
+        Light::Spot {
+            position: Vec3::new(0.2, 2.0, 0.0),
+            direction: -Vec3::Y,
+            inner_deg: 20.0,
+            outer_deg: 35.0,
+            intensity: Vec3::splat(6.0),
+        },
+        Light::Disk {
+            position: Vec3::new(0.0, 0.0, -1.8),
+            direction: Vec3::Z,
+            radius: 0.5,
+            intensity: Vec3::splat(2.0),
+        },
+        Light::Directional {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            irradiance: Vec3::ONE,
+        },
+    ]
+    .into_iter()
+    .map(|light| RuntimeLight {
+        light,
+        group: "g".into(),
+    })
+    .collect();
+    let count = lights.len();
+    // Every value 0..=255 somewhere, zeros (not stored) among them.
+    let values: Vec<u8> = (0..probes * count).map(|i| (i * 37 % 256) as u8).collect();
+    let occlusion = LightOcclusion::from_dense(count, &values).unwrap();
+    let runtime = RuntimeLights { lights, occlusion };
+    let plain = pack_cloud(&cloud).unwrap();
+    let packed = pack_cloud_with_lights(&cloud, Some(&runtime)).unwrap();
+    let w = &packed.words;
+    assert_eq!(h(w, "PK_CLOUD_H_LIGHTS"), count);
+    let records = h(w, "PK_CLOUD_H_LIGHT_RECORDS");
+    assert_eq!(records, h(&plain.words, "PK_CLOUD_H_START_GRID"));
+    assert_eq!(packed.lights, records..records + RIG_LIGHT_WORDS * count);
+    for (l, r) in runtime.lights.iter().enumerate() {
+        let at = records + RIG_LIGHT_WORDS * l;
+        assert_eq!(&w[at..at + RIG_LIGHT_WORDS], &pack_rig_light(&r.light, 1.0));
+    }
+    let occ = h(w, "PK_CLOUD_H_LIGHT_OCCLUSION");
+    assert_eq!(occ, packed.lights.end);
+    let stride = light_occlusion_words(count);
+    assert_eq!(stride, 2);
+    let dense = runtime.occlusion.to_dense(count);
+    for i in 0..probes {
+        for l in 0..count {
+            let byte = (w[occ + stride * i + l / 4] >> (8 * (l % 4))) & 0xff;
+            assert_eq!(byte, u32::from(values[i * count + l]));
+            assert_eq!(byte as f32 / 255.0, dense[i * count + l]);
+        }
+        // Unused bytes of the row's last word are zero.
+        assert_eq!(w[occ + stride * i + 1] >> 8, 0);
+    }
+    assert_eq!(h(w, "PK_CLOUD_H_START_GRID"), occ + stride * probes);
+    // Everything before the lights as without them (but the header's light
+    // words and the start grid's offset).
+    let g = h(&plain.words, "PK_CLOUD_H_START_GRID");
+    for k in 0..g {
+        if !(25..29).contains(&k) {
+            assert_eq!(w[k], plain.words[k], "word {k}");
+        }
+    }
+    assert_eq!(&w[w.len() - (plain.words.len() - g)..], &plain.words[g..]);
+    // Occlusion of another number of probes.
+    let short = RuntimeLights {
+        occlusion: LightOcclusion::from_dense(count, &values[..count * (probes - 1)]).unwrap(),
+        ..runtime
+    };
+    assert!(matches!(
+        pack_cloud_with_lights(&cloud, Some(&short)),
+        Err(LayoutError::LightOcclusion { probes: p, rows }) if p == probes && rows == probes - 1
+    ));
 }
 
 #[test]

@@ -1,10 +1,12 @@
 //! `pk_cloud`: a probe cloud for `shaders/probekit_cloud.wgsl`.
 
+use super::lights::{light_occlusion_words, put_runtime_lights};
 use super::{check_size, LayoutError};
 use glam::Vec3;
 use probekit_runtime::cloud::cell_visibility::record_bytes;
 use probekit_runtime::cloud::directional::{DirectionTable, DIRECTIONAL_COEFFS, DIRECTIONS};
 use probekit_runtime::cloud::{Location, TetMesh, WalkState};
+use probekit_runtime::format::RuntimeLights;
 use probekit_runtime::sh::LUMINANCE;
 use probekit_runtime::{ProbeCloud, ProbeFile};
 use std::collections::HashMap;
@@ -20,8 +22,10 @@ pub const CLOUD_HEADER_WORDS: usize = 32;
 /// brightness exponent α and directional exponent γ (f32 bits), the
 /// distance moments' resolution, bias (m), sharpness, minimum variance
 /// (m²) and maximum distance (m), the cell lattice's subdivision. Then the
-/// word offset of each section.
-pub const CLOUD_HEADER: [(&str, usize); 26] = [
+/// word offset of each section. Then the run-time lights: their count (0
+/// without), the word offsets of their records and of the probes'
+/// occlusion rows ([`pack_cloud_with_lights`]). Words 29–31 are zero.
+pub const CLOUD_HEADER: [(&str, usize); 29] = [
     ("PK_CLOUD_H_PROBES", 0),
     ("PK_CLOUD_H_TETS", 1),
     ("PK_CLOUD_H_HULL_FACES", 2),
@@ -48,6 +52,9 @@ pub const CLOUD_HEADER: [(&str, usize); 26] = [
     ("PK_CLOUD_H_PLANES", 23),
     ("PK_CLOUD_H_DIR_TABLES", 24),
     ("PK_CLOUD_H_START_GRID", 25),
+    ("PK_CLOUD_H_LIGHTS", 26),
+    ("PK_CLOUD_H_LIGHT_RECORDS", 27),
+    ("PK_CLOUD_H_LIGHT_OCCLUSION", 28),
 ];
 
 const H_PROBES: usize = 0;
@@ -76,6 +83,9 @@ const H_CELL_BITS: usize = 22;
 const H_PLANES: usize = 23;
 const H_DIR_TABLES: usize = 24;
 const H_START_GRID: usize = 25;
+const H_LIGHTS: usize = 26;
+const H_LIGHT_RECORDS: usize = 27;
+const H_LIGHT_OCCLUSION: usize = 28;
 
 /// Flag: Chebyshev visibility from the distance moments is on.
 pub const CLOUD_FLAG_VISIBILITY: u32 = 1;
@@ -116,6 +126,11 @@ pub struct PackedCloud {
     /// cloud rewrites only these words. The brightness luminances stay those
     /// packed, as the runtime keeps the ones it was built with.
     pub coefficients: Range<usize>,
+    /// Word range of the run-time light records ([`super::RIG_LIGHT_WORDS`]
+    /// words per light, [`super::pack_rig_light`] with share 1; empty
+    /// without run-time lights): an engine that dims a light with its group,
+    /// or moves it, rewrites that light's record here.
+    pub lights: Range<usize>,
 }
 
 /// The cell code of a located point (`Location` of
@@ -129,10 +144,12 @@ pub fn cell_code(location: &Location) -> u32 {
     }
 }
 
-/// [`pack_cloud`] of the cloud a file holds (`ProbeCloud::from_file`: its
-/// blend data switched on as stored).
+/// [`pack_cloud_with_lights`] of the cloud a file holds
+/// (`ProbeCloud::from_file`: its blend data switched on as stored) and of
+/// its run-time lights, if it has any.
 pub fn pack_cloud_file(file: &ProbeFile) -> Result<PackedCloud, LayoutError> {
-    pack_cloud(&ProbeCloud::from_file(file)?)
+    let lights = file.probes().and_then(|p| p.runtime_lights.as_ref());
+    pack_cloud_with_lights(&ProbeCloud::from_file(file)?, lights)
 }
 
 /// Appends `x` as f32 bits.
@@ -151,8 +168,35 @@ fn put_v3(out: &mut Vec<u32>, v: Vec3) {
 /// cloud's current coefficients, and the directional blend's tables
 /// (read back from [`DirectionTable`] exactly). Coefficients past band 2
 /// are dropped (the shaders blend L2; irradiance loses the band-4 term,
-/// `A_4 = π/24`, of an order ≥ 5 cloud).
+/// `A_4 = π/24`, of an order ≥ 5 cloud). No run-time lights
+/// (`PK_CLOUD_H_LIGHTS` = 0): [`pack_cloud_with_lights`] with `None`.
 pub fn pack_cloud(cloud: &ProbeCloud) -> Result<PackedCloud, LayoutError> {
+    pack_cloud_with_lights(cloud, None)
+}
+
+/// [`pack_cloud`] with a file's run-time lights
+/// ([`ProbeSet::runtime_lights`](probekit_runtime::format::ProbeSet)), whose
+/// direct light the probes' SH leaves out, for `pk_cloud_irradiance` to add
+/// as `probekit_runtime::Probes::irradiance` does:
+/// `Σ_l pk_light_irradiance(light_l, p, n) · Σ_k w_k·v_{k,l}` over the
+/// blend's probes `k` and weights `w_k` (`pk_cloud_weights`).
+///
+/// Layout: header word `PK_CLOUD_H_LIGHTS` holds the light count `L` (0
+/// with `None`). At word `PK_CLOUD_H_LIGHT_RECORDS`, one light record per
+/// light ([`super::RIG_LIGHT_WORDS`] words, [`super::pack_rig_light`] with
+/// share 1: the rig's record, world coordinates). At word
+/// `PK_CLOUD_H_LIGHT_OCCLUSION`, one row of `⌈L/4⌉` words
+/// ([`super::light_occlusion_words`]) per probe, probe after probe: probe
+/// `i`'s stored 8-bit visible fraction `v` of light `l` (the file's
+/// `OCCL` value, 0 where the probe does not list the light) is byte
+/// `l mod 4` (least significant first) of word `⌈L/4⌉·i + l/4`, and
+/// the fraction is `v/255`. Both sections come before the start grid.
+/// Occlusion of another number of probes than the cloud's is a
+/// [`LayoutError::LightOcclusion`].
+pub fn pack_cloud_with_lights(
+    cloud: &ProbeCloud,
+    lights: Option<&RuntimeLights>,
+) -> Result<PackedCloud, LayoutError> {
     let mesh = cloud.mesh();
     let probes = cloud.probe_count();
     let tets = mesh.tets().len();
@@ -323,12 +367,27 @@ pub fn pack_cloud(cloud: &ProbeCloud) -> Result<PackedCloud, LayoutError> {
         w.extend(out.map(|v| v.x.to_bits()));
     }
 
+    // The run-time lights: records, then each probe's occlusion row.
+    let mut light_records = w.len()..w.len();
+    w[H_LIGHT_RECORDS] = w.len() as u32;
+    w[H_LIGHT_OCCLUSION] = w.len() as u32;
+    if let Some(l) = lights {
+        let count = l.lights.len();
+        check_size("cloud", w.len() + light_occlusion_words(count) * probes)?;
+        let s = put_runtime_lights(l, probes, &mut w)?;
+        w[H_LIGHTS] = count as u32;
+        w[H_LIGHT_RECORDS] = s.records.start as u32;
+        w[H_LIGHT_OCCLUSION] = s.occlusion as u32;
+        light_records = s.records;
+    }
+
     w[H_START_GRID] = w.len() as u32;
     start_grid(mesh, &mut w);
     check_size("cloud", w.len())?;
     Ok(PackedCloud {
         words: w,
         coefficients,
+        lights: light_records,
     })
 }
 

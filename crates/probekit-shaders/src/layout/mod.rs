@@ -6,34 +6,41 @@
 //!   (`CVSP`) and occluder planes (`CPLN`), fitted probe weights with the
 //!   brightness and directional exponents (`PWGT`), the per-probe
 //!   luminances the runtime precomputes, and a start grid for the GPU walk —
-//!   into the one `u32` buffer `pk_cloud` of `shaders/probekit_cloud.wgsl`.
+//!   into the one `u32` buffer `pk_cloud` of `shaders/probekit_cloud.wgsl`;
+//!   [`pack_cloud_with_lights`] (and [`pack_cloud_file`]) add a file's
+//!   run-time lights (`LITE`) and each probe's 8-bit occlusion of them
+//!   (`OCCL`).
 //! * [`pack_volume_grid`]: a uniform volume into the `PkVolumeGrid` uniform,
 //!   `pk_sh_coeffs` and `pk_sh_gradients` of `shaders/probekit_buffers.wgsl`.
 //! * [`pack_bricks`]: the textures of a brick-atlas export into the one
 //!   `u32` buffer `pk_bricks` of `shaders/probekit_bricks.wgsl`.
 //! * [`pack_split_rig`]: a runtime [`SplitRig`](probekit_runtime::rig::SplitRig)
 //!   after its per-frame update — model, box, current parameters, near
-//!   lights with their shares — into `pk_rig` of `shaders/probekit_rig.wgsl`;
-//!   [`pack_sphere_table`]: the sphere-light table into `pk_sphere_table`.
+//!   lights with their shares — into `pk_rig` of `shaders/probekit_rig.wgsl`.
+//! * [`pack_rig_light`]: one light record, the layout rigs and clouds share
+//!   (`shaders/probekit_lights.wgsl`); [`pack_sphere_table`]: the
+//!   sphere-light table into `pk_sphere_table`, which the light evaluation
+//!   of both reads.
 //!
 //! Buffers are little-endian `u32` words (`f32` values as their bits);
 //! [`words_to_bytes`] gives the bytes to upload.
 
 mod bricks;
 mod cloud;
+mod lights;
 mod rig;
 mod volume;
 
 pub use bricks::{pack_bricks, BrickAtlas, BrickEncoding, BRICKS_HEADER, BRICKS_HEADER_WORDS};
 pub use cloud::{
-    cell_code, pack_cloud, pack_cloud_file, PackedCloud, CLOUD_FLAG_CELLS,
+    cell_code, pack_cloud, pack_cloud_file, pack_cloud_with_lights, PackedCloud, CLOUD_FLAG_CELLS,
     CLOUD_FLAG_PROBE_WEIGHTS, CLOUD_FLAG_VISIBILITY, CLOUD_HEADER, CLOUD_HEADER_WORDS, CLOUD_HULL,
     CLOUD_HULL_WORDS, CLOUD_NONE, CLOUD_TET_WORDS,
 };
-pub use rig::{
-    pack_rig_light, pack_sphere_table, pack_split_rig, RIG_CODES, RIG_HEADER, RIG_HEADER_WORDS,
-    RIG_LIGHT_WORDS, RIG_MAX_ORDER,
+pub use lights::{
+    light_occlusion_words, pack_rig_light, pack_sphere_table, LIGHT_CODES, RIG_LIGHT_WORDS,
 };
+pub use rig::{pack_split_rig, RIG_CODES, RIG_HEADER, RIG_HEADER_WORDS, RIG_MAX_ORDER};
 pub use volume::{pack_volume_grid, PackedVolumeGrid, VOLUME_GRADIENT_FLOATS, VOLUME_PROBE_FLOATS};
 
 use probekit_runtime::cloud::ProbeCloudError;
@@ -81,6 +88,15 @@ pub enum LayoutError {
     RigOrder {
         /// The rig's order (bands).
         order: usize,
+    },
+    /// Run-time lights whose occlusion table has another number of probes
+    /// than the cloud.
+    #[error("run-time light occlusion of {rows} probes for a cloud of {probes}")]
+    LightOcclusion {
+        /// The cloud's probes.
+        probes: usize,
+        /// The occlusion table's probes.
+        rows: usize,
     },
 }
 

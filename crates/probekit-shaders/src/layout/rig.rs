@@ -6,13 +6,17 @@
 //! writes its result — the rig's model and box, its current parameters and
 //! the near lights in object coordinates with their shares — into the
 //! words the vertex shader reads. The sphere-light table is the same for
-//! every rig and every frame: [`pack_sphere_table`] once.
+//! every rig and every frame: [`super::pack_sphere_table`] once. Light
+//! records and the table are shared with the cloud's run-time lights
+//! (`super::lights`).
 
+use super::lights::{
+    pack_rig_light, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_POINT, LIGHT_SPHERE, LIGHT_SPOT,
+    RIG_LIGHT_WORDS,
+};
 use super::{check_size, LayoutError};
-use glam::Vec3;
 use probekit_runtime::format::{AxisModel, RigModel};
-use probekit_runtime::rig::{Light, SphereTable, SplitRig};
-use probekit_runtime::sh::lights::spot_scale_offset;
+use probekit_runtime::rig::SplitRig;
 
 /// Words of the header at the start of each packed rig.
 pub const RIG_HEADER_WORDS: usize = 20;
@@ -51,7 +55,8 @@ const H_BOX_MAX: usize = 15;
 
 /// The codes the rig buffer uses, by their WGSL constant names: rig models
 /// (header word `PK_RIG_H_MODEL`), axis models (`PK_RIG_H_AXIS_X + a`) and
-/// light kinds (word 0 of a light record; the C API's `PK_LIGHT_*`).
+/// light kinds (word 0 of a light record; the C API's `PK_LIGHT_*`, also
+/// [`super::LIGHT_CODES`], declared in `shaders/probekit_lights.wgsl`).
 pub const RIG_CODES: [(&str, u32); 11] = [
     ("PK_RIG_MODEL_CONSTANT", MODEL_CONSTANT),
     ("PK_RIG_MODEL_GRADIENT", MODEL_GRADIENT),
@@ -72,105 +77,10 @@ const MODEL_TENSOR: u32 = 2;
 const AXIS_CONSTANT: u32 = 0;
 const AXIS_GRADIENT: u32 = 1;
 const AXIS_LATTICE: u32 = 2;
-const LIGHT_SPHERE: u32 = 0;
-const LIGHT_POINT: u32 = 1;
-const LIGHT_SPOT: u32 = 2;
-const LIGHT_DISK: u32 = 3;
-const LIGHT_DIRECTIONAL: u32 = 4;
-
-/// Words per light record (`PK_RIG_LIGHT_WORDS`): the kind, position
-/// (3 f32, m), unit direction (3 f32, the way light travels), radius (m),
-/// intensity (3 f32, W/sr; a directional light's irradiance, W/m²), the
-/// spot attenuation's scale and offset, the per-vertex share, two zero
-/// words. Unused fields are zero.
-pub const RIG_LIGHT_WORDS: usize = 16;
-
 /// The most SH bands a packed rig may have: the shader evaluates L2
 /// (`pk_irradiance_l2`), so an order-4+ rig, whose band-4 term the runtime
 /// keeps, is refused rather than silently truncated.
 pub const RIG_MAX_ORDER: usize = 3;
-
-/// The light record of `light` with per-vertex share `share`
-/// (`PkRigLight` and the share, [`RIG_LIGHT_WORDS`]). A spot's
-/// attenuation scale `1/max(cos inner − cos outer, 0.001)` and offset
-/// `−cos outer · scale` are computed here exactly as
-/// `probekit_sh::lights::spot_attenuation` computes them, so the shader
-/// only multiplies, adds and clamps.
-pub fn pack_rig_light(light: &Light, share: f32) -> [u32; RIG_LIGHT_WORDS] {
-    let mut r = [0u32; RIG_LIGHT_WORDS];
-    let mut put = |at: usize, v: Vec3| {
-        for (k, x) in v.to_array().into_iter().enumerate() {
-            r[at + k] = x.to_bits();
-        }
-    };
-    let (kind, radius, spot) = match *light {
-        Light::Sphere {
-            position,
-            radius,
-            intensity,
-        } => {
-            put(1, position);
-            put(8, intensity);
-            (LIGHT_SPHERE, radius, [0.0; 2])
-        }
-        Light::Point {
-            position,
-            intensity,
-        } => {
-            put(1, position);
-            put(8, intensity);
-            (LIGHT_POINT, 0.0, [0.0; 2])
-        }
-        Light::Spot {
-            position,
-            direction,
-            inner_deg,
-            outer_deg,
-            intensity,
-        } => {
-            put(1, position);
-            put(4, direction);
-            put(8, intensity);
-            let cone = spot_scale_offset(inner_deg.to_radians(), outer_deg.to_radians());
-            (LIGHT_SPOT, 0.0, cone)
-        }
-        Light::Disk {
-            position,
-            direction,
-            radius,
-            intensity,
-        } => {
-            put(1, position);
-            put(4, direction);
-            put(8, intensity);
-            (LIGHT_DISK, radius, [0.0; 2])
-        }
-        Light::Directional {
-            direction,
-            irradiance,
-        } => {
-            put(4, direction);
-            put(8, irradiance);
-            (LIGHT_DIRECTIONAL, 0.0, [0.0; 2])
-        }
-    };
-    r[0] = kind;
-    r[7] = radius.to_bits();
-    r[11] = spot[0].to_bits();
-    r[12] = spot[1].to_bits();
-    r[13] = share.to_bits();
-    r
-}
-
-/// `pk_sphere_table`: the table's side, then its `side²` entries as f32
-/// bits, row after row ([`SphereTable::values`]). Upload once; every rig
-/// made by the same [`probekit_runtime::Probes`] shares it.
-pub fn pack_sphere_table(table: &SphereTable) -> Vec<u32> {
-    let mut w = Vec::with_capacity(1 + table.values().len());
-    w.push(table.size() as u32);
-    w.extend(table.values().iter().map(|x| x.to_bits()));
-    w
-}
 
 /// The axis code and function count (at least 1) of one tensor axis.
 fn axis_code(a: AxisModel) -> (u32, u32) {
