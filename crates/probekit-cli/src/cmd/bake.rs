@@ -255,7 +255,10 @@ fn light_split_line(
         )
     };
     if !l.kept_baked.is_empty() {
-        line += &format!("; kept baked (baking wins on held-out points): {}", names(&l.kept_baked));
+        line += &format!(
+            "; kept baked (baking wins on held-out points): {}",
+            names(&l.kept_baked)
+        );
     }
     if !l.demoted.is_empty() {
         line += &format!(

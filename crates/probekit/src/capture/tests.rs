@@ -26,7 +26,7 @@ fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> Triangle {
 }
 
 /// A closed axis-aligned box; faces point outward, or inward when `inward`.
-fn box_tris(min: Vec3, max: Vec3, inward: bool, material: u32) -> Vec<Triangle> {
+pub(crate) fn box_tris(min: Vec3, max: Vec3, inward: bool, material: u32) -> Vec<Triangle> {
     let c = (min + max) * 0.5;
     let h = (max - min) * 0.5;
     let mut out = Vec::new();
@@ -49,7 +49,7 @@ fn box_tris(min: Vec3, max: Vec3, inward: bool, material: u32) -> Vec<Triangle> 
     out
 }
 
-fn material(albedo: f32, emissive: f32) -> Material {
+pub(crate) fn material(albedo: f32, emissive: f32) -> Material {
     Material {
         name: format!("a{albedo}e{emissive}"),
         base_color: Vec3::splat(albedo),
@@ -58,7 +58,7 @@ fn material(albedo: f32, emissive: f32) -> Material {
     }
 }
 
-fn scene_of(
+pub(crate) fn scene_of(
     objects: Vec<Vec<Triangle>>,
     materials: Vec<Material>,
     lights: Vec<Light>,
@@ -98,7 +98,13 @@ fn scene_of(
     Scene::from_parts(Path::new("test"), parts, extras).expect("test scene")
 }
 
-fn light(kind: LightKind, position: Vec3, direction: Vec3, intensity: f32, radius: f32) -> Light {
+pub(crate) fn light(
+    kind: LightKind,
+    position: Vec3,
+    direction: Vec3,
+    intensity: f32,
+    radius: f32,
+) -> Light {
     Light {
         kind,
         position,

@@ -63,6 +63,8 @@ pub struct LightSplit {
     pub candidates: Vec<usize>,
     /// Per candidate: whether the bake decides (`auto`, no recorded choice).
     pub auto: Vec<bool>,
+    /// Per candidate: baked by a recorded choice (`demoted`).
+    pub demoted: Vec<bool>,
     /// The capture's group of each scene light: a candidate's own, the
     /// light's `group` (or `"default"`) otherwise.
     pub capture_groups: Vec<String>,
@@ -108,17 +110,20 @@ impl LightSplit {
         }
         for (i, l) in scene.lights.iter().enumerate() {
             let lit = (l.color * l.intensity).max_element() > 0.0 && from_scene_light(l).is_some();
-            let (candidate, auto) = match lights.resolved.get(i) {
-                Some(r) => (*r == ResolvedMode::Runtime, false),
+            let (candidate, auto, demoted) = match lights.resolved.get(i) {
+                Some(ResolvedMode::Runtime) => (true, false, false),
+                Some(ResolvedMode::Demoted) => (true, false, true),
+                Some(ResolvedMode::Baked) => (false, false, false),
                 None => match l.mode {
-                    LightMode::Baked => (false, false),
-                    LightMode::Runtime => (true, false),
-                    LightMode::Auto => (true, true),
+                    LightMode::Baked => (false, false, false),
+                    LightMode::Runtime => (true, false, false),
+                    LightMode::Auto => (true, true, false),
                 },
             };
             if candidate && lit {
                 split.candidates.push(i);
                 split.auto.push(auto);
+                split.demoted.push(demoted);
                 split.capture_groups[i] = format!("{}\u{1f}runtime {i}", split.user_groups[i]);
             }
         }
@@ -226,7 +231,7 @@ pub fn resolve(
     }
 
     // Step 3: the held-out choice of `auto` lights.
-    let mut runtime = vec![true; nc];
+    let mut runtime: Vec<bool> = split.demoted.iter().map(|d| !d).collect();
     let mut report = LightSplitReport {
         max_per_probe: settings.max_per_probe,
         ..Default::default()
@@ -316,6 +321,9 @@ pub fn resolve(
     }
     let kept: Vec<usize> = (0..nc).filter(|&l| runtime[l]).collect();
     let mut resolved = vec![ResolvedMode::Baked; scene.lights.len()];
+    for &i in &split.candidates {
+        resolved[i] = ResolvedMode::Demoted;
+    }
     let mut lights = Vec::new();
     let mut dense = Vec::with_capacity(probes * kept.len());
     for &l in &kept {

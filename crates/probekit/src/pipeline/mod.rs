@@ -25,6 +25,8 @@
 //! `weight fit`.
 
 pub mod lights;
+#[cfg(test)]
+mod lights_tests;
 mod merge;
 mod positions;
 pub mod sweep;

@@ -1,19 +1,19 @@
 //! The pipeline of an irradiance volume: a uniform grid or an octree of
 //! captured samples, with gradients, as the recipe's `[volume]` says.
 
+use super::lights::LightSplit;
 use super::PipelineError;
+use crate::capture::CaptureSettings;
 use crate::format::Parts;
 use crate::format::ProbeFile;
 use crate::progress::{Clock, PhaseTime, Progress};
 use crate::recipe::{BakeRecord, GradientModeName, Recipe, VolumeSettings};
-use crate::capture::CaptureSettings;
 use crate::scene::{Aabb, Scene};
-use super::lights::LightSplit;
-use glam::Vec3;
-use probekit_sh::ShRgb;
 use crate::volume::{
     build_adaptive, build_uniform, truncate_gradients, BakerSource, BuildStats, VolumeSource,
 };
+use glam::Vec3;
+use probekit_sh::ShRgb;
 use serde::Serialize;
 
 /// What a volume bake produced, in numbers.
@@ -80,7 +80,9 @@ pub fn bake_volume(
     if !split.candidates.is_empty() {
         let mut clock = Clock::new(src.rays());
         split_volume_lights(&src, &split, &mut recipe, &bake_box, &mut file)?;
-        report.phases.push(clock.lap("light split", src.rays()).clone());
+        report
+            .phases
+            .push(clock.lap("light split", src.rays()).clone());
     }
     // The build's rays and its capture sub-phase, from the tracer.
     let capture = src.capture_time();

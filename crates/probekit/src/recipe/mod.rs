@@ -348,9 +348,10 @@ pub struct Lights {
     pub occlusion_samples: u32,
     /// Held-out points on which `auto` lights are decided.
     pub decision_points: u32,
-    /// The bake's choice per scene light, in the scene's order (written by
-    /// the bake into the file's record; a recipe that gives it is followed
-    /// instead of deciding again). Empty: decide.
+    /// The bake's choice per scene light, in the scene's order: `runtime`,
+    /// `baked`, or `demoted` (written by the bake into the file's record;
+    /// a recipe that gives it is followed instead of deciding again).
+    /// Empty: decide.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub resolved: Vec<ResolvedMode>,
 }
@@ -375,6 +376,11 @@ pub enum ResolvedMode {
     Baked,
     /// Its direct light is evaluated at run time.
     Runtime,
+    /// A candidate of the split that the bake kept baked (its held-out
+    /// choice or K per probe): captured apart, its direct light added back
+    /// to the SH. Baking again with the choice repeats that, so the file
+    /// is the same byte for byte.
+    Demoted,
 }
 
 /// Probe validity: probes inside geometry are moved out or flagged.
