@@ -109,6 +109,8 @@ fn sharded_bake_merges_to_the_unsharded_file() {
             "32",
             "--set",
             "capture.bounces=1",
+            "--set",
+            "lights.split=false",
             "--shard",
             "1/3",
             "-o",

@@ -12,57 +12,13 @@ use probekit_runtime::rig::Light;
 use probekit_runtime::{LoadOptions, ObjectState, Probes};
 
 fn lights() -> Vec<RuntimeLight> {
-    vec![
-        RuntimeLight {
-            light: Light::Point {
-                position: Vec3::new(0.5, 2.0, 0.0),
-                intensity: Vec3::new(4.0, 3.0, 2.0),
-            },
-            group: "lamp".into(),
-        },
-        RuntimeLight {
-            light: Light::Sphere {
-                position: Vec3::new(-0.5, 1.0, 1.0),
-                radius: 0.1,
-                intensity: Vec3::splat(2.0),
-            },
-            group: "default".into(),
-        },
-        RuntimeLight {
-            light: Light::Spot {
-                position: Vec3::new(0.0, 3.0, 0.0),
-                direction: Vec3::NEG_Y,
-                inner_deg: 10.0,
-                outer_deg: 30.0,
-                intensity: Vec3::ONE,
-            },
-            group: "default".into(),
-        },
-        RuntimeLight {
-            light: Light::Directional {
-                direction: Vec3::new(0.0, -0.6, -0.8),
-                irradiance: Vec3::splat(3.0),
-            },
-            group: "sün".into(),
-        },
-    ]
+    runtime_light_list()
 }
 
-/// Quantised fractions of the 5 probes × 4 lights, some zero (not stored).
-const OCC: [u8; 20] = [
-    255, 0, 12, 200, //
-    128, 7, 0, 0, //
-    0, 0, 0, 0, //
-    64, 255, 1, 99, //
-    255, 255, 255, 255,
-];
+const OCC: [u8; 20] = OCCLUSION;
 
-fn with_lights(mut f: ProbeFile) -> ProbeFile {
-    pm(&mut f).runtime_lights = Some(RuntimeLights {
-        lights: lights(),
-        occlusion: LightOcclusion::from_dense(4, &OCC).unwrap(),
-    });
-    f
+fn with_lights(f: ProbeFile) -> ProbeFile {
+    with_runtime_lights(f)
 }
 
 #[test]

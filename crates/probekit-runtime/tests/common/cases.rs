@@ -381,6 +381,7 @@ pub fn corpus_cases() -> Vec<(&'static str, Vec<u8>, Expect)> {
         |e| matches!(e, FormatError::CountMismatch { id, .. } if *id == SectionId::VALIDITY),
     ));
     light_group_cases(&mut v);
+    super::lights::runtime_light_cases(&mut v);
     v
 }
 

@@ -4,10 +4,12 @@
 
 mod cases;
 pub mod clouds;
+mod lights;
 mod parts;
 
 #[allow(unused_imports)] // Only tests/corpus.rs uses them.
 pub use cases::corpus_cases;
+pub use lights::{runtime_light_list, with_runtime_lights, OCCLUSION};
 pub use parts::*;
 
 use glam::Vec3;

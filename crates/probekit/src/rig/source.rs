@@ -17,6 +17,10 @@
 //! Orders: the file's SH (every stored band,
 //! [`Probes::sh_all_bands_at`]) is truncated to the rig's order or padded
 //! with zeros (both exact, SH bands are orthogonal).
+//!
+//! A file's run-time lights (whose direct light its SH leaves out) enter
+//! the rig as lights: their radiance SH at each sample point times the
+//! probes' blended occlusion there.
 
 use super::RigSetupError;
 use glam::Vec3;
@@ -64,8 +68,11 @@ impl ProbeSource {
 
     /// Adds `weight ×` the file's radiance SH at world position `p` to
     /// `out` (its first `out.len()` coefficients; the file's SH is truncated
-    /// or zero-padded to that). `state` is the object's query state. No
-    /// allocation.
+    /// or zero-padded to that). A file's run-time lights enter as lights:
+    /// each one's radiance SH at `p` ([`probekit_runtime::rig::Light::add_sh`])
+    /// scaled by the probes' blended occlusion of it at `p`, up to the
+    /// rig's order (they are not limited to the file's). `state` is the
+    /// object's query state. No allocation.
     pub fn add_sh(&self, p: Vec3, weight: f32, state: &mut ObjectState, out: &mut [Vec3]) {
         let mut buf = [Vec3::ZERO; MAX_COEFFS];
         // Fails only for a position that is not finite, or a rigs-only
@@ -77,6 +84,20 @@ impl ProbeSource {
         let n = out.len().min(self.order() * self.order());
         for (o, b) in out[..n].iter_mut().zip(&buf[..n]) {
             *o += *b * weight;
+        }
+        let lights = self.0.runtime_lights();
+        let mut occ = [0.0f32; probekit_runtime::format::layout::MAX_RUNTIME_LIGHTS];
+        if lights.is_empty() || self.0.light_occlusion(state, p, &mut occ).is_err() {
+            return;
+        }
+        let order = (1..=probekit_sh::MAX_ORDER)
+            .rev()
+            .find(|o| o * o <= out.len())
+            .unwrap_or(0);
+        for (l, v) in lights.iter().zip(occ) {
+            if v > 0.0 {
+                l.light.add_sh(order, p, weight * v, out);
+            }
         }
     }
 
@@ -165,6 +186,44 @@ mod tests {
                 resolution: res,
             }),
         ))
+    }
+
+    /// A volume's run-time point light enters the rig's samples as the
+    /// light's own SH (Sloan's delta projection, computed here) times the
+    /// stored occlusion, on top of the file's SH.
+    #[test]
+    fn run_time_lights_enter_as_lights_scaled_by_their_occlusion() {
+        use probekit_runtime::format::{LightOcclusion, RuntimeLight, RuntimeLights};
+        let f = volume(&Affine::new());
+        let mut lit = f.clone();
+        let light = probekit_runtime::rig::Light::Point {
+            position: Vec3::new(1.0, 2.5, -1.0),
+            intensity: Vec3::new(3.0, 2.0, 1.0),
+        };
+        lit.probe_set_mut().runtime_lights = Some(RuntimeLights {
+            lights: vec![RuntimeLight {
+                light,
+                group: "lamp".into(),
+            }],
+            occlusion: LightOcclusion::from_dense(1, &[102; 27]).unwrap(),
+        });
+        let (a, b) = (
+            ProbeSource::from_file(&f, LoadOptions::default()).unwrap(),
+            ProbeSource::from_file(&lit, LoadOptions::default()).unwrap(),
+        );
+        let p = Vec3::new(0.3, 0.7, -2.2);
+        let (mut sa, mut sb) = ([Vec3::ZERO; N2], [Vec3::ZERO; N2]);
+        a.add_sh(p, 1.0, &mut ObjectState::new(), &mut sa);
+        b.add_sh(p, 1.0, &mut ObjectState::new(), &mut sb);
+        // A delta of irradiance E = I/d² from direction ω projects to
+        // E·Y_lm(ω).
+        let w = Vec3::new(1.0, 2.5, -1.0) - p;
+        let e = Vec3::new(3.0, 2.0, 1.0) / w.length_squared() * (102.0 / 255.0);
+        let y = probekit_sh::basis::eval_l2(w.normalize());
+        for k in 0..N2 {
+            let want = sa[k] + e * y[k];
+            assert!((sb[k] - want).length() < 1e-4, "{k}: {} vs {want}", sb[k]);
+        }
     }
 
     /// A Delaunay cloud (box corners plus scattered inner points) holding
