@@ -9,6 +9,7 @@ mod parts;
 
 #[allow(unused_imports)] // Only tests/corpus.rs uses them.
 pub use cases::corpus_cases;
+#[allow(unused_imports)]
 pub use lights::{runtime_light_list, with_runtime_lights, OCCLUSION};
 pub use parts::*;
 

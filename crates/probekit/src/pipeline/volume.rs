@@ -127,6 +127,7 @@ fn split_volume_lights(
         .probes()
         .ok_or(PipelineError::Parts("a volume without samples".into()))?;
     let coeffs = probes.coefficients.to_f32()?;
+    let probes_order = probes.coefficients.order;
     let k = probes.coefficients.coeffs_per_probe();
     out.sh = coeffs
         .chunks(k)
@@ -145,7 +146,7 @@ fn split_volume_lights(
         .collect();
     let codec = file.probe_set_mut().coefficients.codec;
     file.probe_set_mut().coefficients =
-        crate::format::encode_coefficients(codec, k.isqrt() as u32, &flat)?;
+        crate::format::encode_coefficients(codec, probes_order, &flat)?;
     file.probe_set_mut().runtime_lights = s.lights;
     recipe.lights.resolved = s.resolved;
     if let Some(mut record) = BakeRecord::from_json(file.metadata()) {
