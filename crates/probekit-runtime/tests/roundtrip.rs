@@ -209,7 +209,7 @@ fn files_of_format_1_are_refused_as_written_by_an_older_probekit() {
         layout::VERSION_MAJOR
     );
     assert_eq!(layout::VERSION_MAJOR, 2);
-    assert_eq!(minor_of(&bytes), 0);
+    assert_eq!(minor_of(&bytes), layout::VERSION_MINOR);
     for minor in [0u16, 1, 7, 11, 200] {
         let e = load_patched(&bytes, |b| {
             b[layout::header::MAJOR..][..2].copy_from_slice(&1u16.to_le_bytes());

@@ -312,19 +312,33 @@ fn query_is_the_runtimes_answer() {
             assert!((Vec3::from_array(*g) - *e).length() <= 1e-5 * (1.0 + e.length()));
         }
         // Irradiance for the six axes and the given normal, against the SH
-        // library's evaluation of that SH.
+        // library's evaluation of that SH plus each run-time light's exact
+        // irradiance times its occlusion blended with the cloud's weights.
+        let (wp, ww) = cloud.weights_at(p, &mut fresh());
+        let lights_term = |n: Vec3| {
+            let Some(r) = f.probes().and_then(|s| s.runtime_lights.as_ref()) else {
+                return Vec3::ZERO;
+            };
+            let mut e = Vec3::ZERO;
+            for (l, light) in r.lights.iter().enumerate() {
+                let v: f32 = (0..4)
+                    .map(|k| ww[k] * r.occlusion.value(wp[k] as usize, l))
+                    .sum();
+                e += light.light.irradiance(p, n, None) * v;
+            }
+            e
+        };
         for (name, n) in [("+x", Vec3::X), ("-y", Vec3::NEG_Y), ("+z", Vec3::Z)] {
             let got: [f32; 3] = serde_json::from_value(q["irradiance"][name].clone()).unwrap();
-            let want = probekit_sh::irradiance(&expected, n);
+            let want = probekit_sh::irradiance(&expected, n) + lights_term(n);
             assert!((Vec3::from_array(got) - want).length() <= 1e-4 * (1.0 + want.length()));
         }
         let got: [f32; 3] = serde_json::from_value(q["normal_irradiance"].clone()).unwrap();
-        let want = probekit_sh::irradiance(&expected, Vec3::Y);
+        let want = probekit_sh::irradiance(&expected, Vec3::Y) + lights_term(Vec3::Y);
         assert!((Vec3::from_array(got) - want).length() <= 1e-4 * (1.0 + want.length()));
         // The probes and weights the blend used.
         let probes: Vec<u32> = serde_json::from_value(q["probes"].clone()).unwrap();
         let weights: Vec<f32> = serde_json::from_value(q["weights"].clone()).unwrap();
-        let (wp, ww) = cloud.weights_at(p, &mut fresh());
         assert_eq!(probes, wp[..probes.len()].to_vec());
         assert_eq!(weights, ww[..weights.len()].to_vec());
         assert!((weights.iter().sum::<f32>() - 1.0).abs() < 1e-4);

@@ -100,7 +100,8 @@ pub struct BakeArgs {
     pub render: Option<PathBuf>,
     /// Print the report as JSON, with `phases`: wall and CPU seconds and
     /// rays traced per phase (load, placement and its steps, capture,
-    /// assembly, distance moments, cell visibility, weight fit, picture).
+    /// light split, assembly, distance moments, cell visibility, weight
+    /// fit, picture), and `lights`: which lights run at run time.
     #[arg(long, help_heading = "Output")]
     pub json: bool,
 }
