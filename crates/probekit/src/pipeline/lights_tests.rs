@@ -257,3 +257,50 @@ fn a_sharded_bake_with_run_time_lights_names_the_key() {
     let e = bake.run_part(0, 2, &|_, _, _| {}).unwrap_err().to_string();
     assert!(e.contains("split = false"), "{e}");
 }
+
+/// A uniform volume splits lights as a cloud does: the file holds the
+/// run-time lights with each sample's occlusion, the SH part leaves their
+/// direct light out, and the answer comes back close to a reference
+/// capture.
+#[test]
+fn a_volume_splits_run_time_lights_too() {
+    let mut scene = two_group_room(Vec3::ONE);
+    for l in &mut scene.lights {
+        l.mode = LightMode::Runtime;
+    }
+    let mut recipe = grid_recipe(27);
+    recipe.volume.layout = crate::recipe::VolumeLayout::Uniform {
+        cell: None,
+        resolution: Some([4, 3, 4]),
+    };
+    let (file, _) = crate::pipeline::bake_volume(&scene, "test", &recipe, &|_, _, _| {}).unwrap();
+    let rl = file.probes().unwrap().runtime_lights.as_ref().unwrap();
+    assert_eq!(rl.lights.len(), 2);
+    assert_eq!(rl.occlusion.probe_count(), 48);
+    let record = crate::recipe::BakeRecord::from_json(file.metadata()).unwrap();
+    assert_eq!(
+        record.recipe.lights.resolved,
+        [ResolvedMode::Runtime, ResolvedMode::Runtime]
+    );
+    let probes = Probes::from_file(&file, LoadOptions::default()).unwrap();
+    let baker = crate::capture::Baker::new(&scene).unwrap();
+    let rs = crate::capture::ReferenceSettings {
+        relative_precision: 0.02,
+        max_samples: 16_384,
+        bounces: 1,
+        ..Default::default()
+    };
+    let mut st = ObjectState::new();
+    let (p, n) = (
+        Vec3::new(-0.6, 1.0, 0.2),
+        Vec3::new(-0.2, 1.0, 0.1).normalize(),
+    );
+    let truth = baker.reference_irradiance(p, n, 3, &rs).unwrap().irradiance;
+    let got = Vec3::from(probes.irradiance(&mut st, p, n).unwrap());
+    let sh = Vec3::from(probes.sh_irradiance(&mut st, p, n).unwrap());
+    assert!(got.x > 1.2 * sh.x, "{got} vs SH part {sh}");
+    assert!(
+        (got - truth).length() < 0.25 * truth.length(),
+        "{got} vs {truth}"
+    );
+}
