@@ -5,6 +5,39 @@ use crate::error::Error;
 use crate::PkStatus;
 use glam::Vec3;
 
+/// Writes `name` (UTF-8, `what` in errors) as a NUL-terminated string into
+/// `buf` (`buf_len` bytes) and its length without the NUL into `name_len`
+/// (may be null, written even when the buffer is too small, so a caller
+/// can ask with a null buffer of length 0 first). Too small a buffer is
+/// [`PkStatus::BufferTooSmall`], nothing written to it.
+pub(crate) fn name_out(
+    name: &[u8],
+    what: &str,
+    buf: *mut std::ffi::c_char,
+    buf_len: usize,
+    name_len: *mut usize,
+) -> Result<(), Error> {
+    if !name_len.is_null() {
+        // SAFETY: non-null, points to a usize per the header.
+        unsafe { name_len.write(name.len()) };
+    }
+    if buf_len <= name.len() {
+        return Err(Error::new(
+            PkStatus::BufferTooSmall,
+            format!("{what} needs {} bytes", name.len() + 1),
+        ));
+    }
+    if buf.is_null() {
+        return Err(Error::null("buf"));
+    }
+    // SAFETY: `buf` holds `buf_len > name.len()` writable bytes.
+    unsafe {
+        std::ptr::copy_nonoverlapping(name.as_ptr().cast::<std::ffi::c_char>(), buf, name.len());
+        buf.add(name.len()).write(0);
+    }
+    Ok(())
+}
+
 /// Reads 3 floats (a point or a normal); refuses null and non-finite values.
 pub(crate) fn vec3_in(p: *const f32, what: &str) -> Result<Vec3, Error> {
     if p.is_null() {

@@ -1,7 +1,7 @@
 //! Irradiance rigs: per-object state, its update from sampled SH, and
 //! its irradiance at the object's vertices.
 
-use crate::args::{finite, floats_in, floats_out, times3, vec3_in};
+use crate::args::{finite, floats_in, floats_out, name_out, times3, vec3_in};
 use crate::cloud::walk_state;
 use crate::error::{run, run_value, Error};
 use crate::probes::handle;
@@ -49,26 +49,7 @@ pub unsafe extern "C" fn pk_rig_name(
                 format!("rig {index} of {}", h.rigs.len()),
             )
         })?;
-        let name = rig.name.as_bytes();
-        if !name_len.is_null() {
-            // SAFETY: non-null, points to a usize per the header.
-            unsafe { name_len.write(name.len()) };
-        }
-        if buf_len <= name.len() {
-            return Err(Error::new(
-                PkStatus::BufferTooSmall,
-                format!("rig name needs {} bytes", name.len() + 1),
-            ));
-        }
-        if buf.is_null() {
-            return Err(Error::null("buf"));
-        }
-        // SAFETY: `buf` holds `buf_len > name.len()` writable bytes.
-        unsafe {
-            std::ptr::copy_nonoverlapping(name.as_ptr().cast::<c_char>(), buf, name.len());
-            buf.add(name.len()).write(0);
-        }
-        Ok(())
+        name_out(rig.name.as_bytes(), "rig name", buf, buf_len, name_len)
     })
 }
 

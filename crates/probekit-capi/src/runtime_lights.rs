@@ -6,7 +6,7 @@
 //! engine that draws them itself takes [`crate::pk_sh_irradiance`] and adds,
 //! per light, its own exact irradiance times [`pk_light_occlusion`].
 
-use crate::args::{floats_out, vec3_in};
+use crate::args::{floats_out, name_out, vec3_in};
 use crate::cloud::walk_state;
 use crate::error::{run, Error};
 use crate::probes::handle;
@@ -75,25 +75,7 @@ pub unsafe extern "C" fn pk_runtime_light_group(
     run(|| {
         let h = handle(probes)?;
         let name = light(h, index)?.group.as_bytes();
-        if !name_len.is_null() {
-            // SAFETY: non-null, points to a usize per the header.
-            unsafe { name_len.write(name.len()) };
-        }
-        if buf_len <= name.len() {
-            return Err(Error::new(
-                PkStatus::BufferTooSmall,
-                format!("light group needs {} bytes", name.len() + 1),
-            ));
-        }
-        if buf.is_null() {
-            return Err(Error::null("buf"));
-        }
-        // SAFETY: `buf` holds `buf_len > name.len()` writable bytes.
-        unsafe {
-            std::ptr::copy_nonoverlapping(name.as_ptr().cast::<c_char>(), buf, name.len());
-            buf.add(name.len()).write(0);
-        }
-        Ok(())
+        name_out(name, "light group", buf, buf_len, name_len)
     })
 }
 

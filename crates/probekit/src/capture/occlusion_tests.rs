@@ -4,23 +4,9 @@
 //! the light that trace their own rays.
 
 use super::*;
-use crate::scene::{
-    AlphaMode, BakeSettings, EnvironmentDesc, LightMode, Material, Parts, Scene, SceneExtras,
-    Triangle,
-};
-use glam::Vec2;
+use crate::capture::tests::{scene_of, tri};
+use crate::scene::{AlphaMode, LightMode, Material, Scene, Triangle};
 use std::f64::consts::PI;
-use std::path::Path;
-
-fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> Triangle {
-    let n = (b - a).cross(c - a).normalize();
-    Triangle {
-        positions: [a, b, c],
-        normals: [n; 3],
-        uvs: [Vec2::ZERO; 3],
-        material,
-    }
-}
 
 /// The parallelogram `corner + s·u + t·v`, `s, t ∈ [0, 1]`, material 0.
 fn quad(corner: Vec3, u: Vec3, v: Vec3) -> Vec<Triangle> {
@@ -45,34 +31,10 @@ fn opaque() -> Material {
     }
 }
 
-/// A scene of `objects` (all of material `mat`) and `lights`, black sky.
-/// Scenes need triangles: a 1 mm speck 1 km away stands in for "nothing".
+/// A scene of `objects` (all of material `mat`) and `lights`, black sky
+/// (the capture tests' scene builder).
 fn scene_with(objects: Vec<Vec<Triangle>>, mat: Material, lights: Vec<Light>) -> Scene {
-    let far = Vec3::new(1000.0, -1000.0, 1000.0);
-    let mut objects: Vec<(String, Vec<Triangle>)> = objects
-        .into_iter()
-        .enumerate()
-        .map(|(i, t)| (format!("o{i}"), t))
-        .collect();
-    objects.push((
-        "speck".into(),
-        vec![tri(far, far + Vec3::X * 1e-3, far + Vec3::Y * 1e-3, 0)],
-    ));
-    let parts = Parts {
-        objects,
-        materials: vec![mat],
-        lights,
-        ..Parts::default()
-    };
-    let extras = SceneExtras {
-        environment: EnvironmentDesc {
-            color: Vec3::ZERO,
-            ..EnvironmentDesc::default()
-        },
-        bake: BakeSettings::default(),
-        regions: Vec::new(),
-    };
-    Scene::from_parts(Path::new("test"), parts, extras).expect("test scene")
+    scene_of(objects, vec![mat], lights, Vec3::ZERO)
 }
 
 fn light(kind: LightKind, position: Vec3, direction: Vec3, radius: f32) -> Light {

@@ -15,7 +15,7 @@ use probekit_sh::zonal::zh_to_sh;
 use std::f64::consts::PI;
 use std::path::Path;
 
-fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> Triangle {
+pub(crate) fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> Triangle {
     let n = (b - a).cross(c - a).normalize();
     Triangle {
         positions: [a, b, c],
