@@ -73,34 +73,59 @@ fn load(browser: &Path, addr: SocketAddr, query: &str, shot: &Path) -> Vec<serde
     let query = &format!("{query}&size={CANVAS}");
     let url = format!("http://{addr}/?{query}");
     let _ = std::fs::remove_file(shot);
-    let out = Command::new(browser)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--use-angle=swiftshader",
-            "--enable-unsafe-swiftshader",
-            "--ignore-gpu-blocklist",
-            "--no-first-run",
-            "--no-default-browser-check",
-            "--disable-extensions",
-            "--hide-scrollbars",
-            "--force-device-scale-factor=1",
-            // Virtual time waits while the page's requests are pending.
-            "--virtual-time-budget=60000",
-            "--run-all-compositor-stages-before-draw",
-        ])
-        .arg(format!("--window-size={WIDTH},{HEIGHT}"))
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(format!("--screenshot={}", shot.display()))
-        .arg(&url)
-        .output()
-        .unwrap_or_else(|e| panic!("{}: cannot run: {e}", browser.display()));
+    let stderr_path = profile.path().join("stderr.txt");
+    // Headless Chromium has been seen to hang after the page was done
+    // (idle, screenshot never written): give each run two minutes and try
+    // once more rather than let the test wait for ever.
+    let run = || {
+        let mut child = Command::new(browser)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--ignore-gpu-blocklist",
+                "--no-first-run",
+                "--no-default-browser-check",
+                "--disable-extensions",
+                "--hide-scrollbars",
+                "--force-device-scale-factor=1",
+                // Virtual time waits while the page's requests are pending.
+                "--virtual-time-budget=60000",
+                "--run-all-compositor-stages-before-draw",
+            ])
+            .arg(format!("--window-size={WIDTH},{HEIGHT}"))
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .arg(format!("--screenshot={}", shot.display()))
+            .arg(&url)
+            .stdout(std::process::Stdio::null())
+            // A file, not a pipe: a pipe nobody reads while waiting fills.
+            .stderr(std::fs::File::create(&stderr_path).unwrap())
+            .spawn()
+            .unwrap_or_else(|e| panic!("{}: cannot run: {e}", browser.display()));
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while Instant::now() < deadline {
+            if let Ok(Some(status)) = child.try_wait() {
+                return Some(status);
+            }
+            std::thread::sleep(Duration::from_millis(200));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        None
+    };
+    let status = run().or_else(run).unwrap_or_else(|| {
+        panic!(
+            "{} did not finish {url} in two minutes, twice",
+            browser.display()
+        )
+    });
     assert!(
         shot.exists(),
         "{} wrote no screenshot of {url}; status {}, stderr:\n{}",
         browser.display(),
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
+        status,
+        std::fs::read_to_string(&stderr_path).unwrap_or_default()
     );
     // The page posts its reports before it finishes; wait a little for them.
     let deadline = Instant::now() + Duration::from_secs(10);
@@ -136,7 +161,7 @@ fn load(browser: &Path, addr: SocketAddr, query: &str, shot: &Path) -> Vec<serde
             Instant::now() < deadline,
             "the page at {url} never reported ready (no WebGL2, or a script failed); \
              log: {entries:?}; browser stderr:\n{}",
-            String::from_utf8_lossy(&out.stderr)
+            std::fs::read_to_string(&stderr_path).unwrap_or_default()
         );
         std::thread::sleep(Duration::from_millis(200));
     }
