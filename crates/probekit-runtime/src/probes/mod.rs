@@ -566,22 +566,18 @@ impl Probes {
         p: Vec3,
         out: &mut [Vec3],
     ) -> ([u32; 8], [f32; 8]) {
+        let (probes, weights) = self.blend_weights(state, p);
         match &self.source {
             Source::Cloud(c) => {
-                let (_, p4, w4) = c.blend_at(p, &mut state.walk);
+                // A cloud blends its first four.
+                let p4 = [probes[0], probes[1], probes[2], probes[3]];
+                let w4 = [weights[0], weights[1], weights[2], weights[3]];
                 c.blend_sh(&p4, &w4, out);
-                let (mut probes, mut weights) = ([0u32; 8], [0.0f32; 8]);
-                probes[..4].copy_from_slice(&p4);
-                weights[..4].copy_from_slice(&w4);
-                (probes, weights)
             }
-            Source::Volume(v, interp) => {
-                v.sample_into(p, *interp, out);
-                let (_, probes, weights) = v.cell_at(p);
-                (probes, weights)
-            }
-            Source::None => ([0; 8], [0.0; 8]),
+            Source::Volume(v, interp) => v.sample_into(p, *interp, out),
+            Source::None => {}
         }
+        (probes, weights)
     }
 
     /// The stored coefficients at `p` into `out` (`order²` long).

@@ -474,13 +474,13 @@ impl<'s> Bake<'s> {
         clock.lap("capture", self.rays());
         let mut record = self.record();
         record.placed = Some(placed.report.clone());
-        let (out, split) = self.split_lights(out, &mut record, progress)?;
+        let (out, mut split) = self.split_lights(out, &mut record, progress)?;
         if split.is_some() {
             clock.lap("light split", self.rays());
         }
         let mut file = self.assemble(&out, &record)?;
-        if let Some(s) = &split {
-            file.probe_set_mut().runtime_lights = s.lights.clone();
+        if let Some((lights, _)) = split.as_mut() {
+            file.probe_set_mut().runtime_lights = lights.take();
         }
         clock.lap("assembly", self.rays());
         let training = self.captured_training(placed, &file);
@@ -488,7 +488,7 @@ impl<'s> Bake<'s> {
         file.validate()?;
         let phases = self.phases(clock);
         let mut report = report(&file, &out, None, placed.report.clone(), phases)?;
-        report.lights = split.map(|s| s.report);
+        report.lights = split.map(|(_, r)| r);
         Ok(Baked { file, report })
     }
 
@@ -500,30 +500,20 @@ impl<'s> Bake<'s> {
         out: BakeOutput,
         record: &mut BakeRecord,
         progress: Progress<'_>,
-    ) -> Result<(BakeOutput, Option<lights::Split>), PipelineError> {
+    ) -> Result<SplitLights, PipelineError> {
         if self.split.candidates.is_empty() {
             return Ok((out, None));
         }
         progress("light split", 0, 1);
-        let mut s = lights::resolve(&self.baker, &self.split, &self.recipe, &self.bake_box, out)?;
+        let lights::Split {
+            output,
+            lights,
+            resolved,
+            report,
+        } = lights::resolve(&self.baker, &self.split, &self.recipe, &self.bake_box, out)?;
         progress("light split", 1, 1);
-        record.recipe.lights.resolved = s.resolved.clone();
-        let out = std::mem::replace(
-            &mut s.output,
-            BakeOutput {
-                first_index: 0,
-                positions: Vec::new(),
-                captured_positions: Vec::new(),
-                sh: Vec::new(),
-                direct: None,
-                indirect: None,
-                groups: Vec::new(),
-                groups_indirect: Vec::new(),
-                validity: Vec::new(),
-                settings: CaptureSettings::default(),
-            },
-        );
-        Ok((out, Some(s)))
+        record.recipe.lights.resolved = resolved;
+        Ok((output, Some((lights, report))))
     }
 
     /// Shard `shard` of `shards` as a part file for [`merge`]. Placement is
@@ -572,6 +562,16 @@ impl<'s> Bake<'s> {
         phases
     }
 }
+
+/// [`Bake::split_lights`]' result: the composed capture, and with a split
+/// the file's run-time lights and what the split did.
+type SplitLights = (
+    BakeOutput,
+    Option<(
+        Option<probekit_runtime::format::RuntimeLights>,
+        lights::LightSplitReport,
+    )>,
+);
 
 /// The SH and light groups a bake stores: all light, or indirect only.
 fn stored(out: &BakeOutput, indirect_only: bool) -> (Vec<ShRgb>, Vec<(String, Vec<ShRgb>)>) {
