@@ -200,6 +200,9 @@ impl VisibilityBake {
     /// points that [`super::blend_fit::capture_training_set`] draws uniformly in the box, and
     /// only the rest of those and the half in the cells are captured here
     /// ([`capture_training_points`]).
+    /// When `file` has run-time lights, the fit predicts with the combined
+    /// answer ([`TrainingSet::lights`]): `capture` and `captured` must then
+    /// hold all light, the run-time lights' direct light included.
     /// `progress(done, total)` counts training points. Deterministic (any
     /// thread count). Returns the time of its steps (`training points`:
     /// their capture; `fit`), empty when there are no weights to fit.
@@ -239,6 +242,8 @@ impl VisibilityBake {
         )?;
         training.positions.extend(new.positions);
         training.sh.extend(new.sh);
+        training.excluded.extend(new.excluded);
+        training.lights = file.probes().and_then(|p| p.runtime_lights.clone());
         if training.positions.is_empty() {
             return Err(BlendFitError::NoTrainingPoints.into());
         }

@@ -214,7 +214,7 @@ pub fn merge(
             (Some(_), crate::recipe::Placement::Adaptive { .. }) => {
                 let bake = super::Bake::new(scene, scene_name, recipe)?;
                 let placed = bake.place(progress)?;
-                bake.captured_training(&placed, &file)
+                bake.captured_training(&placed)
             }
             _ => crate::blend::blend_fit::TrainingSet::default(),
         };

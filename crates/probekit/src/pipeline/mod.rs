@@ -336,7 +336,8 @@ impl<'s> Bake<'s> {
 
     /// The capture settings of the weight fit's training points for
     /// `file`: the probes' own, less the direct light of the lights its
-    /// record says run at run time.
+    /// record says run at run time — the capture reports that light apart
+    /// ([`TrainingSet::excluded`]), the fit adds it back to the truth.
     fn fit_capture(&self, file: &ProbeFile) -> CaptureSettings {
         let mut c = self.recipe.capture_settings();
         if let Some(r) = BakeRecord::from_json(file.metadata()) {
@@ -404,22 +405,26 @@ impl<'s> Bake<'s> {
     }
 
     /// The training points of the probe-weight fit that `placed` already
-    /// captured: its free-space points, when they hold what the file stores
-    /// (all light; not with `capture.indirect_only`, since placement
-    /// captures all light). Empty otherwise, and for placements that
-    /// capture none (grid, manual).
-    pub fn captured_training(&self, placed: &Placed, file: &ProbeFile) -> TrainingSet {
+    /// captured: its free-space points, when they hold what the fit needs
+    /// (all light: not with `capture.indirect_only`, and not when a light
+    /// is a run-time candidate, whose direct light placement leaves out).
+    /// Empty otherwise, and for placements that capture none (grid,
+    /// manual).
+    pub fn captured_training(&self, placed: &Placed) -> TrainingSet {
         let settings = self.recipe.capture_settings();
-        // Placement left out every candidate's direct light: its points
-        // hold what the file stores only if every candidate runs at run time.
-        let runtime = file.probes().and_then(|p| p.runtime_lights.as_ref());
-        let same = runtime.map_or(0, |r| r.lights.len()) == self.split.candidates.len();
-        let (positions, sh) = if settings.split_direct || !same {
+        // Placement left out every candidate's direct light, which the fit
+        // needs (it fits the combined answer): its points serve only when
+        // there is no candidate.
+        let (positions, sh) = if settings.split_direct || !self.split.candidates.is_empty() {
             (Vec::new(), Vec::new())
         } else {
             placed.free_points.iter().cloned().unzip()
         };
-        TrainingSet { positions, sh }
+        TrainingSet {
+            positions,
+            sh,
+            ..TrainingSet::default()
+        }
     }
 
     /// Stage 4: the blend data the recipe asks for, baked into `file`.
@@ -483,7 +488,7 @@ impl<'s> Bake<'s> {
             file.probe_set_mut().runtime_lights = lights.take();
         }
         clock.lap("assembly", self.rays());
-        let training = self.captured_training(placed, &file);
+        let training = self.captured_training(placed);
         self.blend_data(&mut file, true, &training, progress, &mut clock)?;
         file.validate()?;
         let phases = self.phases(clock);

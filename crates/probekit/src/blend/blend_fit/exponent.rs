@@ -157,8 +157,10 @@ pub fn fit_blend(
 /// visibility data it holds), captures `fit.points_per_probe ×` probes
 /// training points ([`capture_training_set`]) and fits probe weights for
 /// `fit.brightness`, or for each of [`BRIGHTNESS_CHOICES`] keeping the best
-/// ([`fit_blend`]). `probekit bake` stores the result as the file's `PWGT`
-/// section: the weights, and the exponent in its header.
+/// ([`fit_blend`]); with the file's run-time lights, on the combined answer
+/// ([`TrainingSet::lights`]; `capture` must then capture all light).
+/// `probekit bake` stores the result as the file's `PWGT` section: the
+/// weights, and the exponent in its header.
 pub fn fit_file_probe_weights(
     baker: &Baker,
     file: &probekit_runtime::format::ProbeFile,
@@ -170,7 +172,8 @@ pub fn fit_file_probe_weights(
     fit.validate()?;
     let cloud = ProbeCloud::from_file(file)?;
     let count = (fit.points_per_probe as usize).saturating_mul(cloud.probe_count());
-    let training =
+    let mut training =
         capture_training_set(baker, bake_box, cloud.mesh(), count, capture, fit, progress)?;
+    training.lights = file.probes().and_then(|p| p.runtime_lights.clone());
     fit_blend(&cloud, &training, fit, &fit.exponents())
 }

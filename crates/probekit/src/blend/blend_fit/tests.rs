@@ -71,6 +71,7 @@ fn an_outlier_probe_is_weighted_down_and_the_error_falls() {
     let training = TrainingSet {
         positions: (0..800).map(|_| g.v(0.05, 2.95)).collect(),
         sh: vec![truth.clone(); 800],
+        ..TrainingSet::default()
     };
     let w = fit_probe_weights(&cloud, &training, &settings(1e-5)).unwrap();
     assert_eq!(w.len(), 64);
@@ -100,6 +101,7 @@ fn regularization_determinism_and_bad_input() {
     let training = TrainingSet {
         positions: (0..200).map(|_| g.v(0.05, 2.95)).collect(),
         sh: vec![grey(1.0); 200],
+        ..TrainingSet::default()
     };
     assert_eq!(
         fit_probe_weights(&cloud, &training, &settings(1e9)).unwrap(),
@@ -171,6 +173,7 @@ fn regularization_determinism_and_bad_input() {
     let empty = TrainingSet {
         positions: vec![],
         sh: vec![],
+        ..TrainingSet::default()
     };
     assert_eq!(
         fit_probe_weights(&cloud, &empty, &settings(1e-4)).unwrap(),
@@ -263,6 +266,7 @@ fn fit_blend_chooses_the_exponent_the_data_asks_for() {
         let training = TrainingSet {
             sh: pts.iter().map(|&p| field(p)).collect(),
             positions: pts,
+            ..TrainingSet::default()
         };
         let fit = settings(rho);
         let chosen = fit_blend(&cloud, &training, &fit, &BRIGHTNESS_CHOICES).unwrap();
@@ -311,6 +315,7 @@ fn fit_blend_chooses_the_exponent_the_data_asks_for() {
     let t = TrainingSet {
         positions: vec![Vec3::ONE],
         sh: vec![grey(1.0)],
+        ..TrainingSet::default()
     };
     for bad in [&[][..], &[5.0], &[f32::NAN]] {
         assert!(matches!(
@@ -397,4 +402,140 @@ fn fits_a_small_cloud_of_the_demo_scene() {
             Err(BlendFitError::Settings(_))
         ));
     }
+}
+
+/// The fit predicts what a query returns when the file has run-time
+/// lights: SH part plus each light times the blended occlusion. A lattice
+/// whose SH is the same constant field everywhere, but whose interior probe
+/// alone sees a directional light the training points do not receive (a
+/// doorway probe seeing a sun patch): fitted on the SH part, nothing is
+/// wrong and the weights stay 1; fitted on the combined answer, that probe
+/// is weighted down (the others stay near 1), and the combined error measured
+/// independently (the light's exact irradiance, `Light::irradiance`, over
+/// 200 normals at fresh points, not the fit's SH Gram matrices) falls more
+/// than tenfold. An occlusion table of another probe count is an error.
+#[test]
+fn run_time_lights_are_part_of_what_the_weights_are_fitted_on() {
+    use probekit_runtime::format::{LightOcclusion, RuntimeLight, RuntimeLights};
+    use probekit_runtime::rig::Light;
+    let bright = 21; // (1, 1, 1): interior
+    let flat: Vec<Vec3> = (0..64).flat_map(|_| grey(1.0).coeffs().to_vec()).collect();
+    let cloud = ProbeCloud::new(outlier_cloud(bright).mesh().clone(), 3, flat).unwrap();
+    let sun = Light::Directional {
+        direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
+        irradiance: Vec3::new(5.0, 4.0, 3.0),
+    };
+    let mut occ = vec![0u8; 64];
+    occ[bright] = 255;
+    let lights = RuntimeLights {
+        lights: vec![RuntimeLight {
+            light: sun,
+            group: "sun".into(),
+        }],
+        occlusion: LightOcclusion::from_dense(1, &occ).unwrap(),
+    };
+    let mut g = Lcg::new(3);
+    let truth = grey(1.0);
+    let mut training = TrainingSet {
+        positions: (0..800).map(|_| g.v(0.05, 2.95)).collect(),
+        sh: vec![truth.clone(); 800],
+        ..TrainingSet::default()
+    };
+    let sh_only = fit_probe_weights(&cloud, &training, &settings(1e-5)).unwrap();
+    assert!(sh_only.iter().all(|&w| w == 1.0));
+    training.lights = Some(lights.clone());
+    let w = fit_probe_weights(&cloud, &training, &settings(1e-5)).unwrap();
+    assert!(w[bright] < 0.05, "{}", w[bright]);
+    let mut others: Vec<f32> = (0..64).filter(|&i| i != bright).map(|i| w[i]).collect();
+    others.sort_by(f32::total_cmp);
+    assert!((0.8..1.25).contains(&others[31]), "median {}", others[31]);
+    // The combined answer's relative error, the light exact.
+    let combined_error = |c: &ProbeCloud, pts: &[Vec3]| -> f64 {
+        let mut ws = WalkState::new();
+        let (mut se, mut st) = (0.0f64, 0.0f64);
+        for &p in pts {
+            let (probes, wt) = c.weights_at(p, &mut ws);
+            let v: f32 = (0..4)
+                .map(|k| wt[k] * lights.occlusion.value(probes[k] as usize, 0))
+                .sum();
+            for i in 0..200 {
+                let z = 1.0 - 2.0 * (i as f32 + 0.5) / 200.0;
+                let r = (1.0 - z * z).sqrt();
+                let phi = i as f32 * 2.399_963;
+                let n = Vec3::new(r * phi.cos(), z, r * phi.sin());
+                let got = c.irradiance(p, n, &mut ws) + sun.irradiance(p, n, None) * v;
+                let t = truth.irradiance(n);
+                se += (got - t).length_squared() as f64;
+                st += t.length_squared() as f64;
+            }
+        }
+        (se / st).sqrt()
+    };
+    let test: Vec<Vec3> = (0..300).map(|_| g.v(0.05, 2.95)).collect();
+    let mut fitted = cloud.clone();
+    fitted.set_probe_weights(Some(w)).unwrap();
+    let (before, after) = (
+        combined_error(&cloud, &test),
+        combined_error(&fitted, &test),
+    );
+    assert!(after < 0.1 * before, "{before} → {after}");
+    // An occlusion table for another cloud.
+    training.lights = Some(RuntimeLights {
+        occlusion: LightOcclusion::from_dense(1, &[255; 8]).unwrap(),
+        ..lights
+    });
+    assert!(matches!(
+        fit_probe_weights(&cloud, &training, &settings(1e-5)),
+        Err(BlendFitError::Mismatch(_))
+    ));
+}
+
+/// Training points captured without a group's direct light report it
+/// apart: `sh + excluded` is the capture of all light at the same points
+/// (same random numbers, so to rounding), and `excluded` is empty when
+/// nothing is left out.
+#[test]
+fn training_points_report_the_direct_light_they_leave_out() {
+    let scene = crate::capture::tests::two_group_room(Vec3::ONE);
+    let baker = Baker::new(&scene).unwrap();
+    let corners: Vec<Vec3> = (0..8)
+        .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, (i >> 2) as f32) * 1.5 - 0.75)
+        .collect();
+    let mesh = tetrahedralize(&corners)
+        .unwrap()
+        .to_tet_mesh(&corners)
+        .unwrap();
+    let fit = BlendFitSettings {
+        samples: 256,
+        ..BlendFitSettings::new(4)
+    };
+    let all = CaptureSettings {
+        samples: 256,
+        ..CaptureSettings::from_scene(&scene)
+    };
+    let without_a = CaptureSettings {
+        exclude_direct: vec!["a".into()],
+        ..all.clone()
+    };
+    let bounds = scene.bake_box();
+    let capture = |c: &CaptureSettings| {
+        capture_training_points(&baker, &bounds, &mesh, [40, 10], c, &fit, &|_, _| {}).unwrap()
+    };
+    let (full, part) = (capture(&all), capture(&without_a));
+    assert!(full.excluded.is_empty());
+    assert_eq!(part.excluded.len(), part.positions.len());
+    assert_eq!(full.positions, part.positions);
+    let mut left_out = 0.0f32;
+    for j in 0..full.positions.len() {
+        for k in 0..9 {
+            let want = full.sh[j].coeffs()[k];
+            let got = part.sh[j].coeffs()[k] + part.excluded[j].coeffs()[k];
+            assert!(
+                (got - want).abs().max_element() <= 1e-4 * (1.0 + want.abs().max_element()),
+                "point {j} coefficient {k}: {got} vs {want}"
+            );
+        }
+        left_out += part.excluded[j].coeffs()[0].x;
+    }
+    assert!(left_out > 0.0, "the sphere light reaches some point");
 }

@@ -2,12 +2,13 @@
 //! uniform in the cloud's cells) and captured as radiance SH.
 
 use super::{BlendFitError, BlendFitSettings};
-use crate::capture::{Baker, CaptureSettings};
+use crate::capture::{Baker, CaptureResult, CaptureSettings};
 use crate::sampling::SampleRng;
 use crate::scene::Aabb;
 use crate::trace::free_space::{is_free, sample_points, SURFACE_CLEARANCE};
 use glam::Vec3;
 use probekit_runtime::cloud::TetMesh;
+use probekit_runtime::format::RuntimeLights;
 use probekit_sh::ShRgb;
 
 /// Seed stream of the training points (`"wfit"`), apart from `probekit
@@ -22,14 +23,29 @@ const CELL_STREAM: u64 = 0x6365_6c6c; // "cell"
 const TRAINING_INDEX: usize = 1 << 32;
 
 /// Captured training points: positions (metres) and their radiance SH
-/// (empty by default).
+/// (empty by default), and the run-time lights of the file being fitted.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TrainingSet {
     /// Where each point was captured.
     pub positions: Vec<Vec3>,
     /// Radiance SH at each point (all light, or indirect only, as the cloud
-    /// stores).
+    /// stores). With [`TrainingSet::lights`], all light including theirs:
+    /// the combined answer's truth.
     pub sh: Vec<ShRgb>,
+    /// The run-time lights of the file being fitted and its probes'
+    /// occlusion of them, if it has any: the fit then predicts each point
+    /// with the combined answer the runtime gives, the blend of each
+    /// probe's SH plus each light's radiance SH at the point
+    /// ([`probekit_runtime::rig::Light::add_sh`]) times the probe's visible
+    /// fraction of it, so the weights are fitted on what a query returns,
+    /// not on the SH part alone.
+    pub lights: Option<RuntimeLights>,
+    /// Per point, the direct light the capture left out of `sh`
+    /// ([`CaptureSettings::exclude_direct`]: the run-time lights'), or
+    /// empty when it left none out. The truth the fit predicts is `sh`
+    /// plus this; each point's weight in the objective comes from `sh`
+    /// alone.
+    pub excluded: Vec<ShRgb>,
 }
 
 /// Draws `count` training points in free space of `bake_box` (seeded by
@@ -117,12 +133,22 @@ pub fn capture_training_points(
     }
     let mut s = capture.clone();
     s.samples = fit.samples;
-    s.groups = false;
+    // The light left out is reported per group: its direct part.
+    let excluding = !capture.exclude_direct.is_empty();
+    s.groups = excluding;
+    s.split_direct |= excluding;
     // The points keep a clearance from every surface (`is_free`): the
     // virtual offset's pre-pass would trace its rays to leave them where
     // they are.
     s.validity.virtual_offset = false;
     let rs = baker.capture_many(&pts, TRAINING_INDEX, &s, progress)?;
+    let excluded = if excluding {
+        rs.iter()
+            .map(|r| excluded_direct(r, &capture.exclude_direct))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let (positions, sh) = rs
         .into_iter()
         .map(|r| {
@@ -133,5 +159,25 @@ pub fn capture_training_points(
             (r.position, sh)
         })
         .unzip();
-    Ok(TrainingSet { positions, sh })
+    Ok(TrainingSet {
+        positions,
+        sh,
+        lights: None,
+        excluded,
+    })
+}
+
+/// The direct light of the groups `names` in `r` (its per-group SH less
+/// their scattered part).
+fn excluded_direct(r: &CaptureResult, names: &[String]) -> ShRgb {
+    let order = r.sh.order();
+    let mut c = vec![Vec3::ZERO; order * order];
+    for ((name, all), (_, scattered)) in r.groups.iter().zip(&r.groups_indirect) {
+        if names.contains(name) {
+            for ((o, a), s) in c.iter_mut().zip(all.coeffs()).zip(scattered.coeffs()) {
+                *o += *a - *s;
+            }
+        }
+    }
+    ShRgb::from_coeffs(c).unwrap_or_else(|| ShRgb::zeros(order))
 }

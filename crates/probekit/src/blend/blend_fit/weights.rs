@@ -6,6 +6,7 @@ use super::training::TrainingSet;
 use super::{BlendFitError, BlendFitSettings, FittedBlend, LOG_WEIGHT_MAX, LOG_WEIGHT_MIN};
 use glam::Vec3;
 use probekit_runtime::cloud::{ProbeCloud, WalkState};
+use probekit_runtime::format::RuntimeLights;
 use probekit_sh::convolve::clamped_cosine_band;
 use rayon::prelude::*;
 
@@ -82,6 +83,17 @@ pub(super) fn check(
             "a training point has fewer SH bands than the cloud",
         ));
     }
+    if !training.excluded.is_empty() && training.excluded.len() != training.positions.len() {
+        return Err(BlendFitError::Mismatch(
+            "training points and their excluded direct light differ in count",
+        ));
+    }
+    if (training.lights.as_ref()).is_some_and(|l| l.occlusion.probe_count() != cloud.probe_count())
+    {
+        return Err(BlendFitError::Mismatch(
+            "the run-time lights' occlusion table has another probe count than the cloud",
+        ));
+    }
     Ok(())
 }
 
@@ -128,6 +140,7 @@ pub(super) fn solve(rows: &[Row], nprobes: usize, rho: f64) -> (Vec<f32>, f64) {
 /// inverse mean squared irradiance over the row's scale).
 pub(super) fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Vec<Row>, Vec<f64>) {
     let n = cloud.coeffs_per_probe();
+    let order = (n as f64).sqrt() as usize;
     let mut plain = cloud.clone();
     plain.set_probe_weighting(false);
     // A_l² per coefficient.
@@ -157,11 +170,23 @@ pub(super) fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Ve
     // Each point's row on its own: in parallel, chunks in order.
     let row = |j: usize, p: Vec3, ws: &mut WalkState| -> (Row, f64) {
         let (probes, w) = plain.weights_at(p, ws);
-        let e = truth(j);
-        let scale = 1.0 / (norm(e) + floor).powi(2).max(1e-30) + beta / mean_square;
+        let scale = 1.0 / (norm(truth(j)) + floor).powi(2).max(1e-30) + beta / mean_square;
+        // What the prediction is compared with: with the run-time lights,
+        // the light the capture left out too.
+        let e: Vec<Vec3> = match (training.lights.as_ref(), training.excluded.get(j)) {
+            (Some(_), Some(x)) => truth(j)
+                .iter()
+                .zip(x.coeffs())
+                .map(|(a, b)| *a + *b)
+                .collect(),
+            _ => truth(j).to_vec(),
+        };
+        let e = &e[..];
         let d: [Vec<Vec3>; 4] = core::array::from_fn(|k| {
             if w[k] > 0.0 {
-                let c = plain.probe_sh(probes[k] as usize);
+                let i = probes[k] as usize;
+                let mut c = plain.probe_sh(i).to_vec();
+                add_runtime_lights(training.lights.as_ref(), i, p, order, &mut c);
                 c.iter().zip(e).map(|(a, b)| *a - *b).collect()
             } else {
                 vec![Vec3::ZERO; n]
@@ -198,6 +223,24 @@ pub(super) fn rows(cloud: &ProbeCloud, training: &TrainingSet, beta: f64) -> (Ve
                 .collect::<Vec<_>>()
         })
         .unzip()
+}
+
+/// Adds to probe `i`'s SH `c` what the runtime adds for it at `p`: each
+/// run-time light's radiance SH at `p` times the probe's visible fraction
+/// of it (the combined answer of [`TrainingSet::lights`]).
+fn add_runtime_lights(
+    lights: Option<&RuntimeLights>,
+    i: usize,
+    p: Vec3,
+    order: usize,
+    c: &mut [Vec3],
+) {
+    let Some(rl) = lights else { return };
+    for &[l, v] in rl.occlusion.probe(i) {
+        if let Some(light) = rl.lights.get(l as usize) {
+            light.light.add_sh(order, p, v as f32 / 255.0, c);
+        }
+    }
 }
 
 /// Per-slot factors of `r` for probe weights `s`.
