@@ -25,9 +25,6 @@ fn sharded_bake_merges_to_the_unsharded_file() {
         "64",
         "--set",
         "capture.bounces=1",
-        // A sharded bake bakes every light (no run-time light split yet).
-        "--set",
-        "lights.split=false",
     ];
     let full = json(d, &[&common[..], &["-o", "full.probes", "--json"]].concat());
     assert_eq!(full["probes"], 30);
@@ -109,8 +106,6 @@ fn sharded_bake_merges_to_the_unsharded_file() {
             "32",
             "--set",
             "capture.bounces=1",
-            "--set",
-            "lights.split=false",
             "--shard",
             "1/3",
             "-o",

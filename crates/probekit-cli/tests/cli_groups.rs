@@ -14,7 +14,7 @@ fn rgb(v: &Value) -> [f64; 3] {
     [0, 1, 2].map(|k| a[k].as_f64().unwrap())
 }
 
-const COMMON: [&str; 11] = [
+const COMMON: [&str; 9] = [
     "bake",
     "--placement",
     "grid",
@@ -24,9 +24,6 @@ const COMMON: [&str; 11] = [
     "64",
     "--set",
     "capture.bounces=1",
-    // Sharded bakes bake every light (no run-time light split yet).
-    "--set",
-    "lights.split=false",
 ];
 
 #[test]

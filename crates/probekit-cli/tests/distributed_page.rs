@@ -76,7 +76,7 @@ fn the_pages_slurm_steps_merge_to_the_single_machine_bake() {
     bash(
         d,
         &format!(
-            "probekit bake scene.toml --positions probes.csv --samples {samples} --set lights.split=false -o single.probes"
+            "probekit bake scene.toml --positions probes.csv --samples {samples} -o single.probes"
         ),
         &[],
     );

@@ -146,3 +146,45 @@ fn a_query_adds_each_light_times_its_blended_occlusion() {
     // Too short an output slice.
     assert!(probes.light_occlusion(&mut st, x, &mut occ[..2]).is_err());
 }
+
+/// Relighting scales a run-time light with its group, as it scales the
+/// bounce light the group holds: the light term (answer less SH part)
+/// equals `Σ_l s_{group(l)} · E_l(x, n) · occlusion_l`, computed here from
+/// the light model and the blended occlusion; lights of groups the file
+/// does not hold keep scale 1; `runtime_lights` still reports them as
+/// baked.
+#[test]
+fn relighting_scales_each_run_time_light_with_its_group() {
+    let f = with_lights(groups_file());
+    let relighter = Relighter::new(&f).unwrap();
+    let mut probes = Probes::from_file(&f, LoadOptions::default()).unwrap();
+    let scale_of = |g: &str| match g {
+        "lamp" => Vec3::new(2.0, 0.5, 0.0),
+        "sün" => Vec3::splat(3.0),
+        _ => Vec3::ONE,
+    };
+    let scales = relighter
+        .scales_for(&[("lamp", scale_of("lamp")), ("sün", scale_of("sün"))])
+        .unwrap();
+    probes.relight(&relighter, &scales).unwrap();
+    assert_eq!(probes.runtime_lights(), &lights()[..]);
+    let mut st = ObjectState::new();
+    for x in [Vec3::new(0.2, 0.2, 0.2), Vec3::new(0.5, 0.4, 0.6)] {
+        let n = Vec3::new(0.1, 1.0, 0.3).normalize();
+        let mut occ = [0.0f32; 4];
+        probes.light_occlusion(&mut st, x, &mut occ).unwrap();
+        let expected: Vec3 = lights()
+            .iter()
+            .zip(occ)
+            .map(|(r, o)| scale_of(&r.group) * r.light.irradiance(x, n, None) * o)
+            .sum();
+        let all = Vec3::from(probes.irradiance(&mut st, x, n).unwrap());
+        let sh = Vec3::from(probes.sh_irradiance(&mut st, x, n).unwrap());
+        let got = all - sh;
+        assert!(expected.length() > 0.0, "a light reaches {x}");
+        assert!(
+            (got - expected).length() < 1e-4 * expected.length(),
+            "{x}: {got} vs {expected}"
+        );
+    }
+}

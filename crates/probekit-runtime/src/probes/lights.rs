@@ -12,6 +12,8 @@ pub(super) struct LightTerm {
     lights: Vec<RuntimeLight>,
     /// Visible fractions, `probes × lights`, row-major.
     occlusion: Vec<f32>,
+    /// Each light's RGB scale from its group's relighting (1 as baked).
+    scales: Vec<Vec3>,
 }
 
 impl LightTerm {
@@ -21,7 +23,16 @@ impl LightTerm {
         Some(Self {
             occlusion: r.occlusion.to_dense(r.lights.len()),
             lights: r.lights.clone(),
+            scales: vec![Vec3::ONE; r.lights.len()],
         })
+    }
+
+    /// Scales each light by `scale_of` its group (relighting: the light
+    /// scales with the bounce light its group holds).
+    pub(super) fn set_group_scales(&mut self, scale_of: impl Fn(&str) -> Vec3) {
+        for (s, l) in self.scales.iter_mut().zip(&self.lights) {
+            *s = scale_of(&l.group);
+        }
     }
 
     pub(super) fn lights(&self) -> &[RuntimeLight] {
@@ -60,7 +71,7 @@ impl LightTerm {
         for (l, r) in self.lights.iter().enumerate() {
             let v = self.blended(l, probes, weights);
             if v > 0.0 {
-                e += v * r.light.irradiance(p, n, None);
+                e += v * self.scales[l] * r.light.irradiance(p, n, None);
             }
         }
         e

@@ -390,7 +390,10 @@ impl Probes {
     /// A cloud keeps the blend of its baked light (its brightness
     /// weightings read the probes' brightness as loaded), so the relit
     /// irradiance is linear in the scales; a volume's gradients stay the
-    /// baked ones. Errors (nothing changed): a relighter of another order
+    /// baked ones. A run-time light scales with its group too (its exact
+    /// term in [`Probes::irradiance`]; [`Probes::runtime_lights`] stays as
+    /// baked, for an engine that draws the light itself and scales it).
+    /// Errors (nothing changed): a relighter of another order
     /// or probe count, a scale count that is not the group count, a scale
     /// that is not finite. No allocation; a rigs-only file has nothing to
     /// relight.
@@ -405,7 +408,15 @@ impl Probes {
             Source::Volume(v, _) => v.coefficients_mut(),
             Source::None => &mut [],
         };
-        relighter.relight_into(scales, coeffs)
+        relighter.relight_into(scales, coeffs)?;
+        if let Some(t) = &mut self.lights {
+            t.set_group_scales(|g| {
+                (relighter.group_index(g))
+                    .and_then(|k| scales.get(k).copied())
+                    .unwrap_or(Vec3::ONE)
+            });
+        }
+        Ok(())
     }
 
     /// Number of rigs in the file.

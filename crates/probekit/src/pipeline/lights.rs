@@ -422,13 +422,14 @@ fn regroup(
     merge(&mut out.groups_indirect);
 }
 
-/// A plain-blend cloud of the captured probes, for the held-out choice.
+/// A plain-blend cloud of the captured probes, for the held-out choice
+/// (a cloud blends without the probes' validity, so none is read).
 fn provisional_cloud(out: &BakeOutput) -> Result<ProbeCloud, crate::pipeline::PipelineError> {
-    let validity: Vec<_> = out
-        .validity
-        .iter()
-        .map(crate::format::cloud::file_validity)
-        .collect();
+    let valid = probekit_runtime::format::Validity {
+        value: 1.0,
+        flags: 0,
+    };
+    let validity = vec![valid; out.captured_positions.len()];
     let file = crate::format::cloud::cloud_file(
         &out.captured_positions,
         &out.sh,

@@ -1,6 +1,6 @@
 //! The run-time light split through the whole pipeline: the file's answer
 //! against independent captures, K per probe, the recorded choice, a sealed
-//! room, and what a sharded bake says.
+//! room, and a sharded bake's merge.
 
 use super::*;
 use crate::capture::tests::{box_tris, light, material, scene_of, two_group_room};
@@ -249,13 +249,41 @@ fn a_sealed_room_beside_a_lit_one_stays_dark() {
     }
 }
 
-/// A sharded bake with run-time lights says what to do, naming the key.
+/// A sharded bake splits lights in the merge, over all probes: two parts
+/// (each carrying its candidates' scattered light apart) merge to the
+/// bytes a single machine writes — with `auto` lights decided on held-out
+/// points, with and without light groups, with the default blend data
+/// (the weight fit on the combined answer included). Merging without the
+/// scene is an error that says to give it.
 #[test]
-fn a_sharded_bake_with_run_time_lights_names_the_key() {
+fn a_sharded_bake_splits_lights_in_the_merge_to_the_same_bytes() {
     let scene = two_group_room(Vec3::ONE);
-    let bake = Bake::new(&scene, "test", &grid_recipe(27)).unwrap();
-    let e = bake.run_part(0, 2, &|_, _, _| {}).unwrap_err().to_string();
-    assert!(e.contains("split = false"), "{e}");
+    for groups in [false, true] {
+        let mut recipe = grid_recipe(27);
+        recipe.blend = Recipe::default().blend;
+        recipe.blend.fit.points_per_probe = 2;
+        recipe.capture.groups = groups;
+        let whole = bake(&scene, &recipe);
+        assert!(whole.file.probes().unwrap().runtime_lights.is_some());
+        assert!(whole.file.cloud().blend.probe_weights.is_some());
+        let b = Bake::new(&scene, "test", &recipe).unwrap();
+        let parts: Vec<(String, ProbeFile)> = (0..2)
+            .map(|k| {
+                (
+                    format!("part{k}"),
+                    b.run_part(k, 2, &|_, _, _| {}).unwrap().file,
+                )
+            })
+            .collect();
+        let merged = merge(&parts, Some((&scene, "test")), &|_, _, _| {}).unwrap();
+        assert_eq!(
+            merged.to_bytes().unwrap(),
+            whole.file.to_bytes().unwrap(),
+            "groups {groups}"
+        );
+        let e = merge(&parts, None, &|_, _, _| {}).unwrap_err().to_string();
+        assert!(e.contains("give the scene"), "{e}");
+    }
 }
 
 /// A uniform volume splits lights as a cloud does: the file holds the

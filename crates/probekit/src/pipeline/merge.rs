@@ -3,6 +3,7 @@
 use super::PipelineError;
 use crate::blend::cell_planes::bake_file_cell_planes;
 use crate::blend::cell_visibility::bake_file_cell_visibility;
+use crate::capture::BakeOutput;
 use crate::format::check_scene_hash;
 use crate::format::cloud::{cloud_file, decode_light_groups, light_groups};
 use crate::format::Parts;
@@ -11,6 +12,12 @@ use crate::progress::Progress;
 use crate::recipe::BakeRecord;
 use crate::scene::Scene;
 use probekit_sh::ShRgb;
+
+/// The suffix of the light group under which a shard part carries a
+/// run-time light candidate's scattered light (its group's name before
+/// it): with the group's light it gives the candidate's direct light, which
+/// the merge's split needs.
+pub const SCATTERED_SUFFIX: &str = "\u{1f}scattered";
 
 /// One part, read.
 struct Part<'a> {
@@ -25,10 +32,11 @@ struct Part<'a> {
 /// Joins shard parts (`(name, file)`, in any order) into the cloud file the
 /// unsharded bake writes, byte for byte. Checks that the parts come from
 /// scenes of the same lighting and the same recipe (nodes may name the
-/// scene by different paths), and cover every probe once. Cell visibility,
-/// occluder planes and probe weights depend on every probe, so they are
-/// baked here, with `scene` (as named), which must light the probes as the
-/// parts' scene did; a recipe without them needs no scene.
+/// scene by different paths), and cover every probe once. The run-time
+/// light split (`super::lights`), cell visibility, occluder planes and
+/// probe weights depend on every probe, so they are made here, with
+/// `scene` (as named), which must light the probes as the parts' scene
+/// did; a bake without them needs no scene.
 pub fn merge(
     parts: &[(String, ProbeFile)],
     scene: Option<(&Scene, &str)>,
@@ -169,58 +177,90 @@ pub fn merge(
     }
     let mut record = head.record.clone();
     record.part = None;
-    let mut file = cloud_file(&positions, &sh, &validity, codec, &record.to_json())?;
-    let order = head.file.probe_set().coefficients.order as usize;
-    file.probe_set_mut().groups = light_groups(&groups, order, codec)?;
-    file.probe_set_mut().l1_mode = recipe.l1_evaluation.l1_mode();
-    file.cloud_mut().blend.distance_moments = moments;
     let Some(first) = read.first() else {
         return Err(bad("no parts to merge".into()));
     };
     let kinds = recipe.visibility_bake(&recipe.recorded_box(), true);
-    if kinds.cell_subdivision.is_some() || kinds.probe_weights.is_some() {
-        let Some((scene, scene_name)) = scene else {
+    // Run-time light candidates' scattered light, which parts carry apart.
+    let (scattered, groups): (Vec<_>, Vec<_>) = groups
+        .into_iter()
+        .partition(|(name, _)| name.ends_with(SCATTERED_SUFFIX));
+    let needs_scene =
+        !scattered.is_empty() || kinds.cell_subdivision.is_some() || kinds.probe_weights.is_some();
+    let bake = match (needs_scene, scene) {
+        (false, _) => None,
+        (true, None) => {
             return Err(bad(format!(
-                "{}: baked with cell visibility or probe weights, which merge bakes over all \
-                 probes: give the scene",
+                "{}: baked with run-time lights, cell visibility or probe weights, which merge \
+                 decides and bakes over all probes: give the scene",
                 first.name
-            )));
-        };
-        check_scene_hash(
-            head.file.metadata(),
-            head.name,
-            &scene.lighting_hash_hex(),
-            scene_name,
-        )?;
-        let baker = crate::capture::Baker::new(scene)?;
+            )))
+        }
+        (true, Some((scene, scene_name))) => {
+            check_scene_hash(
+                head.file.metadata(),
+                head.name,
+                &scene.lighting_hash_hex(),
+                scene_name,
+            )?;
+            Some(super::Bake::new(scene, scene_name, recipe)?)
+        }
+    };
+    let order = head.file.probe_set().coefficients.order as usize;
+    // The run-time light split over all probes, as a single machine's bake
+    // makes it after its capture.
+    let (sh, groups, runtime_lights) = match &bake {
+        Some(bake) if !scattered.is_empty() => {
+            let out = BakeOutput {
+                first_index: 0,
+                positions: positions.clone(),
+                captured_positions: positions.clone(),
+                sh,
+                direct: None,
+                indirect: None,
+                groups,
+                groups_indirect: (scattered.into_iter())
+                    .map(|(n, g)| (n.trim_end_matches(SCATTERED_SUFFIX).to_string(), g))
+                    .collect(),
+                validity: Vec::new(),
+                settings: bake.recipe.capture_settings(),
+            };
+            let (out, split) = bake.split_lights(out, &mut record, progress)?;
+            (out.sh, out.groups, split.and_then(|(lights, _)| lights))
+        }
+        _ => (sh, groups, None),
+    };
+    let mut file = cloud_file(&positions, &sh, &validity, codec, &record.to_json())?;
+    file.probe_set_mut().groups = light_groups(&groups, order, codec)?;
+    file.probe_set_mut().l1_mode = recipe.l1_evaluation.l1_mode();
+    file.probe_set_mut().runtime_lights = runtime_lights;
+    file.cloud_mut().blend.distance_moments = moments;
+    if let Some(bake) = &bake {
+        let tracer = bake.baker.tracer();
         if let Some(lattice) = kinds.cell_subdivision {
             file.cloud_mut().blend.cell_visibility = Some(
-                bake_file_cell_visibility(baker.tracer(), &file, lattice, &|d, t| {
+                bake_file_cell_visibility(tracer, &file, lattice, &|d, t| {
                     progress("cell visibility", d, t)
                 })
                 .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?,
             );
             if kinds.cell_planes {
                 file.cloud_mut().blend.cell_planes =
-                    bake_file_cell_planes(baker.tracer(), &file, &|d, t| {
-                        progress("occluder planes", d, t)
-                    })
-                    .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
+                    bake_file_cell_planes(tracer, &file, &|d, t| progress("occluder planes", d, t))
+                        .map_err(crate::blend::visibility_bake::VisibilityBakeError::from)?;
             }
         }
         // The fit trains on what placement captured, where it did: place
         // again (placement is deterministic) for the same points.
         let training = match (&kinds.probe_weights, &recipe.placement) {
             (Some(_), crate::recipe::Placement::Adaptive { .. }) => {
-                let bake = super::Bake::new(scene, scene_name, recipe)?;
-                let placed = bake.place(progress)?;
-                bake.captured_training(&placed)
+                bake.captured_training(&bake.place(progress)?)
             }
             _ => crate::blend::blend_fit::TrainingSet::default(),
         };
         kinds.fit_weights_into(
-            &baker,
-            &recipe.capture_settings(),
+            &bake.baker,
+            &bake.fit_capture(&file),
             &mut file,
             &training,
             &|d, t| progress("weight fit", d, t),

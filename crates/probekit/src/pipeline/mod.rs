@@ -34,7 +34,7 @@ pub mod sweep;
 mod tests;
 mod volume;
 
-pub use merge::merge;
+pub use merge::{merge, SCATTERED_SUFFIX};
 pub use positions::read_positions;
 pub use volume::{bake_volume, bake_volume_from, VolumeReport};
 
@@ -338,7 +338,7 @@ impl<'s> Bake<'s> {
     /// `file`: the probes' own, less the direct light of the lights its
     /// record says run at run time — the capture reports that light apart
     /// ([`TrainingSet::excluded`]), the fit adds it back to the truth.
-    fn fit_capture(&self, file: &ProbeFile) -> CaptureSettings {
+    pub(crate) fn fit_capture(&self, file: &ProbeFile) -> CaptureSettings {
         let mut c = self.recipe.capture_settings();
         if let Some(r) = BakeRecord::from_json(file.metadata()) {
             let runtime: Vec<usize> = (r.recipe.lights.resolved.iter().enumerate())
@@ -377,7 +377,11 @@ impl<'s> Bake<'s> {
 
     /// Stage 3 of a shard: a part file without tetrahedra — the shard's
     /// captured positions, f32 SH, validity and light groups — whose record
-    /// says which slice of `total` probes it holds.
+    /// says which slice of `total` probes it holds. With run-time light
+    /// candidates, the SH leaves their direct light out, the groups are the
+    /// capture's (each candidate its own), and each candidate's scattered
+    /// light follows under its group's name and [`SCATTERED_SUFFIX`]: what
+    /// [`merge`] needs to split the lights over all probes.
     pub fn assemble_part(
         &self,
         out: &BakeOutput,
@@ -386,7 +390,16 @@ impl<'s> Bake<'s> {
         shards: usize,
         total: usize,
     ) -> Result<ProbeFile, PipelineError> {
-        let (sh, groups) = stored(out, self.recipe.capture.indirect_only);
+        let (sh, mut groups) = stored(out, self.recipe.capture.indirect_only);
+        // The run-time light split is decided over all probes, in `merge`:
+        // it needs each candidate's direct light apart, so its group's
+        // scattered light goes along under a name of its own.
+        for &i in &self.split.candidates {
+            let name = &self.split.capture_groups[i];
+            if let Some((_, g)) = out.groups_indirect.iter().find(|g| &g.0 == name) {
+                groups.push((format!("{name}{SCATTERED_SUFFIX}"), g.clone()));
+            }
+        }
         let order = sh.first().map_or(out.settings.order, |s| s.order()) as u32;
         let flat: Vec<Vec3> = sh.iter().flat_map(|s| s.coeffs().iter().copied()).collect();
         let mut f = ProbeFile::cloud(out.captured_positions.clone(), order, &flat)?;
@@ -500,7 +513,7 @@ impl<'s> Bake<'s> {
     /// The run-time light split of a whole capture (`lights` module):
     /// occlusion, the held-out choice, K per probe, the composed capture;
     /// the choice goes into `record`. Nothing to do without candidates.
-    fn split_lights(
+    pub(crate) fn split_lights(
         &self,
         out: BakeOutput,
         record: &mut BakeRecord,
@@ -523,20 +536,14 @@ impl<'s> Bake<'s> {
 
     /// Shard `shard` of `shards` as a part file for [`merge`]. Placement is
     /// deterministic, so every shard places the same probes and captures
-    /// its slice.
+    /// its slice. The run-time light split, which looks at every probe, is
+    /// left to the merge ([`Bake::assemble_part`]).
     pub fn run_part(
         &self,
         shard: usize,
         shards: usize,
         progress: Progress<'_>,
     ) -> Result<Baked, PipelineError> {
-        if !self.split.candidates.is_empty() {
-            return Err(PipelineError::Parts(
-                "a sharded bake bakes every light into the probes: add `split = false` under \
-                 [lights] in the recipe (or mode = \"baked\" on the scene's lights)"
-                    .into(),
-            ));
-        }
         let mut clock = Clock::new(self.rays());
         let placed = self.place(progress)?;
         clock.lap_with("placement", self.rays(), placed.phases.clone());
