@@ -123,6 +123,9 @@ pub struct CaptureResult {
     pub validity: Validity,
 }
 
+/// Most exits [`Baker::nearest_free_exit`] tries.
+const MAX_EXIT_TRIES: usize = 12;
+
 impl Baker<'_> {
     /// One chunk of probe samples `[start, end)`; `keys`: the R2 rotation
     /// of the directions and the key of the light samples' scrambles.
@@ -293,9 +296,11 @@ impl Baker<'_> {
         let mut pos = point;
         let mut pushed = false;
         if v.virtual_offset {
+            let mut valid = false;
             for _ in 0..v.max_offset_steps {
                 let st = self.hit_stats(pos, probe_index, s.seed, v.pre_pass_rays);
-                if st.backface_fraction() <= v.backface_threshold {
+                valid = st.backface_fraction() <= v.backface_threshold;
+                if valid {
                     break;
                 }
                 match st.nearest_back {
@@ -304,6 +309,14 @@ impl Baker<'_> {
                         pushed = true;
                     }
                     None => break,
+                }
+            }
+            if pushed && !valid && !self.is_valid_at(pos, probe_index, s) {
+                // Out of one solid into one that touches it (a wall's top
+                // into the ceiling slab) and back: leave the first solid
+                // through its nearest face whose far side is free.
+                if let Some(p) = self.nearest_free_exit(point, probe_index, s) {
+                    pos = p;
                 }
             }
         }
@@ -325,6 +338,46 @@ impl Baker<'_> {
             pushed = true;
         }
         Ok((pos, pushed, in_light))
+    }
+
+    /// Whether the validity pre-pass at `x` finds it outside geometry.
+    fn is_valid_at(&self, x: Vec3, probe_index: u64, s: &CaptureSettings) -> bool {
+        let v = &s.validity;
+        self.hit_stats(x, probe_index, s.seed, v.pre_pass_rays)
+            .backface_fraction()
+            <= v.backface_threshold
+    }
+
+    /// The virtual offset's fallback for a probe its moves leave in
+    /// geometry: the ways out of the geometry at `point`
+    /// ([`Baker::exits`]), nearest first, one per face direction, each
+    /// tried as a move to `margin` beyond the face; the first whose far
+    /// side the pre-pass finds free, if any of [`MAX_EXIT_TRIES`] is.
+    fn nearest_free_exit(
+        &self,
+        point: Vec3,
+        probe_index: u64,
+        s: &CaptureSettings,
+    ) -> Option<Vec3> {
+        let v = &s.validity;
+        let mut exits = self.exits(point, probe_index, s.seed, v.pre_pass_rays);
+        exits.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut tried: Vec<Vec3> = Vec::new();
+        for (t, d) in exits {
+            if tried.len() >= MAX_EXIT_TRIES {
+                break;
+            }
+            // Rays that leave through one face give one way out.
+            if tried.iter().any(|u| u.dot(d) > 0.95) {
+                continue;
+            }
+            tried.push(d);
+            let p = point + d * (t + v.offset_margin);
+            if self.is_valid_at(p, probe_index, s) {
+                return Some(p);
+            }
+        }
+        None
     }
 
     fn assemble(

@@ -629,6 +629,58 @@ fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
     assert!(c.sh.coeffs()[0].x > 0.0, "the pushed probe sees the light");
 }
 
+/// A thin wall (10 cm) whose top touches a slab above it, as a room's
+/// dividing wall meets the ceiling: a probe in the wall just under its top
+/// is pushed into the slab and back into the wall, and the virtual offset's
+/// fallback takes it out through the wall's side into the room.
+#[test]
+fn probe_in_a_wall_touching_a_slab_ends_in_free_space() {
+    let room = box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0);
+    let (wall_min, wall_max) = (Vec3::new(-0.05, -3.0, -1.0), Vec3::new(0.05, 2.0, 1.0));
+    let (slab_min, slab_max) = (Vec3::new(-3.0, 2.0, -3.0), Vec3::new(3.0, 2.4, 3.0));
+    let scene = scene_of(
+        vec![
+            room,
+            box_tris(wall_min, wall_max, false, 0),
+            box_tris(slab_min, slab_max, false, 0),
+        ],
+        vec![material(0.5, 0.0)],
+        vec![light(
+            LightKind::Point,
+            Vec3::new(1.5, 0.0, 0.0),
+            Vec3::NEG_Y,
+            5.0,
+            0.0,
+        )],
+        Vec3::ZERO,
+    );
+    let inside = |p: Vec3, lo: Vec3, hi: Vec3| p.cmpgt(lo).all() && p.cmplt(hi).all();
+    let baker = Baker::new(&scene).unwrap();
+    let s = quick(256, 1, 2, 5);
+    for (i, p) in [
+        Vec3::new(0.01, 1.99, 0.3),
+        Vec3::new(-0.02, 1.985, -0.4),
+        Vec3::new(0.0, 1.995, 0.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let c = baker.capture(p, i as u64, &s).unwrap();
+        let q = c.position;
+        assert!(
+            c.validity.offset_applied && c.validity.valid,
+            "{p} moved to {q}: {:?}",
+            c.validity
+        );
+        assert!(
+            !inside(q, wall_min, wall_max) && !inside(q, slab_min, slab_max),
+            "{p} moved to {q}, still in geometry"
+        );
+        assert!(q.distance(p) < 0.2, "{p} moved far, to {q}");
+        assert!(c.sh.coeffs()[0].x > 0.0, "{p} at {q} sees no light");
+    }
+}
+
 /// `capture_positions` predicts where a bake captures its probes, bit for
 /// bit, moved ones included (the CLI tetrahedralizes them before spending
 /// the capture), and refuses a non-finite point like the capture.

@@ -20,7 +20,12 @@
 //! just beyond that surface (`t + margin`), re-tested (a cheap pre-pass of
 //! [`ValiditySettings::pre_pass_rays`] rays, up to
 //! [`ValiditySettings::max_offset_steps`] moves), then captured there and
-//! flagged.
+//! flagged. Where two solids touch (a wall's top against the ceiling slab)
+//! those moves can go from one into the other and back; a probe still in
+//! geometry after them leaves the solid it started in straight across one
+//! of its faces, the nearest whose far side the pre-pass finds free
+//! (`Baker::exits`). Only such probes move differently: a probe the moves
+//! free is where they leave it.
 
 use super::probe::STREAM_ROTATION;
 use super::{BakeError, Baker};
@@ -219,6 +224,37 @@ impl Baker<'_> {
             }
         }
         false
+    }
+
+    /// Ways out of the geometry around `x`: for each back face the validity
+    /// pre-pass's rays ([`Baker::hit_stats`]' directions) meet first, the
+    /// distance to the face's plane and its outward normal (the way out of
+    /// that face, straight across); where winding says nothing and parity
+    /// judged the ray, its distance and direction.
+    pub(crate) fn exits(
+        &self,
+        x: Vec3,
+        probe_index: u64,
+        seed: u64,
+        rays: u32,
+    ) -> Vec<(f32, Vec3)> {
+        let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
+        let mut out = Vec::new();
+        for i in 0..rays {
+            let d = sample_uniform_sphere(r2_point(i as u64, rot));
+            let Some(h) = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY) else {
+                continue;
+            };
+            if h.winding_consistent {
+                if !h.front_face {
+                    let n = h.geometric_normal;
+                    out.push((h.t * d.dot(n).max(0.0), n));
+                }
+            } else if self.parity_inside(&h, d) {
+                out.push((h.t, d));
+            }
+        }
+        out
     }
 
     /// First-hit statistics of `rays` R2 directions from `x` (validity pre-pass).
