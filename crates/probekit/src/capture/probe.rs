@@ -304,8 +304,8 @@ impl Baker<'_> {
                     break;
                 }
                 match st.nearest_back {
-                    Some((t, d)) => {
-                        pos += d * (t + v.offset_margin);
+                    Some(b) => {
+                        pos += b.way * (b.across + v.offset_margin);
                         pushed = true;
                     }
                     None => break,
@@ -361,18 +361,18 @@ impl Baker<'_> {
     ) -> Option<Vec3> {
         let v = &s.validity;
         let mut exits = self.exits(point, probe_index, s.seed, v.pre_pass_rays);
-        exits.sort_by(|a, b| a.0.total_cmp(&b.0));
+        exits.sort_by(|a, b| a.across.total_cmp(&b.across));
         let mut tried: Vec<Vec3> = Vec::new();
-        for (t, d) in exits {
+        for b in exits {
             if tried.len() >= MAX_EXIT_TRIES {
                 break;
             }
             // Rays that leave through one face give one way out.
-            if tried.iter().any(|u| u.dot(d) > 0.95) {
+            if tried.iter().any(|u| u.dot(b.way) > 0.95) {
                 continue;
             }
-            tried.push(d);
-            let p = point + d * (t + v.offset_margin);
+            tried.push(b.way);
+            let p = point + b.way * (b.across + v.offset_margin);
             if self.is_valid_at(p, probe_index, s) {
                 return Some(p);
             }

@@ -16,8 +16,8 @@
 //! - **nearest distance**: the smallest hit distance.
 //!
 //! **Virtual offset**: a probe whose back-face fraction exceeds the
-//! threshold is moved along the direction of its nearest back-face hit to
-//! just beyond that surface (`t + margin`), re-tested (a cheap pre-pass of
+//! threshold is moved straight across the face of its nearest back-face hit
+//! (along the face's normal) to `margin` beyond its plane, re-tested (a cheap pre-pass of
 //! [`ValiditySettings::pre_pass_rays`] rays, up to
 //! [`ValiditySettings::max_offset_steps`] moves), then captured there and
 //! flagged. Where two solids touch (a wall's top against the ceiling slab)
@@ -113,8 +113,22 @@ pub(crate) struct HitStats {
     pub back: u32,
     pub inv_dist_sum: f64,
     pub min_dist: f32,
-    /// Distance and direction of the nearest back-face hit.
-    pub nearest_back: Option<(f32, Vec3)>,
+    /// The nearest back-face hit (by distance along its ray).
+    pub nearest_back: Option<BackHit>,
+}
+
+/// A back-face hit of a validity ray: the way out of the solid through the
+/// face it met.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BackHit {
+    /// Distance along the ray (metres).
+    pub t: f32,
+    /// Unit direction straight across the face: its outward normal; the
+    /// ray's direction where the winding says nothing and parity judged it.
+    pub way: Vec3,
+    /// Distance from the ray's origin to the face's plane along `way`
+    /// (metres).
+    pub across: f32,
 }
 
 impl Default for HitStats {
@@ -131,15 +145,15 @@ impl Default for HitStats {
 }
 
 impl HitStats {
-    /// Adds a hit at distance `t` along unit `dir`.
-    pub fn add_hit(&mut self, t: f32, dir: Vec3, back: bool) {
+    /// Adds a hit at distance `t`, with the way out where it is a back face.
+    pub fn add_hit(&mut self, t: f32, back: Option<BackHit>) {
         self.hits += 1;
         self.inv_dist_sum += 1.0 / (t.max(1e-6) as f64);
         self.min_dist = self.min_dist.min(t);
-        if back {
+        if let Some(b) = back {
             self.back += 1;
-            if self.nearest_back.map_or(true, |(tb, _)| t < tb) {
-                self.nearest_back = Some((t, dir));
+            if self.nearest_back.map_or(true, |n| b.t < n.t) {
+                self.nearest_back = Some(b);
             }
         }
     }
@@ -151,9 +165,9 @@ impl HitStats {
         self.back += o.back;
         self.inv_dist_sum += o.inv_dist_sum;
         self.min_dist = self.min_dist.min(o.min_dist);
-        if let Some((t, d)) = o.nearest_back {
-            if self.nearest_back.map_or(true, |(tb, _)| t < tb) {
-                self.nearest_back = Some((t, d));
+        if let Some(b) = o.nearest_back {
+            if self.nearest_back.map_or(true, |n| b.t < n.t) {
+                self.nearest_back = Some(b);
             }
         }
     }
@@ -199,12 +213,26 @@ impl Baker<'_> {
     pub(super) fn record_first_hit(&self, st: &mut HitStats, dir: Vec3, hit: Option<&Hit>) {
         st.rays += 1;
         let Some(h) = hit else { return };
-        let back = if h.winding_consistent {
-            !h.front_face
+        st.add_hit(h.t, self.back_hit(h, dir));
+    }
+
+    /// The way out where `h`, the first hit along unit `dir`, is a back
+    /// face (the ray started inside a solid), `None` where it is a front one.
+    fn back_hit(&self, h: &Hit, dir: Vec3) -> Option<BackHit> {
+        if h.winding_consistent {
+            let n = h.geometric_normal;
+            (!h.front_face).then(|| BackHit {
+                t: h.t,
+                way: n,
+                across: h.t * dir.dot(n).max(0.0),
+            })
         } else {
-            self.parity_inside(h, dir)
-        };
-        st.add_hit(h.t, dir, back);
+            self.parity_inside(h, dir).then_some(BackHit {
+                t: h.t,
+                way: dir,
+                across: h.t,
+            })
+        }
     }
 
     /// Winding-free inside test for a ray whose first hit is on an
@@ -226,35 +254,17 @@ impl Baker<'_> {
         false
     }
 
-    /// Ways out of the geometry around `x`: for each back face the validity
-    /// pre-pass's rays ([`Baker::hit_stats`]' directions) meet first, the
-    /// distance to the face's plane and its outward normal (the way out of
-    /// that face, straight across); where winding says nothing and parity
-    /// judged the ray, its distance and direction.
-    pub(crate) fn exits(
-        &self,
-        x: Vec3,
-        probe_index: u64,
-        seed: u64,
-        rays: u32,
-    ) -> Vec<(f32, Vec3)> {
+    /// Ways out of the geometry around `x`: the back faces the validity
+    /// pre-pass's rays ([`Baker::hit_stats`]' directions) meet first.
+    pub(crate) fn exits(&self, x: Vec3, probe_index: u64, seed: u64, rays: u32) -> Vec<BackHit> {
         let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
-        let mut out = Vec::new();
-        for i in 0..rays {
-            let d = sample_uniform_sphere(r2_point(i as u64, rot));
-            let Some(h) = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY) else {
-                continue;
-            };
-            if h.winding_consistent {
-                if !h.front_face {
-                    let n = h.geometric_normal;
-                    out.push((h.t * d.dot(n).max(0.0), n));
-                }
-            } else if self.parity_inside(&h, d) {
-                out.push((h.t, d));
-            }
-        }
-        out
+        (0..rays)
+            .filter_map(|i| {
+                let d = sample_uniform_sphere(r2_point(i as u64, rot));
+                let h = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY)?;
+                self.back_hit(&h, d)
+            })
+            .collect()
     }
 
     /// First-hit statistics of `rays` R2 directions from `x` (validity pre-pass).
