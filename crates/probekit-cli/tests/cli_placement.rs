@@ -541,11 +541,11 @@ fn manual_positions_flattened_by_the_virtual_offset_are_refused_before_capture()
     let in_wall = "2.1,0.7,0.5";
     let c = json(&probekit(&["capture", &scene, "--at", in_wall, "--json"]));
     let moved = c["position"].as_array().unwrap();
-    let z = moved[2].to_string();
-    assert_ne!(moved[0].as_f64().unwrap(), 2.1, "not moved: {c}");
-    assert_ne!(z.parse::<f32>().unwrap(), 0.5, "moved within z = 0.5: {c}");
-    // Three free points in the moved probe's plane z = const.
-    let csv = format!("{in_wall}\n0.5,0.5,{z}\n1.0,1.2,{z}\n3.0,1.0,{z}\n");
+    let x = moved[0].to_string();
+    assert!(x.parse::<f32>().unwrap() < 2.0, "not moved out: {c}");
+    // Three free points in the moved probe's plane x = const, beside the
+    // wall: the four span a volume as given, a plane once it has moved.
+    let csv = format!("{in_wall}\n{x},0.5,0.2\n{x},1.2,0.9\n{x},1.0,1.5\n");
     let positions = dir.path().join("p.csv");
     std::fs::write(&positions, csv).unwrap();
     let out = dir.path().join("m.probes");
