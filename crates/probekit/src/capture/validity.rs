@@ -17,8 +17,8 @@
 //!
 //! **Virtual offset**: a probe whose back-face fraction exceeds the
 //! threshold is moved straight across the face of its nearest back-face hit
-//! (along the face's normal) to `margin` beyond its plane, re-tested (a cheap pre-pass of
-//! [`ValiditySettings::pre_pass_rays`] rays, up to
+//! (along the face's normal) to `margin` beyond its plane, re-tested (a
+//! cheap pre-pass of [`ValiditySettings::pre_pass_rays`] rays, up to
 //! [`ValiditySettings::max_offset_steps`] moves), then captured there and
 //! flagged. Where two solids touch (a wall's top against the ceiling slab)
 //! those moves can go from one into the other and back; a probe still in
