@@ -299,7 +299,7 @@ impl Baker<'_> {
             let mut valid = false;
             for _ in 0..v.max_offset_steps {
                 let st = self.hit_stats(pos, probe_index, s.seed, v.pre_pass_rays);
-                valid = st.backface_fraction() <= v.backface_threshold;
+                valid = v.accepts(&st);
                 if valid {
                     break;
                 }
@@ -343,9 +343,7 @@ impl Baker<'_> {
     /// Whether the validity pre-pass at `x` finds it outside geometry.
     fn is_valid_at(&self, x: Vec3, probe_index: u64, s: &CaptureSettings) -> bool {
         let v = &s.validity;
-        self.hit_stats(x, probe_index, s.seed, v.pre_pass_rays)
-            .backface_fraction()
-            <= v.backface_threshold
+        v.accepts(&self.hit_stats(x, probe_index, s.seed, v.pre_pass_rays))
     }
 
     /// The virtual offset's fallback for a probe its moves leave in

@@ -65,6 +65,12 @@ impl Default for ValiditySettings {
 }
 
 impl ValiditySettings {
+    /// Whether rays with these statistics find their origin outside
+    /// geometry: a back-face fraction at most the threshold.
+    pub(crate) fn accepts(&self, st: &HitStats) -> bool {
+        st.backface_fraction() <= self.backface_threshold
+    }
+
     /// Checks the bounds: threshold in [0, 1], margin finite and ≥ 0, rays ≥ 1.
     pub fn validate(&self) -> Result<(), BakeError> {
         if !(0.0..=1.0).contains(&self.backface_threshold) {
@@ -196,12 +202,11 @@ impl Validity {
         offset: Vec3,
         pushed: bool,
     ) -> Self {
-        let f = st.backface_fraction();
         Self {
-            backface_fraction: f,
+            backface_fraction: st.backface_fraction(),
             harmonic_mean_distance: st.harmonic_mean(),
             nearest_distance: st.min_dist,
-            valid: f <= s.backface_threshold,
+            valid: s.accepts(st),
             offset,
             offset_applied: pushed,
         }
@@ -255,27 +260,41 @@ impl Baker<'_> {
     }
 
     /// Ways out of the geometry around `x`: the back faces the validity
-    /// pre-pass's rays ([`Baker::hit_stats`]' directions) meet first.
+    /// pre-pass's rays meet first.
     pub(crate) fn exits(&self, x: Vec3, probe_index: u64, seed: u64, rays: u32) -> Vec<BackHit> {
-        let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
-        (0..rays)
-            .filter_map(|i| {
-                let d = sample_uniform_sphere(r2_point(i as u64, rot));
-                let h = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY)?;
-                self.back_hit(&h, d)
-            })
-            .collect()
+        let mut out = Vec::new();
+        self.pre_pass(x, probe_index, seed, rays, |d, hit| {
+            if let Some(b) = hit.and_then(|h| self.back_hit(h, d)) {
+                out.push(b);
+            }
+        });
+        out
     }
 
-    /// First-hit statistics of `rays` R2 directions from `x` (validity pre-pass).
+    /// First-hit statistics of the validity pre-pass's rays from `x`.
     pub(crate) fn hit_stats(&self, x: Vec3, probe_index: u64, seed: u64, rays: u32) -> HitStats {
-        let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
         let mut st = HitStats::default();
+        self.pre_pass(x, probe_index, seed, rays, |d, hit| {
+            self.record_first_hit(&mut st, d, hit)
+        });
+        st
+    }
+
+    /// The validity pre-pass: `rays` R2 directions from `x` (rotated by the
+    /// probe's own stream), each with its first hit, in order.
+    fn pre_pass(
+        &self,
+        x: Vec3,
+        probe_index: u64,
+        seed: u64,
+        rays: u32,
+        mut f: impl FnMut(Vec3, Option<&Hit>),
+    ) {
+        let rot = SampleRng::new(seed, probe_index, STREAM_ROTATION - 1).next_2d();
         for i in 0..rays {
             let d = sample_uniform_sphere(r2_point(i as u64, rot));
             let hit = self.tracer.closest_hit(&Ray::new(x, d), f32::INFINITY);
-            self.record_first_hit(&mut st, d, hit.as_ref());
+            f(d, hit.as_ref());
         }
-        st
     }
 }
