@@ -581,23 +581,19 @@ fn environment_map_capture_matches_projection() {
     assert_close(&m, &se, &want, 0.01 * want[0].abs(), "environment map");
 }
 
-/// A room 6 m across (inward faces) around a solid 1 m block (outward
-/// faces) at the origin, lit by a point light above the block.
+/// A room 6 m across (inward faces) around `solids` (outward faces), lit
+/// by a point light at `light_at`.
+fn lit_room(solids: Vec<Vec<Triangle>>, light_at: Vec3) -> Scene {
+    let mut objects = vec![box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0)];
+    objects.extend(solids);
+    let lamp = light(LightKind::Point, light_at, Vec3::NEG_Y, 5.0, 0.0);
+    scene_of(objects, vec![material(0.5, 0.0)], vec![lamp], Vec3::ZERO)
+}
+
+/// [`lit_room`] around a solid 1 m block at the origin, the light above it.
 fn room_with_block() -> Scene {
-    let room = box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0);
     let block = box_tris(Vec3::splat(-0.5), Vec3::splat(0.5), false, 0);
-    scene_of(
-        vec![room, block],
-        vec![material(0.5, 0.0)],
-        vec![light(
-            LightKind::Point,
-            Vec3::new(0.0, 2.5, 0.0),
-            Vec3::NEG_Y,
-            5.0,
-            0.0,
-        )],
-        Vec3::ZERO,
-    )
+    lit_room(vec![block], Vec3::new(0.0, 2.5, 0.0))
 }
 
 #[test]
@@ -639,25 +635,13 @@ fn probe_inside_a_solid_block_is_invalid_and_pushed_out() {
 /// fallback takes it out through the wall's side into the room.
 #[test]
 fn probe_in_a_wall_touching_a_slab_ends_in_free_space() {
-    let room = box_tris(Vec3::splat(-3.0), Vec3::splat(3.0), true, 0);
     let (wall_min, wall_max) = (Vec3::new(-0.05, -3.0, -1.0), Vec3::new(0.05, 2.0, 1.0));
     let (slab_min, slab_max) = (Vec3::new(-3.0, 2.0, -3.0), Vec3::new(3.0, 2.4, 3.0));
-    let scene = scene_of(
-        vec![
-            room,
-            box_tris(wall_min, wall_max, false, 0),
-            box_tris(slab_min, slab_max, false, 0),
-        ],
-        vec![material(0.5, 0.0)],
-        vec![light(
-            LightKind::Point,
-            Vec3::new(1.5, 0.0, 0.0),
-            Vec3::NEG_Y,
-            5.0,
-            0.0,
-        )],
-        Vec3::ZERO,
-    );
+    let solids = vec![
+        box_tris(wall_min, wall_max, false, 0),
+        box_tris(slab_min, slab_max, false, 0),
+    ];
+    let scene = lit_room(solids, Vec3::new(1.5, 0.0, 0.0));
     let inside = |p: Vec3, lo: Vec3, hi: Vec3| p.cmpgt(lo).all() && p.cmplt(hi).all();
     let baker = Baker::new(&scene).unwrap();
     let s = quick(256, 1, 2, 5);
