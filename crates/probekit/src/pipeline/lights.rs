@@ -12,7 +12,9 @@
 //!    solid angle or a disk's area, one ray to a point, spot or sun).
 //! 3. **Choice.** An `auto` light becomes run-time where the bake's own
 //!    held-out estimate says that lowers the error: on held-out points of
-//!    free space (with random normals), the light's shadowed direct
+//!    free space (with random normals), dense around the positional
+//!    candidates and weighted by the volume each stands for
+//!    ([`decision_points`]), the light's shadowed direct
 //!    irradiance (exact irradiance × its receiver-weighted visible fraction)
 //!    against (a) its exact irradiance × the probes' blended visible
 //!    fractions and (b) the probes' blended SH of its direct light; it runs
@@ -30,9 +32,12 @@
 use crate::capture::occlusion::{visible_fraction, visible_fractions};
 use crate::capture::{BakeOutput, Baker, DEFAULT_GROUP};
 use crate::lights::from_scene_light;
+use crate::placement::held_out_points;
 use crate::recipe::{Lights, Recipe, ResolvedMode};
+use crate::sampling::{sample_uniform_sphere, SampleRng};
 use crate::scene::{Aabb, LightMode, Scene};
-use crate::trace::free_space::sample_points;
+use crate::trace::free_space::{is_evaluation_point, EvalPoint};
+use crate::trace::Tracer;
 use glam::Vec3;
 use probekit_runtime::cloud::WalkState;
 use probekit_runtime::format::{quantize_occlusion, LightOcclusion, RuntimeLight, RuntimeLights};
@@ -238,18 +243,13 @@ pub fn resolve(
     };
     if split.auto.iter().any(|&a| a) {
         let cloud = provisional_cloud(&out)?;
-        let points = sample_points(
-            tracer,
-            bake_box,
-            settings.decision_points as usize,
-            seed ^ DECISION_SEED,
-        );
+        let points = decision_points(tracer, &cands, bake_box, settings.decision_points, seed);
         for l in (0..nc).filter(|&l| split.auto[l]) {
             let Some(light) = rt[l] else { continue };
             let (e_rt, e_bk) = points
                 .par_iter()
                 .enumerate()
-                .map(|(j, p)| {
+                .map(|(j, &(p, volume))| {
                     let mut ws = WalkState::new();
                     let (idx, w) = cloud.weights_at(p.position, &mut ws);
                     let exact = lum(light.irradiance(p.position, p.normal, None));
@@ -279,7 +279,8 @@ pub fn resolve(
                     let baked = lum(sh.irradiance(p.normal));
                     let a = (exact * v - truth) as f64;
                     let b = (baked - truth) as f64;
-                    (a * a, b * b)
+                    let volume = f64::from(volume);
+                    (volume * a * a, volume * b * b)
                 })
                 .reduce(|| (0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1));
             runtime[l] = e_rt < DECISION_MARGIN * e_bk;
@@ -369,6 +370,36 @@ pub fn resolve(
     })
 }
 
+/// About `n` held-out points of the choice in free space of `bake_box`
+/// ([`is_evaluation_point`], as `probekit eval`'s), each with a random
+/// normal and the volume it stands for (m³): stratified as placement's
+/// held-out points ([`held_out_points`]): half of them drawn around the
+/// positional candidates, a third of the whole kept in their 1 m balls. A lamp's error sits within a metre of it,
+/// where uniform points are few: on the duplex's ~2000 bake 2 000 uniform
+/// points kept a 10 cm lamp baked (squared error 703 at run time against
+/// 624 baked), and `probekit eval` then put 73 % of the bake's squared
+/// error on two points beside it (`rel_rmse` 0.256 against 0.115 with the
+/// lamp at run time).
+fn decision_points(
+    tracer: &Tracer,
+    candidates: &[crate::scene::Light],
+    bake_box: &Aabb,
+    n: u32,
+    seed: u64,
+) -> Vec<(EvalPoint, f32)> {
+    let points = held_out_points(candidates, bake_box, n as usize, seed ^ DECISION_SEED);
+    points
+        .into_par_iter()
+        .enumerate()
+        .filter(|(_, (p, _))| is_evaluation_point(tracer, *p))
+        .map(|(j, (position, volume))| {
+            let mut rng = SampleRng::new(seed ^ DECISION_SEED, 0x4e4f_524d, j as u64);
+            let normal = sample_uniform_sphere(rng.next_2d());
+            (EvalPoint { position, normal }, volume)
+        })
+        .collect()
+}
+
 /// The capture's groups under the scene's names: candidates' groups
 /// summed into their lights' own groups, less the direct light of the
 /// lights that run at run time (so the groups still sum to the SH).
@@ -439,4 +470,50 @@ fn provisional_cloud(out: &BakeOutput) -> Result<ProbeCloud, crate::pipeline::Pi
     )?;
     ProbeCloud::from_file(&file)
         .map_err(|e| crate::pipeline::PipelineError::Parts(format!("run-time light split: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::capture::tests::{box_tris, light, material, scene_of};
+    use crate::scene::LightKind;
+    use crate::trace::free_space::SURFACE_CLEARANCE;
+
+    /// The choice's points stand for the volume they sample: inside a
+    /// closed room their weights add up to its free volume (the room less
+    /// the evaluation's clearance from its walls, a closed form), and those
+    /// within 1 m of the lamp, a third of them (2 % of the room's volume),
+    /// to the ball's volume.
+    #[test]
+    fn decision_points_are_dense_at_lamps_and_weigh_their_volume() {
+        let half = 3.0;
+        let room = box_tris(Vec3::splat(-half), Vec3::splat(half), true, 0);
+        let lamp_at = Vec3::new(0.5, 1.0, -0.5);
+        let lamp = light(LightKind::Point, lamp_at, Vec3::NEG_Y, 5.0, 0.0);
+        let scene = scene_of(vec![room], vec![material(0.5, 0.0)], vec![lamp], Vec3::ZERO);
+        let tracer = Tracer::new(&scene);
+        let bbox = Aabb::new(Vec3::splat(-half), Vec3::splat(half));
+        let points = decision_points(&tracer, &scene.lights, &bbox, 4000, 1);
+        let total: f32 = points.iter().map(|p| p.1).sum();
+        let free = (2.0 * (half - SURFACE_CLEARANCE)).powi(3);
+        assert!(
+            (total / free - 1.0).abs() < 0.01,
+            "{total} m³ against {free}"
+        );
+        let near: Vec<f32> = (points.iter())
+            .filter(|p| p.0.position.distance(lamp_at) < 1.0)
+            .map(|p| p.1)
+            .collect();
+        let share = near.len() as f32 / points.len() as f32;
+        assert!(
+            (0.3..0.4).contains(&share),
+            "{share} of the points near the lamp"
+        );
+        let ball = 4.0 / 3.0 * std::f32::consts::PI;
+        let sum: f32 = near.iter().sum();
+        assert!((sum / ball - 1.0).abs() < 0.02, "{sum} m³ in the 1 m ball");
+        for (p, _) in &points {
+            assert!((p.normal.length() - 1.0).abs() < 1e-5);
+        }
+    }
 }

@@ -33,6 +33,7 @@ mod leaks;
 mod orphans;
 pub mod spawn_merge;
 
+pub(crate) use adaptive::held_out_points;
 pub use adaptive::PROBE_CLEARANCE;
 pub use grid::{grid_points, grid_resolution, MIN_GRID};
 pub use leaks::{crossing_extent, leak_points, tet_edges, LeakSettings};

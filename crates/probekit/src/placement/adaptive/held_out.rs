@@ -55,7 +55,7 @@ const HELD_OUT_MAX: usize = 8192;
 /// points holds none or one of them, so with it the comparison of two
 /// placements was close to a coin flip (BENCHMARKS.md, "Held-out points
 /// near the lights"). Points are not yet checked for free space.
-pub(super) fn held_out_points(
+pub(crate) fn held_out_points(
     lights: &[Light],
     bbox: &Aabb,
     n: usize,

@@ -86,6 +86,7 @@ mod scoring;
 mod tests;
 
 pub(super) use held_out::held_out_errors;
+pub(crate) use held_out::held_out_points;
 pub(super) use pool::has_shell_lights;
 #[cfg(test)]
 pub(super) use pool::BOUNDARY_SNAP;
