@@ -14,7 +14,7 @@
 //!    held-out estimate says that lowers the error: on held-out points of
 //!    free space (with random normals), dense around the positional
 //!    candidates and weighted by the volume each stands for
-//!    ([`decision_points`]), the light's shadowed direct
+//!    (`decision_points`), the light's shadowed direct
 //!    irradiance (exact irradiance × its receiver-weighted visible fraction)
 //!    against (a) its exact irradiance × the probes' blended visible
 //!    fractions and (b) the probes' blended SH of its direct light; it runs
