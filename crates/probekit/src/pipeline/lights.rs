@@ -374,8 +374,9 @@ pub fn resolve(
 /// ([`is_evaluation_point`], as `probekit eval`'s), each with a random
 /// normal and the volume it stands for (m³): stratified as placement's
 /// held-out points ([`held_out_points`]): half of them drawn around the
-/// positional candidates, a third of the whole kept in their 1 m balls. A lamp's error sits within a metre of it,
-/// where uniform points are few: on the duplex's ~2000 bake 2 000 uniform
+/// positional candidates, a third of the whole kept in their 1 m balls. A
+/// lamp's error sits within a metre of it, where uniform points are few:
+/// on the duplex's ~2000 bake 2 000 uniform
 /// points kept a 10 cm lamp baked (squared error 703 at run time against
 /// 624 baked), and `probekit eval` then put 73 % of the bake's squared
 /// error on two points beside it (`rel_rmse` 0.256 against 0.115 with the

@@ -346,7 +346,9 @@ pub struct Lights {
     /// Stratified shadow rays per probe and light for the visible fraction
     /// of a sphere, a disk or a sun with an angular diameter.
     pub occlusion_samples: u32,
-    /// Held-out points on which `auto` lights are decided.
+    /// Held-out points on which `auto` lights are decided: half uniform in
+    /// the bake box, half drawn in 1 m balls around the positional lights,
+    /// each weighted by the volume it stands for.
     pub decision_points: u32,
     /// The bake's choice per scene light, in the scene's order: `runtime`,
     /// `baked`, or `demoted` (written by the bake into the file's record;
