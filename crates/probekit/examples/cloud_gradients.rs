@@ -22,7 +22,7 @@ use probekit::capture::Baker;
 use probekit::eval::metrics;
 use probekit::format::ProbeFile;
 use probekit::pipeline::lights::LightSplit;
-use probekit::recipe::{BakeRecord, ResolvedMode};
+use probekit::recipe::BakeRecord;
 use probekit::scene::Scene;
 use probekit_runtime::{LoadOptions, ObjectState, Probes};
 use rayon::prelude::*;
@@ -46,12 +46,8 @@ fn gradients(
     if !split.candidates.is_empty() {
         baker.set_light_groups(&split.capture_groups)?;
     }
-    let runtime: Vec<usize> = (recipe.lights.resolved.iter().enumerate())
-        .filter(|(_, m)| **m == ResolvedMode::Runtime)
-        .map(|(i, _)| i)
-        .collect();
     let mut s = recipe.placement_capture();
-    s.exclude_direct = split.excluded_groups(&runtime);
+    s.exclude_direct = split.excluded_groups(&recipe.lights.runtime_indices());
     s.validity.virtual_offset = false;
     let axes = [Vec3::X, Vec3::Y, Vec3::Z];
     file.positions()

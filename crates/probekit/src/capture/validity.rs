@@ -158,9 +158,7 @@ impl HitStats {
         self.min_dist = self.min_dist.min(t);
         if let Some(b) = back {
             self.back += 1;
-            if self.nearest_back.map_or(true, |n| b.t < n.t) {
-                self.nearest_back = Some(b);
-            }
+            self.keep_nearest(b);
         }
     }
 
@@ -172,9 +170,14 @@ impl HitStats {
         self.inv_dist_sum += o.inv_dist_sum;
         self.min_dist = self.min_dist.min(o.min_dist);
         if let Some(b) = o.nearest_back {
-            if self.nearest_back.map_or(true, |n| b.t < n.t) {
-                self.nearest_back = Some(b);
-            }
+            self.keep_nearest(b);
+        }
+    }
+
+    /// `b` as the nearest back-face hit when it is nearer than the one held.
+    fn keep_nearest(&mut self, b: BackHit) {
+        if self.nearest_back.map_or(true, |n| b.t < n.t) {
+            self.nearest_back = Some(b);
         }
     }
 

@@ -341,10 +341,7 @@ impl<'s> Bake<'s> {
     pub(crate) fn fit_capture(&self, file: &ProbeFile) -> CaptureSettings {
         let mut c = self.recipe.capture_settings();
         if let Some(r) = BakeRecord::from_json(file.metadata()) {
-            let runtime: Vec<usize> = (r.recipe.lights.resolved.iter().enumerate())
-                .filter(|(_, m)| **m == crate::recipe::ResolvedMode::Runtime)
-                .map(|(i, _)| i)
-                .collect();
+            let runtime = r.recipe.lights.runtime_indices();
             if runtime.iter().all(|&i| i < self.split.capture_groups.len()) {
                 c.exclude_direct = self.split.excluded_groups(&runtime);
             }

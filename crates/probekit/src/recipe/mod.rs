@@ -370,6 +370,17 @@ impl Default for Lights {
     }
 }
 
+impl Lights {
+    /// Scene light indices (0-based, increasing) that `resolved` records
+    /// as run-time: the lights whose direct light a file's SH leaves out.
+    pub fn runtime_indices(&self) -> Vec<usize> {
+        (self.resolved.iter().enumerate())
+            .filter(|(_, m)| **m == ResolvedMode::Runtime)
+            .map(|(i, _)| i)
+            .collect()
+    }
+}
+
 /// Where a light ended up after the bake's choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
